@@ -1,0 +1,125 @@
+# Zephyr — a cycle-faithful WaveTracer Zephyr emulator and the paper's four ray tracers.
+# Plain make: objects under build/, -MMD -MP dependencies, quiet unless V=1, rebuild when
+# the flags change, Debian packages installed on demand by tools/setup.sh.
+#
+#   make run  [SCENE=file.nff] [METHOD=...] [WORKERS=K] [FRAME=F]
+#   make test [FILTER=gtest-filter]
+
+.DEFAULT_GOAL := all
+SHELL := /bin/bash
+
+V ?= 0
+ifeq ($(V),0)
+  Q := @
+  say = @printf '  %-7s %s\n' $(1) $(2);
+else
+  Q :=
+  say :=
+endif
+
+BUILD   ?= build
+JOBS    ?= $(shell nproc)
+BIN     := $(BUILD)/bin
+CXX     ?= g++
+ifeq ($(origin CXX),default)
+  CXX := g++
+endif
+OPT     ?= -O2
+# Run-time dispatch (Highway) — never -march=native: the binary must run on any x86-64.
+# PCLMUL/AES are disabled so the static target stays honest without -maes -mpclmul.
+DEPCFLAGS = $(shell pkg-config --cflags libhwy libpng ompi-c fmt 2>/dev/null)
+DEPLIBS   = $(shell pkg-config --libs libhwy libpng ompi-c fmt 2>/dev/null)
+CXXFLAGS ?= $(OPT) -g
+ALL_CXXFLAGS = -std=c++20 -Wall -Wextra -Wno-unused-parameter -I. $(DEPCFLAGS) $(CXXFLAGS)
+LDLIBS_ALL   = $(DEPLIBS) -lpthread
+
+# Every .cpp in the library rooms is part of the engine; mains live apart.
+# ROOMS / TEST_GLOB narrow a build to part of the tree (e.g. while one room is being
+# rebuilt: `make BUILD=build/x ROOMS="fixed bitserial" TEST_GLOB="tests/fixed_*_test.cpp"`).
+ROOMS     ?= fixed bitserial hosts tools
+TEST_GLOB ?= tests/*_test.cpp
+LIB_SRCS  := $(sort $(wildcard $(addsuffix /*.cpp,$(ROOMS))) hosts/command.cpp)
+LIB_SRCS  := $(filter-out hosts/main.cpp,$(LIB_SRCS))
+TEST_SRCS := $(sort $(wildcard $(TEST_GLOB)))
+BENCH_SRCS:= $(sort $(wildcard tools/bench/*.cpp))
+
+LIB_OBJS  := $(LIB_SRCS:%.cpp=$(BUILD)/obj/%.o)
+TEST_OBJS := $(TEST_SRCS:%.cpp=$(BUILD)/obj/%.o)
+BENCH_BINS:= $(BENCH_SRCS:tools/bench/%.cpp=$(BIN)/bench_%)
+
+ZEPHYR := $(BIN)/zephyr
+TESTS  := $(BIN)/zephyr_tests
+
+# ---------------------------------------------------------------------------
+.PHONY: all build test run bench charts fuzz clean help setup
+
+help: ## List the targets
+	@grep -E '^[a-z][a-zA-Z_-]*:.*## ' $(MAKEFILE_LIST) | sed 's/:.*## /\t/' | \
+	  awk -F'\t' '{printf "  make %-8s %s\n", $$1, $$2}'
+
+setup: ## Install any missing Debian packages (idempotent; quick when all are there)
+	$(Q)bash tools/setup.sh
+
+all: setup ## Build the zephyr program, the tests and the benchmarks
+	$(Q)$(MAKE) --no-print-directory -j$(JOBS) build
+
+build: $(ZEPHYR) $(TESTS) $(BENCH_BINS)
+
+test: setup ## Build and run every test (GoogleTest; FILTER=... to select)
+	$(Q)$(MAKE) --no-print-directory -j$(JOBS) $(TESTS) $(ZEPHYR)
+	$(Q)$(TESTS) --gtest_brief=1 $(if $(FILTER),--gtest_filter='$(FILTER)')
+
+# Defaults for `make run`: a generated 384×384 random-sphere scene, the default method.
+METHOD  ?= $(DEFAULT_METHOD)
+DEFAULT_METHOD := simd
+WORKERS ?= 2
+FRAME   ?= 64
+SPHERES ?= 32
+SEED    ?= 1
+run: setup ## Render SCENE (default: generated random spheres) with METHOD, print the cycle report
+	$(Q)$(MAKE) --no-print-directory -j$(JOBS) $(ZEPHYR)
+	$(Q)SCENE='$(SCENE)' METHOD='$(METHOD)' WORKERS='$(WORKERS)' FRAME='$(FRAME)' \
+	  SPHERES='$(SPHERES)' SEED='$(SEED)' bash tools/run.sh
+
+bench: setup ## Build and run the benchmarks (figures printed; medians of repeats)
+	$(Q)$(MAKE) --no-print-directory -j$(JOBS) $(ZEPHYR) $(BENCH_BINS)
+	$(Q)bash tools/bench.sh $(BENCH_BINS)
+
+charts: setup ## Run the experiment sweeps and draw the charts under docs/results/ (QUICK=1: small)
+	$(Q)$(MAKE) --no-print-directory -j$(JOBS) $(ZEPHYR)
+	$(Q)QUICK='$(QUICK)' bash tools/charts.sh
+
+clean: ## Remove build/ and out/
+	$(Q)rm -rf $(BUILD) out
+
+# ---------------------------------------------------------------------------
+# Rebuild everything when the compiler or flags change.
+FLAGS_FILE := $(BUILD)/flags.txt
+FLAGS_NOW   = $(CXX) $(ALL_CXXFLAGS) $(LDLIBS_ALL)
+$(FLAGS_FILE): FORCE | $(BUILD)
+	@echo '$(FLAGS_NOW)' | cmp -s - $@ || echo '$(FLAGS_NOW)' > $@
+FORCE:
+
+$(BUILD) $(BIN):
+	@mkdir -p $@
+
+$(BUILD)/obj/%.o: %.cpp $(FLAGS_FILE)
+	$(call say,CXX,$<)
+	@mkdir -p $(@D)
+	$(Q)$(CXX) $(ALL_CXXFLAGS) -MMD -MP -c $< -o $@
+
+$(ZEPHYR): $(LIB_OBJS) $(BUILD)/obj/hosts/main.o | $(BIN)
+	$(call say,LINK,$@)
+	$(Q)$(CXX) $(ALL_CXXFLAGS) $^ -o $@ $(LDLIBS_ALL)
+
+$(TESTS): $(LIB_OBJS) $(TEST_OBJS) | $(BIN)
+	$(call say,LINK,$@)
+	$(Q)$(CXX) $(ALL_CXXFLAGS) $^ -o $@ $(LDLIBS_ALL) $(shell pkg-config --libs gtest_main)
+
+# A benchmark may link extra libraries named in a `// LIBS: ...` line at its top.
+$(BIN)/bench_%: $(BUILD)/obj/tools/bench/%.o $(LIB_OBJS) | $(BIN)
+	$(call say,LINK,$@)
+	$(Q)$(CXX) $(ALL_CXXFLAGS) $^ -o $@ $(LDLIBS_ALL) \
+	  $$(sed -n 's@^// LIBS: @@p' tools/bench/$*.cpp)
+
+-include $(shell find $(BUILD)/obj -name '*.d' 2>/dev/null)
