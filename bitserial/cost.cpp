@@ -1,0 +1,332 @@
+#include "bitserial/cost.h"
+
+#include <algorithm>
+#include <vector>
+
+#include "fixed/check.h"
+
+namespace zephyr::bitserial {
+
+namespace {
+MicroOp Read(Space s) { return s == Space::Internal ? MicroOp::ReadInternal : MicroOp::ReadExternal; }
+MicroOp Write(Space s) { return s == Space::Internal ? MicroOp::WriteInternal : MicroOp::WriteExternal; }
+
+// An operand laid on the exact result's bit positions: its bit 0 sits at `offset`.
+struct Placed {
+  Operand op;
+  int offset;
+  bool Has(int p) const { return p >= offset && p < offset + op.format.Width(); }
+};
+
+// The one pass shared by add, sub, neg, select, shift and convert (docs/bitserial.md):
+// the serial loop runs over the exact result's positions p = 0 .. lo+wo-1 (lo = exact
+// fraction bits - out fraction bits): a read for each operand bit that exists at p (a sign
+// extension reuses the bit still in the input latch), one ALU step, and a write if p is an
+// output position. Output bits below the exact LSB are written as zeros. Positions above
+// the output (up to the exact top) are computed for the overflow latch: reads + ALU, no
+// write; if the result cannot overflow there are none, else at least one.
+// Nearest (when bits are dropped) adds a rounding pass over the output, Saturate a select
+// pass when overflow is possible.
+MicroOpCounts AlignedPass(const std::vector<Placed>& ops, const fixed::Format& exact,
+                          Operand out, fixed::Policy policy) {
+  MicroOpCounts c;
+  const int w = exact.Width();
+  const int wo = out.format.Width();
+  const int lo = exact.fracBits - out.format.fracBits;
+  const int top = lo + wo;  // first position above the output
+  for (int p = 0; p < std::max(top, 0); ++p) {
+    for (const Placed& o : ops)
+      if (o.Has(p)) c.Add(Read(o.op.space));
+    c.Add(MicroOp::AluStep);
+    if (p >= lo) c.Add(Write(out.space));
+  }
+  if (lo < 0) c.Add(Write(out.space), std::min(-lo, wo));  // zero-filled low output bits
+  const bool rounds = policy.rounding == fixed::Rounding::Nearest && lo > 0;
+  const int roundedWidth = w + (rounds ? 1 : 0);
+  const bool canOverflow = roundedWidth - lo > wo || (exact.isSigned && !out.format.isSigned);
+  if (canOverflow) {
+    const int extra = std::max(w - top, 1);
+    for (int p = top; p < top + extra; ++p) {
+      for (const Placed& o : ops)
+        if (o.Has(p)) c.Add(Read(o.op.space));
+      c.Add(MicroOp::AluStep);
+    }
+  }
+  if (rounds) {  // increment the kept bits by the dropped half: one more serial pass
+    c.Add(MicroOp::FlagOp);
+    c.Add(Read(out.space), wo);
+    c.Add(MicroOp::AluStep, wo + 1);
+    c.Add(Write(out.space), wo);
+  }
+  if (canOverflow && policy.overflow == fixed::OverflowPolicy::Saturate) {
+    c.Add(MicroOp::FlagOp);  // the overflow latch becomes the select mask
+    c.Add(Read(out.space), wo);
+    c.Add(MicroOp::AluStep, wo);
+    c.Add(Write(out.space), wo);
+  }
+  return c;
+}
+
+int Offset(const fixed::Format& exact, const fixed::Format& f) { return exact.fracBits - f.fracBits; }
+
+// Shift-and-add multiply (docs/bitserial.md, "Multiply"). `rows` lists the multiplier bit
+// positions that get an add pass; `readRows` says whether the multiplier bit comes from PE
+// memory (multi) or from the controller (uni).
+MicroOpCounts MulPass(Operand a, int multiplierWidth, const std::vector<int>& rows,
+                      bool readRows, Space rowSpace, const fixed::Format& exact, Operand out,
+                      fixed::Policy policy) {
+  MicroOpCounts c;
+  const int wa = a.format.Width();
+  const int w = exact.Width();
+  const int wo = out.format.Width();
+  const int lo = exact.fracBits - out.format.fracBits;
+  const int top = lo + wo;
+  for (int j : rows) {
+    if (readRows) c.Add(Read(rowSpace));  // the multiplier bit into the mask register
+    c.Add(MicroOp::FlagOp);               // clear the carry
+    c.Add(Read(a.space), wa);
+    c.Add(MicroOp::AluStep, wa);
+    c.Add(MicroOp::AccumulatorRead, wa);
+    c.Add(MicroOp::AccumulatorWrite, wa);
+    (void)j;
+  }
+  // Each multiplier position retires the accumulator's low bit: written if it is an output
+  // bit. The remaining high bits leave the accumulator afterwards.
+  for (int p = 0; p < multiplierWidth; ++p)
+    if (p >= lo && p < top) c.Add(Write(out.space));
+  for (int p = multiplierWidth; p < std::min(w, std::max(top, 0)); ++p) {
+    if (p < lo) continue;
+    c.Add(MicroOp::AccumulatorRead);
+    c.Add(Write(out.space));
+  }
+  if (top > w) c.Add(Write(out.space), top - std::max(w, lo));  // sign extension of the product
+  if (lo < 0) c.Add(Write(out.space), std::min(-lo, wo));
+  const bool rounds = policy.rounding == fixed::Rounding::Nearest && lo > 0;
+  const bool canOverflow = w + (rounds ? 1 : 0) - lo > wo || (exact.isSigned && !out.format.isSigned);
+  if (canOverflow) {
+    const int extra = std::max(w - top, 1);
+    c.Add(MicroOp::AccumulatorRead, extra);
+    c.Add(MicroOp::AluStep, extra);
+  }
+  if (rounds) {
+    c.Add(MicroOp::FlagOp);
+    c.Add(Read(out.space), wo);
+    c.Add(MicroOp::AluStep, wo + 1);
+    c.Add(Write(out.space), wo);
+  }
+  if (canOverflow && policy.overflow == fixed::OverflowPolicy::Saturate) {
+    c.Add(MicroOp::FlagOp);
+    c.Add(Read(out.space), wo);
+    c.Add(MicroOp::AluStep, wo);
+    c.Add(Write(out.space), wo);
+  }
+  return c;
+}
+}  // namespace
+
+const char* SpaceName(Space s) { return s == Space::Internal ? "internal" : "external"; }
+
+double MicroOpCounts::Cycles(const MachineProfile& p) const {
+  double total = 0;
+  for (int i = 0; i < kMicroOpCount; ++i) total += n[i] * p.cost[i];
+  return total;
+}
+
+std::array<double, kCycleClassCount> MicroOpCounts::ByClass(const MachineProfile& p) const {
+  std::array<double, kCycleClassCount> r{};
+  for (int i = 0; i < kMicroOpCount; ++i)
+    r[static_cast<int>(ClassOf(static_cast<MicroOp>(i)))] += n[i] * p.cost[i];
+  return r;
+}
+
+fixed::Format SumFormat(const fixed::Format& a, const fixed::Format& b) {
+  return {a.isSigned || b.isSigned, std::max(a.intBits, b.intBits) + 1,
+          std::max(a.fracBits, b.fracBits)};
+}
+fixed::Format DiffFormat(const fixed::Format& a, const fixed::Format& b) {
+  return {true, std::max(a.intBits, b.intBits) + 1, std::max(a.fracBits, b.fracBits)};
+}
+fixed::Format ProductFormat(const fixed::Format& a, const fixed::Format& b) {
+  // Width a.Width()+b.Width() holds every product; the sign bit is one of those bits.
+  bool s = a.isSigned || b.isSigned;
+  return {s, a.Width() + b.Width() - (a.fracBits + b.fracBits) - (s ? 1 : 0),
+          a.fracBits + b.fracBits};
+}
+fixed::Format NegFormat(const fixed::Format& a) { return {true, a.intBits + 1, a.fracBits}; }
+fixed::Format AbsFormat(const fixed::Format& a) {
+  return {a.isSigned, a.intBits + (a.isSigned ? 1 : 0), a.fracBits};
+}
+fixed::Format UnionFormat(const fixed::Format& a, const fixed::Format& b) {
+  bool s = a.isSigned || b.isSigned;
+  int ia = a.intBits + (s && !a.isSigned ? 0 : 0), ib = b.intBits;
+  return {s, std::max(ia, ib), std::max(a.fracBits, b.fracBits)};
+}
+
+MicroOpCounts AddCost(Operand a, Operand b, Operand out, fixed::Policy p) {
+  fixed::Format e = SumFormat(a.format, b.format);
+  MicroOpCounts c = AlignedPass({{a, Offset(e, a.format)}, {b, Offset(e, b.format)}}, e, out, p);
+  c.Add(MicroOp::FlagOp);  // clear the carry
+  return c;
+}
+
+MicroOpCounts SubCost(Operand a, Operand b, Operand out, fixed::Policy p) {
+  fixed::Format e = DiffFormat(a.format, b.format);
+  MicroOpCounts c = AlignedPass({{a, Offset(e, a.format)}, {b, Offset(e, b.format)}}, e, out, p);
+  c.Add(MicroOp::FlagOp);  // set the carry (a + ~b + 1)
+  return c;
+}
+
+MicroOpCounts NegCost(Operand a, Operand out, fixed::Policy p) {
+  fixed::Format e = NegFormat(a.format);
+  MicroOpCounts c = AlignedPass({{a, 0}}, e, out, p);
+  c.Add(MicroOp::FlagOp);
+  return c;
+}
+
+MicroOpCounts AbsCost(Operand a, Operand out, fixed::Policy p) {
+  fixed::Format e = AbsFormat(a.format);
+  MicroOpCounts c = AlignedPass({{a, 0}}, e, out, p);
+  if (a.format.isSigned) {  // the sign bit becomes the conditional-negate mask
+    c.Add(Read(a.space));
+    c.Add(MicroOp::FlagOp, 2);
+  }
+  return c;
+}
+
+MicroOpCounts ShiftCost(Operand a, int k, Operand out, fixed::Policy p) {
+  fixed::Format e{a.format.isSigned, a.format.intBits, a.format.fracBits};
+  // The exact value a × 2^k has the same bits with k fewer fraction bits; negative
+  // fraction or integer bit counts are folded into the placement of the operand.
+  int frac = a.format.fracBits - k;
+  int off = 0;
+  if (frac < 0) { off = -frac; frac = 0; }
+  e.fracBits = frac;
+  e.intBits = std::max(0, a.format.Width() + off - frac - (a.format.isSigned ? 1 : 0));
+  return AlignedPass({{a, off}}, e, out, p);
+}
+
+MicroOpCounts CompareCost(Operand a, Operand b, Space outSpace) {
+  fixed::Format e = DiffFormat(a.format, b.format);
+  std::vector<Placed> ops = {{a, Offset(e, a.format)}, {b, Offset(e, b.format)}};
+  MicroOpCounts c;
+  c.Add(MicroOp::FlagOp);
+  for (int p = 0; p < e.Width(); ++p) {
+    for (const Placed& o : ops)
+      if (o.Has(p)) c.Add(Read(o.op.space));
+    c.Add(MicroOp::AluStep);
+  }
+  c.Add(Write(outSpace));
+  return c;
+}
+
+MicroOpCounts SelectCost(Operand mask, Operand a, Operand b, Operand out, fixed::Policy p) {
+  fixed::Format e = UnionFormat(a.format, b.format);
+  MicroOpCounts c = AlignedPass({{a, Offset(e, a.format)}, {b, Offset(e, b.format)}}, e, out, p);
+  c.Add(Read(mask.space));
+  c.Add(MicroOp::FlagOp);
+  return c;
+}
+
+MicroOpCounts MinMaxCost(Operand a, Operand b, Operand out, fixed::Policy p) {
+  fixed::Format e = DiffFormat(a.format, b.format);
+  MicroOpCounts c;
+  c.Add(MicroOp::FlagOp);
+  std::vector<Placed> ops = {{a, Offset(e, a.format)}, {b, Offset(e, b.format)}};
+  for (int q = 0; q < e.Width(); ++q) {
+    for (const Placed& o : ops)
+      if (o.Has(q)) c.Add(Read(o.op.space));
+    c.Add(MicroOp::AluStep);
+  }
+  fixed::Format u = UnionFormat(a.format, b.format);
+  c += AlignedPass({{a, Offset(u, a.format)}, {b, Offset(u, b.format)}}, u, out, p);
+  c.Add(MicroOp::FlagOp);  // the comparison's sign becomes the select mask
+  return c;
+}
+
+MicroOpCounts MulCost(Operand a, Operand b, Operand out, fixed::Policy p) {
+  std::vector<int> rows;
+  for (int j = 0; j < b.format.Width(); ++j) rows.push_back(j);
+  return MulPass(a, b.format.Width(), rows, true, b.space, ProductFormat(a.format, b.format),
+                 out, p);
+}
+
+MicroOpCounts MulUniCost(Operand a, const fixed::Fixed& k, Operand out, fixed::Policy p) {
+  std::vector<int> rows;
+  for (int j = 0; j < k.format.Width(); ++j)
+    if (k.Bit(j)) rows.push_back(j);
+  return MulPass(a, k.format.Width(), rows, false, Space::Internal,
+                 ProductFormat(a.format, k.format), out, p);
+}
+
+MicroOpCounts LogicCost(Operand a, bool binary, Space outSpace) {
+  MicroOpCounts c;
+  c.Add(Read(a.space), binary ? 2 : 1);
+  c.Add(MicroOp::AluStep);
+  c.Add(Write(outSpace));
+  return c;
+}
+
+MicroOpCounts CopyCost(Operand a, Operand out) {
+  MicroOpCounts c;
+  c.Add(Read(a.space), a.format.Width());
+  c.Add(Write(out.space), out.format.Width());
+  return c;
+}
+
+MicroOpCounts BroadcastCost(Operand out) {
+  MicroOpCounts c;
+  c.Add(MicroOp::BroadcastBit, out.format.Width());
+  c.Add(Write(out.space), out.format.Width());
+  return c;
+}
+
+MicroOpCounts HostTransferCost(int width) {
+  MicroOpCounts c;
+  c.Add(MicroOp::HostPlane, width);
+  return c;
+}
+
+const char* ReduceName(ReduceKind k) {
+  static const char* names[] = {"reduceOr", "reduceAnd", "reduceXor", "reduceSum",
+                                "reduceMax", "reduceMin"};
+  return names[static_cast<int>(k)];
+}
+
+MicroOpCounts ReduceCost(ReduceKind kind, Operand a) {
+  MicroOpCounts c;
+  const int w = a.format.Width();
+  c.Add(Read(a.space), w);
+  c.Add(MicroOp::ReduceBit, w);
+  if (kind == ReduceKind::Max || kind == ReduceKind::Min) {
+    // Most significant bit first: each answer bit is broadcast back and the PEs that
+    // differ from it drop out of the candidate set.
+    c.Add(MicroOp::ActivitySet);
+    c.Add(MicroOp::AluStep, w);
+    c.Add(MicroOp::BroadcastBit, w);
+  }
+  return c;
+}
+
+MicroOpCounts MeshShiftCost(Operand a, int distance) {
+  MicroOpCounts c;
+  const int w = a.format.Width();
+  c.Add(Read(a.space), w);
+  c.Add(MicroOp::MeshHop, static_cast<int64_t>(w) * std::abs(distance));
+  c.Add(Write(a.space), w);
+  return c;
+}
+
+MicroOpCounts WhereCost(Operand mask) {
+  MicroOpCounts c;
+  c.Add(Read(mask.space));
+  c.Add(MicroOp::ActivitySet);
+  return c;
+}
+
+MicroOpCounts ActivityCost() {
+  MicroOpCounts c;
+  c.Add(MicroOp::ActivitySet);
+  return c;
+}
+
+}  // namespace zephyr::bitserial

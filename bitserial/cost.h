@@ -1,0 +1,71 @@
+// bitserial/cost.h — the micro-op schedule of every operation, as counts.
+//
+// Each function walks the bit positions the serial algorithm visits and counts the
+// micro-ops a PE executes for ONE virtual-PE layer (docs/bitserial.md gives the closed
+// forms). The engine charges these counts × the profile's costs × the number of layers;
+// `zephyr cycles` prints them. Counts depend only on formats, places and the policy
+// (and, for multiply by a uni constant, on the constant's bits), never on the data.
+#pragma once
+
+#include <array>
+#include <cstdint>
+
+#include "bitserial/profile.h"
+#include "fixed/format.h"
+
+namespace zephyr::bitserial {
+
+enum class Space : int { Internal, External };
+const char* SpaceName(Space s);
+
+struct MicroOpCounts {
+  std::array<int64_t, kMicroOpCount> n{};
+  void Add(MicroOp op, int64_t k = 1) { n[static_cast<int>(op)] += k; }
+  int64_t operator[](MicroOp op) const { return n[static_cast<int>(op)]; }
+  MicroOpCounts& operator+=(const MicroOpCounts& o) {
+    for (int i = 0; i < kMicroOpCount; ++i) n[i] += o.n[i];
+    return *this;
+  }
+  double Cycles(const MachineProfile& p) const;
+  std::array<double, kCycleClassCount> ByClass(const MachineProfile& p) const;
+};
+
+// An operand as the schedule sees it: its format and where it lives.
+struct Operand {
+  fixed::Format format;
+  Space space = Space::Internal;
+};
+
+// The exact-result formats (docs/bitserial.md, "Exact formats").
+fixed::Format SumFormat(const fixed::Format& a, const fixed::Format& b);   // a + b
+fixed::Format DiffFormat(const fixed::Format& a, const fixed::Format& b);  // a - b
+fixed::Format ProductFormat(const fixed::Format& a, const fixed::Format& b);
+fixed::Format NegFormat(const fixed::Format& a);
+fixed::Format AbsFormat(const fixed::Format& a);
+fixed::Format UnionFormat(const fixed::Format& a, const fixed::Format& b);  // holds both
+
+MicroOpCounts AddCost(Operand a, Operand b, Operand out, fixed::Policy p);
+MicroOpCounts SubCost(Operand a, Operand b, Operand out, fixed::Policy p);
+MicroOpCounts NegCost(Operand a, Operand out, fixed::Policy p);
+MicroOpCounts AbsCost(Operand a, Operand out, fixed::Policy p);
+// a × 2^k rounded and fitted (Convert is k = 0).
+MicroOpCounts ShiftCost(Operand a, int k, Operand out, fixed::Policy p);
+// <, <=, ==: one result bit written to `outSpace`.
+MicroOpCounts CompareCost(Operand a, Operand b, Space outSpace);
+MicroOpCounts SelectCost(Operand mask, Operand a, Operand b, Operand out, fixed::Policy p);
+MicroOpCounts MinMaxCost(Operand a, Operand b, Operand out, fixed::Policy p);
+MicroOpCounts MulCost(Operand a, Operand b, Operand out, fixed::Policy p);
+// Rows only for the constant's one bits (the controller skips zero bits).
+MicroOpCounts MulUniCost(Operand a, const fixed::Fixed& c, Operand out, fixed::Policy p);
+MicroOpCounts LogicCost(Operand a, bool binary, Space outSpace);  // 1-bit and/or/xor/not
+MicroOpCounts CopyCost(Operand a, Operand out);  // masked assignment
+MicroOpCounts BroadcastCost(Operand out);        // a uni value into every PE
+MicroOpCounts HostTransferCost(int width);       // planes between host and array
+enum class ReduceKind { Or, And, Xor, Sum, Max, Min };
+const char* ReduceName(ReduceKind k);
+MicroOpCounts ReduceCost(ReduceKind kind, Operand a);
+MicroOpCounts MeshShiftCost(Operand a, int distance);
+MicroOpCounts WhereCost(Operand mask);  // read the mask, load the activity flag
+MicroOpCounts ActivityCost();           // elsewhere / end of scope: one activity load
+
+}  // namespace zephyr::bitserial

@@ -1,0 +1,98 @@
+// bitserial/machine.h — the emulated PE array: geometry, virtual-PE layers, PE memory,
+// activity, per-PE flags, the plane pool and the cycle report.
+//
+// Storage: one plane is WordsPerPlane() words = Layers() × (physical PEs / 64): all layers
+// side by side, so every kernel runs an instruction for every layer at once while the
+// report charges each layer its cycles. Virtual PE v lives in layer v / physicalPes at PE
+// v % physicalPes, i.e. simply bit v of a plane. Planes come from a pool owned by the
+// machine and are reused, so a program's steady state allocates nothing per operation;
+// the host holds only planes of variables that exist.
+#pragma once
+
+#include <hwy/aligned_allocator.h>
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "bitserial/cost.h"
+#include "bitserial/kernels.h"
+#include "bitserial/memory.h"
+#include "bitserial/profile.h"
+#include "bitserial/report.h"
+
+namespace zephyr::bitserial {
+
+class Machine {
+ public:
+  // virtualPes = 0 means one per physical PE; shapeIndex picks profile.shapes[i].
+  explicit Machine(MachineProfile profile, int64_t virtualPes = 0, int shapeIndex = 0);
+  ~Machine();
+  Machine(const Machine&) = delete;
+  Machine& operator=(const Machine&) = delete;
+
+  const MachineProfile& Profile() const { return profile_; }
+  const MeshShape& Shape() const { return shape_; }
+  int64_t VirtualPes() const { return virtualPes_; }
+  int Layers() const { return layers_; }
+  size_t WordsPerLayer() const { return wordsPerLayer_; }
+  size_t WordsPerPlane() const { return words_; }
+  PeMemory& Memory() { return memory_; }
+  CycleReport& Report() { return report_; }
+  const PlaneKernels& Kernels() const { return *kernels_; }
+
+  // Charges one operation (counts are per layer; the report multiplies by the layers).
+  void Charge(const std::string& op, const MicroOpCounts& counts) { report_.Charge(op, counts); }
+
+  // The current activity plane: existing virtual PEs inside every enclosing where.
+  const Word* Activity() const { return activity_.back(); }
+  bool AllActive() const { return activity_.size() == 1; }
+  // where: activity &= mask (or &= ~mask with complement); PopActivity restores.
+  void PushActivity(const Word* mask, bool complement);
+  void PopActivity();
+
+  // Sticky per-PE flags, set only where active (fixed::Status per virtual PE).
+  Word* OverflowPlane() { return overflow_; }
+  bool Overflow(int64_t pe) const { return (overflow_[pe >> 6] >> (pe & 63)) & 1; }
+  void ClearFlags();
+
+  const Word* ZeroPlane() const { return zero_; }
+  const Word* OnesPlane() const { return ones_; }
+
+  // Pooled plane storage: `planes` planes of WordsPerPlane() words, 64-byte aligned.
+  Word* AcquirePlanes(int planes);
+  void ReleasePlanes(Word* p, int planes);
+
+  // Reusable pointer arrays for building kernel arguments (no allocation per op).
+  std::vector<const Word*>& PointersA() { return ptrA_; }
+  std::vector<const Word*>& PointersB() { return ptrB_; }
+  std::vector<Word*>& PointersOut() { return ptrOut_; }
+
+  // The plane whose bit is 1 where coordinate `axis` minus `distance` is inside the mesh
+  // (the PEs that receive a value in a mesh shift); cached.
+  const Word* MeshEdgeMask(int axis, int distance);
+
+ private:
+  MachineProfile profile_;
+  MeshShape shape_;
+  int64_t virtualPes_;
+  int layers_;
+  size_t wordsPerLayer_;
+  size_t words_;
+  PeMemory memory_;
+  CycleReport report_;
+  const PlaneKernels* kernels_;
+  std::vector<hwy::AlignedFreeUniquePtr<Word[]>> blocks_;
+  std::map<int, std::vector<Word*>> free_;
+  std::vector<Word*> activity_;
+  Word* overflow_;
+  Word* zero_;
+  Word* ones_;
+  std::map<std::pair<int, int>, Word*> edgeMasks_;
+  std::vector<const Word*> ptrA_, ptrB_;
+  std::vector<Word*> ptrOut_;
+};
+
+}  // namespace zephyr::bitserial

@@ -1,0 +1,57 @@
+// bitserial/memory.h — the PE memory address spaces and what lives where.
+//
+// Every multi variable has a width and an address (in bits) in the internal (2048 bits per
+// PE on the WaveTracer) or the external (32 KB per PE) memory. With n virtual-PE layers
+// each virtual PE owns 1/n of each physical PE's memory (SPEC §3: "the controller splits
+// each PE's memory into n equal parts"), so addresses here are per virtual PE and the
+// capacity is floor(physical capacity / n). Allocation is first fit in address order, so
+// the same program always gets the same layout.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "bitserial/cost.h"
+
+namespace zephyr::bitserial {
+
+struct Allocation {
+  int id = -1;
+  std::string name;
+  Space space = Space::Internal;
+  int64_t address = 0;  // first bit, per virtual PE
+  int64_t bits = 0;
+};
+
+class PeMemory {
+ public:
+  PeMemory(int64_t internalBitsPerPe, int64_t externalBitsPerPe, int layers);
+
+  // Places `bits` bits in `space`, or (no space given) internal if it fits, else external.
+  // Throws UserError naming the variable, its size and what is left when it does not fit.
+  Allocation Allocate(const std::string& name, int64_t bits,
+                      std::optional<Space> space = std::nullopt);
+  void Free(int id);
+
+  int64_t Capacity(Space s) const;  // bits per virtual PE
+  int64_t Used(Space s) const;
+  int64_t PeakUsed(Space s) const;
+  int Layers() const { return layers_; }
+  const std::vector<Allocation>& Live() const { return live_; }
+  // The printable memory map: one line per live variable, in address order.
+  std::string Map() const;
+
+ private:
+  std::optional<int64_t> FirstFit(Space s, int64_t bits) const;
+
+  int64_t capacity_[2];
+  int64_t used_[2] = {0, 0};
+  int64_t peak_[2] = {0, 0};
+  int layers_;
+  int nextId_ = 0;
+  std::vector<Allocation> live_;  // sorted by (space, address)
+};
+
+}  // namespace zephyr::bitserial

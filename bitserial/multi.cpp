@@ -1,0 +1,684 @@
+#include "bitserial/multi.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <bit>
+#include <cstring>
+
+#include "fixed/check.h"
+
+namespace zephyr::bitserial {
+
+using fixed::Format;
+using fixed::Policy;
+
+namespace {
+
+// The plane of operand `x` at exact position p when x's bit 0 sits at `offset`: zero below
+// x, x's sign plane (or zero) above it.
+const Word* PlaneAt(const Multi& x, int offset, int p) {
+  const int q = p - offset;
+  const int w = x.Width();
+  if (q < 0) return x.GetMachine().ZeroPlane();
+  if (q >= w) return x.Format().isSigned ? x.Plane(w - 1) : x.GetMachine().ZeroPlane();
+  return x.Plane(q);
+}
+
+// The same over raw planes (a scratch exact value of `w` planes).
+const Word* RawAt(Machine& m, const Word* base, int w, bool isSigned, int q) {
+  if (q < 0) return m.ZeroPlane();
+  if (q >= w) return isSigned ? base + (w - 1) * m.WordsPerPlane() : m.ZeroPlane();
+  return base + q * m.WordsPerPlane();
+}
+
+// Scratch planes from the machine's pool, returned on scope exit.
+struct Scratch {
+  Scratch(Machine& m, int planes) : m(m), n(planes), p(m.AcquirePlanes(planes)) {}
+  ~Scratch() { m.ReleasePlanes(p, n); }
+  Word* Plane(int i) const { return p + i * m.WordsPerPlane(); }
+  Machine& m;
+  int n;
+  Word* p;
+};
+
+// Steps 2 and 3 of fixed/'s rule: the exact value (w planes at `base`, `frac` fraction
+// bits, signed or not) rounded and fitted into `out`.
+void RoundFitInto(Machine& m, const Word* base, int w, bool isSigned, int frac, Multi& out,
+                  Policy policy) {
+  const int wo = out.Width();
+  const int lo = frac - out.Format().fracBits;
+  const int k = std::max(wo + 1, w - lo + 2);
+  auto& src = m.PointersA();
+  src.clear();
+  for (int i = 0; i < k; ++i) src.push_back(RawAt(m, base, w, isSigned, lo + i));
+  auto& dst = m.PointersOut();
+  dst.clear();
+  for (int i = 0; i < wo; ++i) dst.push_back(out.Plane(i));
+  RoundFitArgs args{src.data(),
+                    k,
+                    policy.rounding == fixed::Rounding::Nearest && lo > 0
+                        ? RawAt(m, base, w, isSigned, lo - 1)
+                        : nullptr,
+                    dst.data(),
+                    wo,
+                    out.Format().isSigned,
+                    policy.overflow == fixed::OverflowPolicy::Saturate,
+                    m.OverflowPlane(),
+                    m.Activity()};
+  m.Kernels().roundFit(args, m.WordsPerPlane());
+}
+
+// a + b or a - b (subtract), exactly, then rounded and fitted.
+void AddInto(const Multi& a, const Multi& b, bool subtract, Multi& out, Policy policy) {
+  Machine& m = a.GetMachine();
+  const Format e = subtract ? DiffFormat(a.Format(), b.Format()) : SumFormat(a.Format(), b.Format());
+  const int w = e.Width();
+  const int wo = out.Width();
+  const int lo = e.fracBits - out.Format().fracBits;
+  const int offA = e.fracBits - a.Format().fracBits, offB = e.fracBits - b.Format().fracBits;
+  auto& pa = m.PointersA();
+  auto& pb = m.PointersB();
+  auto& po = m.PointersOut();
+  if (lo == 0 && policy.overflow == fixed::OverflowPolicy::Wrap) {
+    // Fast path: the output bits are the exact sum's low bits; the adder runs on past
+    // them only to latch the overflow.
+    const int n = std::max(w, wo + 1);
+    pa.clear(), pb.clear(), po.clear();
+    for (int p = 0; p < n; ++p) {
+      pa.push_back(PlaneAt(a, offA, p));
+      pb.push_back(PlaneAt(b, offB, p));
+      po.push_back(p < wo ? out.Plane(p) : nullptr);
+    }
+    const bool outSigned = out.Format().isSigned;
+    AddArgs args{pa.data(), pb.data(), po.data(), n, subtract, subtract,
+                 outSigned ? wo - 1 : wo, outSigned, m.OverflowPlane(), m.Activity()};
+    m.Kernels().add(args, m.WordsPerPlane());
+    return;
+  }
+  Scratch exact(m, w);
+  pa.clear(), pb.clear(), po.clear();
+  for (int p = 0; p < w; ++p) {
+    pa.push_back(PlaneAt(a, offA, p));
+    pb.push_back(PlaneAt(b, offB, p));
+    po.push_back(exact.Plane(p));
+  }
+  AddArgs args{pa.data(), pb.data(), po.data(), w, subtract, subtract, 0, false, nullptr, nullptr};
+  m.Kernels().add(args, m.WordsPerPlane());
+  RoundFitInto(m, exact.p, w, e.isSigned, e.fracBits, out, policy);
+}
+
+// The exact -a into `w` scratch planes (w = NegFormat(a).Width()).
+void NegExact(const Multi& a, Word* base, int w) {
+  Machine& m = a.GetMachine();
+  auto& pa = m.PointersA();
+  auto& pb = m.PointersB();
+  auto& po = m.PointersOut();
+  pa.clear(), pb.clear(), po.clear();
+  for (int p = 0; p < w; ++p) {
+    pa.push_back(m.ZeroPlane());
+    pb.push_back(PlaneAt(a, 0, p));
+    po.push_back(base + p * m.WordsPerPlane());
+  }
+  AddArgs args{pa.data(), pb.data(), po.data(), w, true, true, 0, false, nullptr, nullptr};
+  m.Kernels().add(args, m.WordsPerPlane());
+}
+
+// mask ? a : b in the union format, into scratch planes.
+void SelectExact(const Word* mask, const Multi& a, const Multi& b, const Format& u, Word* base) {
+  Machine& m = a.GetMachine();
+  auto& pa = m.PointersA();
+  auto& pb = m.PointersB();
+  auto& po = m.PointersOut();
+  pa.clear(), pb.clear(), po.clear();
+  for (int p = 0; p < u.Width(); ++p) {
+    pa.push_back(PlaneAt(a, u.fracBits - a.Format().fracBits, p));
+    pb.push_back(PlaneAt(b, u.fracBits - b.Format().fracBits, p));
+    po.push_back(base + p * m.WordsPerPlane());
+  }
+  m.Kernels().select(mask, pa.data(), pb.data(), po.data(), u.Width(), m.WordsPerPlane());
+}
+
+// The plane of a < b (the sign of the exact difference) into `out`.
+void LessPlane(const Multi& a, const Multi& b, Word* out) {
+  Machine& m = a.GetMachine();
+  const Format e = DiffFormat(a.Format(), b.Format());
+  const int w = e.Width();
+  auto& pa = m.PointersA();
+  auto& pb = m.PointersB();
+  auto& po = m.PointersOut();
+  pa.clear(), pb.clear(), po.clear();
+  for (int p = 0; p < w; ++p) {
+    pa.push_back(PlaneAt(a, e.fracBits - a.Format().fracBits, p));
+    pb.push_back(PlaneAt(b, e.fracBits - b.Format().fracBits, p));
+    po.push_back(p == w - 1 ? out : nullptr);
+  }
+  AddArgs args{pa.data(), pb.data(), po.data(), w, true, true, 0, false, nullptr, nullptr};
+  m.Kernels().add(args, m.WordsPerPlane());
+}
+
+void CheckSameMachine(const Multi& a, const Multi& b) {
+  ZEPHYR_CHECK(!a.Empty() && !b.Empty());
+  ZEPHYR_CHECK(&a.GetMachine() == &b.GetMachine());
+}
+
+void CheckBool(const Multi& a, const char* what) {
+  if (a.Width() != 1)
+    throw UserError(fmt::format("{} needs a 1-bit multi (a mask), got format {}", what,
+                                a.Format().Name()));
+}
+
+// Product rows (shift-and-add) then round/fit; rows given by the caller.
+void MulInto(const Multi& a, const std::vector<const Word*>& rows, const std::vector<int>& shifts,
+             const std::vector<unsigned char>& subs, const Format& product, Multi& out,
+             Policy policy) {
+  Machine& m = a.GetMachine();
+  const int w = product.Width();
+  Scratch exact(m, w);
+  auto& pa = m.PointersA();
+  pa.clear();
+  for (int p = 0; p < w; ++p) pa.push_back(PlaneAt(a, 0, p));
+  auto& po = m.PointersOut();
+  po.clear();
+  for (int p = 0; p < w; ++p) po.push_back(exact.Plane(p));
+  MulArgs args{pa.data(), w, rows.data(), shifts.data(), subs.data(),
+               static_cast<int>(rows.size()), po.data()};
+  m.Kernels().mul(args, m.WordsPerPlane());
+  RoundFitInto(m, exact.p, w, product.isSigned, product.fracBits, out, policy);
+}
+
+// One row per multiplier bit; the sign row of a signed multiplier is subtracted.
+void MulByMulti(const Multi& a, const Multi& b, Multi& out, Policy p) {
+  std::vector<const Word*> rows;
+  std::vector<int> shifts;
+  std::vector<unsigned char> subs;
+  for (int j = 0; j < b.Width(); ++j) {
+    rows.push_back(b.Plane(j));
+    shifts.push_back(j);
+    subs.push_back(b.Format().isSigned && j == b.Width() - 1);
+  }
+  MulInto(a, rows, shifts, subs, ProductFormat(a.Format(), b.Format()), out, p);
+}
+
+}  // namespace
+
+// ---- Multi ------------------------------------------------------------------------------------
+
+Multi::Multi(Machine& machine, fixed::Format format, std::string name, std::optional<Space> space)
+    : machine_(&machine), format_(format) {
+  if (!format.IsValid())
+    throw UserError(fmt::format("multi '{}': invalid format {}", name, format.Name()));
+  alloc_ = machine.Memory().Allocate(name, format.Width(), space);
+  planes_ = machine.AcquirePlanes(format.Width());
+  std::memset(planes_, 0, sizeof(Word) * format.Width() * machine.WordsPerPlane());
+}
+
+Multi::Multi(const Multi& o) : Multi(o.GetMachine(), o.format_, o.alloc_.name + "'") {
+  machine_->Charge("copy", CopyCost(o.AsOperand(), AsOperand()));
+  std::memcpy(planes_, o.planes_, sizeof(Word) * Width() * machine_->WordsPerPlane());
+}
+
+Multi::Multi(Multi&& o) noexcept
+    : machine_(o.machine_), format_(o.format_), alloc_(o.alloc_), planes_(o.planes_) {
+  o.machine_ = nullptr;
+  o.planes_ = nullptr;
+}
+
+Multi& Multi::operator=(const Multi& o) {
+  if (this == &o) return *this;
+  if (Empty()) {
+    *this = Multi(o);
+    return *this;
+  }
+  CheckSameMachine(*this, o);
+  if (o.format_ != format_) return *this = Convert(o, format_);
+  Machine& m = *machine_;
+  m.Charge("assign", CopyCost(o.AsOperand(), AsOperand()));
+  auto& pa = m.PointersA();
+  auto& pb = m.PointersB();
+  auto& po = m.PointersOut();
+  pa.clear(), pb.clear(), po.clear();
+  for (int i = 0; i < Width(); ++i) {
+    pa.push_back(o.Plane(i));
+    pb.push_back(Plane(i));
+    po.push_back(Plane(i));
+  }
+  m.Kernels().select(m.Activity(), pa.data(), pb.data(), po.data(), Width(), m.WordsPerPlane());
+  return *this;
+}
+
+Multi& Multi::operator=(Multi&& o) {
+  if (this == &o) return *this;
+  if (Empty() || (o.machine_ == machine_ && o.format_ == format_ && machine_->AllActive() &&
+                  o.alloc_.space == alloc_.space)) {
+    // Outside any where every PE is written: take the value's storage (the compiler
+    // would have computed straight into this variable), keeping this name.
+    std::string name = alloc_.name;
+    bool hadName = !Empty();
+    Release();
+    machine_ = o.machine_, format_ = o.format_, alloc_ = o.alloc_, planes_ = o.planes_;
+    o.machine_ = nullptr, o.planes_ = nullptr;
+    (void)name, (void)hadName;
+    return *this;
+  }
+  return *this = static_cast<const Multi&>(o);
+}
+
+Multi::~Multi() { Release(); }
+
+void Multi::Release() {
+  if (!machine_) return;
+  machine_->Memory().Free(alloc_.id);
+  machine_->ReleasePlanes(planes_, Width());
+  machine_ = nullptr;
+  planes_ = nullptr;
+}
+
+void Multi::LoadRaw(const std::vector<int64_t>& raw) {
+  Machine& m = *machine_;
+  if (static_cast<int64_t>(raw.size()) > m.VirtualPes())
+    throw UserError(fmt::format("multi '{}': {} values for {} virtual PEs", alloc_.name,
+                                raw.size(), m.VirtualPes()));
+  m.Charge("hostLoad", HostTransferCost(Width()));
+  std::memset(planes_, 0, sizeof(Word) * Width() * m.WordsPerPlane());
+  const int w = std::min(Width(), 64);
+  for (size_t pe = 0; pe < raw.size(); ++pe) {
+    uint64_t bits = static_cast<uint64_t>(raw[pe]);
+    for (int i = 0; i < Width(); ++i) {
+      uint64_t bit = i < w ? (bits >> i) & 1 : (raw[pe] < 0 && format_.isSigned ? 1 : 0);
+      Plane(i)[pe >> 6] |= bit << (pe & 63);
+    }
+  }
+}
+
+void Multi::Load(const std::vector<fixed::Fixed>& values) {
+  Machine& m = *machine_;
+  if (static_cast<int64_t>(values.size()) > m.VirtualPes())
+    throw UserError(fmt::format("multi '{}': {} values for {} virtual PEs", alloc_.name,
+                                values.size(), m.VirtualPes()));
+  m.Charge("hostLoad", HostTransferCost(Width()));
+  std::memset(planes_, 0, sizeof(Word) * Width() * m.WordsPerPlane());
+  for (size_t pe = 0; pe < values.size(); ++pe) {
+    if (values[pe].format != format_)
+      throw UserError(fmt::format("multi '{}' has format {}; value {} has {}", alloc_.name,
+                                  format_.Name(), pe, values[pe].format.Name()));
+    fixed::BigInt bits = values[pe].Bits();
+    for (int i = 0; i < Width(); ++i)
+      if (boost::multiprecision::bit_test(bits, i)) Plane(i)[pe >> 6] |= Word{1} << (pe & 63);
+  }
+}
+
+fixed::Fixed Multi::At(int64_t pe) const {
+  fixed::BigInt bits = 0;
+  for (int i = 0; i < Width(); ++i)
+    if (BitAt(i, pe)) boost::multiprecision::bit_set(bits, i);
+  return fixed::Fixed::FromBits(format_, bits);
+}
+
+std::vector<fixed::Fixed> Multi::Read() const {
+  machine_->Charge("hostRead", HostTransferCost(Width()));
+  std::vector<fixed::Fixed> v;
+  v.reserve(machine_->VirtualPes());
+  for (int64_t pe = 0; pe < machine_->VirtualPes(); ++pe) v.push_back(At(pe));
+  return v;
+}
+
+std::vector<int64_t> Multi::ReadRaw() const {
+  ZEPHYR_CHECK_LE(Width(), 64);
+  machine_->Charge("hostRead", HostTransferCost(Width()));
+  std::vector<int64_t> v(machine_->VirtualPes());
+  const int w = Width();
+  for (int64_t pe = 0; pe < machine_->VirtualPes(); ++pe) {
+    uint64_t bits = 0;
+    for (int i = 0; i < w; ++i) bits |= uint64_t{BitAt(i, pe)} << i;
+    if (format_.isSigned && w < 64 && ((bits >> (w - 1)) & 1)) bits |= ~uint64_t{0} << w;
+    v[pe] = static_cast<int64_t>(bits);
+  }
+  return v;
+}
+
+// ---- arithmetic ---------------------------------------------------------------------------
+
+Multi Add(const Multi& a, const Multi& b, Format out, Policy p) {
+  CheckSameMachine(a, b);
+  Multi r(a.GetMachine(), out, "add");
+  a.GetMachine().Charge("add", AddCost(a.AsOperand(), b.AsOperand(), r.AsOperand(), p));
+  AddInto(a, b, false, r, p);
+  return r;
+}
+
+Multi Sub(const Multi& a, const Multi& b, Format out, Policy p) {
+  CheckSameMachine(a, b);
+  Multi r(a.GetMachine(), out, "sub");
+  a.GetMachine().Charge("sub", SubCost(a.AsOperand(), b.AsOperand(), r.AsOperand(), p));
+  AddInto(a, b, true, r, p);
+  return r;
+}
+
+Multi Neg(const Multi& a, Format out, Policy p) {
+  Machine& m = a.GetMachine();
+  Multi r(m, out, "neg");
+  m.Charge("neg", NegCost(a.AsOperand(), r.AsOperand(), p));
+  const Format e = NegFormat(a.Format());
+  Scratch exact(m, e.Width());
+  NegExact(a, exact.p, e.Width());
+  RoundFitInto(m, exact.p, e.Width(), true, e.fracBits, r, p);
+  return r;
+}
+
+Multi Abs(const Multi& a, Format out, Policy p) {
+  Machine& m = a.GetMachine();
+  Multi r(m, out, "abs");
+  m.Charge("abs", AbsCost(a.AsOperand(), r.AsOperand(), p));
+  const Format e = AbsFormat(a.Format());
+  if (!a.Format().isSigned) {
+    RoundFitInto(m, a.Plane(0), a.Width(), false, a.Format().fracBits, r, p);
+    return r;
+  }
+  const int w = e.Width();  // == NegFormat(a).Width()
+  Scratch neg(m, w), exact(m, w);
+  NegExact(a, neg.p, w);
+  auto& pa = m.PointersA();
+  auto& pb = m.PointersB();
+  auto& po = m.PointersOut();
+  pa.clear(), pb.clear(), po.clear();
+  for (int q = 0; q < w; ++q) {
+    pa.push_back(neg.Plane(q));
+    pb.push_back(PlaneAt(a, 0, q));
+    po.push_back(exact.Plane(q));
+  }
+  m.Kernels().select(a.Plane(a.Width() - 1), pa.data(), pb.data(), po.data(), w, m.WordsPerPlane());
+  RoundFitInto(m, exact.p, w, true, e.fracBits, r, p);
+  return r;
+}
+
+static Multi MinMax(const Multi& a, const Multi& b, Format out, Policy p, bool isMax) {
+  CheckSameMachine(a, b);
+  Machine& m = a.GetMachine();
+  Multi r(m, out, isMax ? "max" : "min");
+  m.Charge(isMax ? "max" : "min", MinMaxCost(a.AsOperand(), b.AsOperand(), r.AsOperand(), p));
+  Scratch lt(m, 1);
+  LessPlane(a, b, lt.p);
+  const Format u = UnionFormat(a.Format(), b.Format());
+  Scratch exact(m, u.Width());
+  if (isMax) SelectExact(lt.p, b, a, u, exact.p);
+  else SelectExact(lt.p, a, b, u, exact.p);
+  RoundFitInto(m, exact.p, u.Width(), u.isSigned, u.fracBits, r, p);
+  return r;
+}
+
+Multi Min(const Multi& a, const Multi& b, Format out, Policy p) { return MinMax(a, b, out, p, false); }
+Multi Max(const Multi& a, const Multi& b, Format out, Policy p) { return MinMax(a, b, out, p, true); }
+
+Multi Mul(const Multi& a, const Multi& b, Format out, Policy p) {
+  CheckSameMachine(a, b);
+  Machine& m = a.GetMachine();
+  Multi r(m, out, "mul");
+  m.Charge("mul", MulCost(a.AsOperand(), b.AsOperand(), r.AsOperand(), p));
+  MulByMulti(a, b, r, p);
+  return r;
+}
+
+Multi Mul(const Multi& a, const Uni& b, Format out, Policy p) {
+  Machine& m = a.GetMachine();
+  Multi r(m, out, "mulUni");
+  m.Charge("mulUni", MulUniCost(a.AsOperand(), b.value, r.AsOperand(), p));
+  std::vector<const Word*> rows;
+  std::vector<int> shifts;
+  std::vector<unsigned char> subs;
+  const int wc = b.value.format.Width();
+  for (int j = 0; j < wc; ++j)
+    if (b.value.Bit(j)) {  // the controller skips the constant's zero bits
+      rows.push_back(m.OnesPlane());
+      shifts.push_back(j);
+      subs.push_back(b.value.format.isSigned && j == wc - 1);
+    }
+  MulInto(a, rows, shifts, subs, ProductFormat(a.Format(), b.value.format), r, p);
+  return r;
+}
+
+Multi Square(const Multi& a, Format out, Policy p) {
+  Machine& m = a.GetMachine();
+  Multi r(m, out, "square");
+  m.Charge("square", MulCost(a.AsOperand(), a.AsOperand(), r.AsOperand(), p));
+  MulByMulti(a, a, r, p);
+  return r;
+}
+
+Multi Shift(const Multi& a, int k, Format out, Policy p) {
+  Machine& m = a.GetMachine();
+  Multi r(m, out, "shift");
+  m.Charge(k == 0 ? "convert" : "shift", ShiftCost(a.AsOperand(), k, r.AsOperand(), p));
+  RoundFitInto(m, a.Plane(0), a.Width(), a.Format().isSigned, a.Format().fracBits - k, r, p);
+  return r;
+}
+
+Multi Convert(const Multi& a, Format out, Policy p) { return Shift(a, 0, out, p); }
+
+Multi Select(const Multi& mask, const Multi& a, const Multi& b, Format out, Policy p) {
+  CheckSameMachine(a, b);
+  CheckBool(mask, "Select");
+  Machine& m = a.GetMachine();
+  Multi r(m, out, "select");
+  m.Charge("select", SelectCost(mask.AsOperand(), a.AsOperand(), b.AsOperand(), r.AsOperand(), p));
+  const Format u = UnionFormat(a.Format(), b.Format());
+  Scratch exact(m, u.Width());
+  SelectExact(mask.Plane(0), a, b, u, exact.p);
+  RoundFitInto(m, exact.p, u.Width(), u.isSigned, u.fracBits, r, p);
+  return r;
+}
+
+Multi Broadcast(Machine& m, const fixed::Fixed& value) {
+  Multi r(m, value.format, "uni");
+  m.Charge("broadcast", BroadcastCost(r.AsOperand()));
+  for (int i = 0; i < r.Width(); ++i)
+    std::memcpy(r.Plane(i), value.Bit(i) ? m.OnesPlane() : m.ZeroPlane(),
+                sizeof(Word) * m.WordsPerPlane());
+  return r;
+}
+
+// ---- comparisons and logic ----------------------------------------------------------------
+
+Format BoolFormat() { return Format::Unsigned(1, 0); }
+
+Multi Less(const Multi& a, const Multi& b) {
+  CheckSameMachine(a, b);
+  Machine& m = a.GetMachine();
+  Multi r(m, BoolFormat(), "less");
+  m.Charge("compare", CompareCost(a.AsOperand(), b.AsOperand(), r.GetSpace()));
+  LessPlane(a, b, r.Plane(0));
+  return r;
+}
+
+Multi LessEqual(const Multi& a, const Multi& b) {
+  CheckSameMachine(a, b);
+  Machine& m = a.GetMachine();
+  Multi r(m, BoolFormat(), "lessEqual");
+  m.Charge("compare", CompareCost(a.AsOperand(), b.AsOperand(), r.GetSpace()));
+  LessPlane(b, a, r.Plane(0));
+  m.Kernels().logic(LogicOp::Not, r.Plane(0), nullptr, r.Plane(0), m.WordsPerPlane());
+  return r;
+}
+
+Multi Equal(const Multi& a, const Multi& b) {
+  CheckSameMachine(a, b);
+  Machine& m = a.GetMachine();
+  Multi r(m, BoolFormat(), "equal");
+  m.Charge("compare", CompareCost(a.AsOperand(), b.AsOperand(), r.GetSpace()));
+  const Format u = UnionFormat(a.Format(), b.Format());
+  auto& pa = m.PointersA();
+  auto& pb = m.PointersB();
+  pa.clear(), pb.clear();
+  for (int q = 0; q < u.Width(); ++q) {
+    pa.push_back(PlaneAt(a, u.fracBits - a.Format().fracBits, q));
+    pb.push_back(PlaneAt(b, u.fracBits - b.Format().fracBits, q));
+  }
+  m.Kernels().equal(pa.data(), pb.data(), u.Width(), r.Plane(0), m.WordsPerPlane());
+  return r;
+}
+
+static Multi LogicOf(LogicOp op, const Multi& a, const Multi* b, const char* name) {
+  CheckBool(a, name);
+  if (b) CheckBool(*b, name), CheckSameMachine(a, *b);
+  Machine& m = a.GetMachine();
+  Multi r(m, BoolFormat(), name);
+  m.Charge("logic", LogicCost(a.AsOperand(), b != nullptr, r.GetSpace()));
+  m.Kernels().logic(op, a.Plane(0), b ? b->Plane(0) : nullptr, r.Plane(0), m.WordsPerPlane());
+  return r;
+}
+
+Multi And(const Multi& a, const Multi& b) { return LogicOf(LogicOp::And, a, &b, "and"); }
+Multi Or(const Multi& a, const Multi& b) { return LogicOf(LogicOp::Or, a, &b, "or"); }
+Multi Xor(const Multi& a, const Multi& b) { return LogicOf(LogicOp::Xor, a, &b, "xor"); }
+Multi Not(const Multi& a) { return LogicOf(LogicOp::Not, a, nullptr, "not"); }
+
+Multi operator+(const Multi& a, const Multi& b) { return Add(a, b, SumFormat(a.Format(), b.Format())); }
+Multi operator-(const Multi& a, const Multi& b) { return Sub(a, b, DiffFormat(a.Format(), b.Format())); }
+Multi operator*(const Multi& a, const Multi& b) {
+  return Mul(a, b, ProductFormat(a.Format(), b.Format()));
+}
+Multi operator-(const Multi& a) { return Neg(a, NegFormat(a.Format())); }
+
+// ---- where ----------------------------------------------------------------------------------
+
+WhereScope::WhereScope(const Multi& mask) : machine_(&mask.GetMachine()) {
+  CheckBool(mask, "where");
+  machine_->Charge("where", WhereCost(mask.AsOperand()));
+  mask_ = machine_->AcquirePlanes(1);
+  std::memcpy(mask_, mask.Plane(0), sizeof(Word) * machine_->WordsPerPlane());
+  machine_->PushActivity(mask_, false);
+}
+
+void WhereScope::Elsewhere() {
+  ZEPHYR_CHECK(!elsewhere_);
+  elsewhere_ = true;
+  machine_->Charge("elsewhere", ActivityCost());
+  machine_->PopActivity();
+  machine_->PushActivity(mask_, true);
+}
+
+WhereScope::~WhereScope() {
+  machine_->Charge("endWhere", ActivityCost());
+  machine_->PopActivity();
+  machine_->ReleasePlanes(mask_, 1);
+}
+
+// ---- reductions -----------------------------------------------------------------------------
+
+namespace {
+bool AnyActive(const Machine& m, const Word* plane, bool complement) {
+  const Word* act = m.Activity();
+  for (size_t w = 0; w < m.WordsPerPlane(); ++w)
+    if ((complement ? ~plane[w] : plane[w]) & act[w]) return true;
+  return false;
+}
+
+fixed::Fixed Bitwise(const Multi& a, ReduceKind kind) {
+  Machine& m = a.GetMachine();
+  m.Charge(ReduceName(kind), ReduceCost(kind, a.AsOperand()));
+  fixed::BigInt bits = 0;
+  for (int i = 0; i < a.Width(); ++i) {
+    bool bit = false;
+    if (kind == ReduceKind::Or) bit = AnyActive(m, a.Plane(i), false);
+    if (kind == ReduceKind::And) bit = !AnyActive(m, a.Plane(i), true);
+    if (kind == ReduceKind::Xor) {
+      int64_t n = 0;
+      for (size_t w = 0; w < m.WordsPerPlane(); ++w) n += std::popcount(a.Plane(i)[w] & m.Activity()[w]);
+      bit = n & 1;
+    }
+    if (bit) boost::multiprecision::bit_set(bits, i);
+  }
+  return fixed::Fixed::FromBits(a.Format(), bits);
+}
+
+fixed::Fixed Extreme(const Multi& a, bool isMax) {
+  Machine& m = a.GetMachine();
+  m.Charge(ReduceName(isMax ? ReduceKind::Max : ReduceKind::Min),
+           ReduceCost(isMax ? ReduceKind::Max : ReduceKind::Min, a.AsOperand()));
+  const Format& f = a.Format();
+  if (!AnyActive(m, m.OnesPlane(), false))
+    return fixed::Fixed{f, isMax ? f.MinRaw() : f.MaxRaw()};
+  const size_t words = m.WordsPerPlane();
+  std::vector<Word> cand(m.Activity(), m.Activity() + words);
+  fixed::BigInt bits = 0;
+  for (int i = a.Width() - 1; i >= 0; --i) {
+    const Word* plane = a.Plane(i);
+    // The bit value the extreme prefers: 1 for max, 0 for min; inverted for a sign bit.
+    bool want = isMax != (f.isSigned && i == a.Width() - 1);
+    bool found = false;
+    for (size_t w = 0; w < words && !found; ++w)
+      found = (want ? plane[w] : ~plane[w]) & cand[w];
+    bool bit = found ? want : !want;
+    for (size_t w = 0; w < words; ++w) cand[w] &= bit ? plane[w] : ~plane[w];
+    if (bit) boost::multiprecision::bit_set(bits, i);
+  }
+  return fixed::Fixed::FromBits(f, bits);
+}
+}  // namespace
+
+fixed::Fixed ReduceOr(const Multi& a) { return Bitwise(a, ReduceKind::Or); }
+fixed::Fixed ReduceAnd(const Multi& a) { return Bitwise(a, ReduceKind::And); }
+fixed::Fixed ReduceXor(const Multi& a) { return Bitwise(a, ReduceKind::Xor); }
+bool Any(const Multi& mask) {
+  CheckBool(mask, "Any");
+  return ReduceOr(mask).raw != 0;
+}
+
+fixed::Fixed ReduceSum(const Multi& a) {
+  Machine& m = a.GetMachine();
+  m.Charge("reduceSum", ReduceCost(ReduceKind::Sum, a.AsOperand()));
+  fixed::BigInt sum = 0;
+  for (int i = 0; i < a.Width(); ++i) {
+    int64_t n = 0;
+    for (size_t w = 0; w < m.WordsPerPlane(); ++w) n += std::popcount(a.Plane(i)[w] & m.Activity()[w]);
+    fixed::BigInt term = fixed::BigInt(n) << i;
+    if (a.Format().isSigned && i == a.Width() - 1) sum -= term;
+    else sum += term;
+  }
+  int extra = 0;
+  while ((int64_t{1} << extra) < m.VirtualPes()) ++extra;
+  Format f{a.Format().isSigned, a.Format().intBits + extra, a.Format().fracBits};
+  return fixed::Fixed{f, sum};
+}
+
+fixed::Fixed ReduceMax(const Multi& a) { return Extreme(a, true); }
+fixed::Fixed ReduceMin(const Multi& a) { return Extreme(a, false); }
+
+// ---- mesh ---------------------------------------------------------------------------------------
+
+Multi MeshShift(const Multi& a, int axis, int distance) {
+  Machine& m = a.GetMachine();
+  const MeshShape& shape = m.Shape();
+  if (axis < 0 || axis >= static_cast<int>(shape.extent.size()))
+    throw UserError(fmt::format("mesh shift along axis {}: the {} mesh has {} axes", axis,
+                                shape.Name(), shape.extent.size()));
+  Multi r(m, a.Format(), "meshShift");
+  m.Charge("meshShift", MeshShiftCost(a.AsOperand(), distance));
+  int64_t stride = 1;
+  for (int i = 0; i < axis; ++i) stride *= shape.extent[i];
+  const int64_t s = stride * distance;  // bit offset within a layer: out[i] = in[i - s]
+  const Word* edge = m.MeshEdgeMask(axis, distance);
+  const int64_t perLayer = static_cast<int64_t>(m.WordsPerLayer());
+  const int64_t bitsPerLayer = perLayer * 64;
+  for (int i = 0; i < a.Width(); ++i)
+    for (int layer = 0; layer < m.Layers(); ++layer) {
+      const Word* src = a.Plane(i) + layer * perLayer;
+      Word* dst = r.Plane(i) + layer * perLayer;
+      for (int64_t w = 0; w < perLayer; ++w) {
+        // Bits w*64 .. w*64+63 of dst come from bits starting at w*64 - s of src.
+        const int64_t from = w * 64 - s;
+        auto word = [&](int64_t bit) -> Word {  // 64 bits of src starting at `bit`
+          if (bit <= -64 || bit >= bitsPerLayer) return 0;
+          const int64_t q = bit >= 0 ? bit / 64 : -1 - ((-bit - 1) / 64);
+          const int rem = static_cast<int>(bit - q * 64);
+          Word lo = (q >= 0 && q < perLayer) ? src[q] : 0;
+          Word hi = (q + 1 >= 0 && q + 1 < perLayer) ? src[q + 1] : 0;
+          return rem == 0 ? lo : (lo >> rem) | (hi << (64 - rem));
+        };
+        dst[w] = word(from) & edge[layer * perLayer + w];
+      }
+    }
+  return r;
+}
+
+}  // namespace zephyr::bitserial

@@ -1,0 +1,176 @@
+// bitserial/multi.h — the MultiC-like layer: multi (one value per virtual PE) and uni
+// (one value on the host), with formats chosen at run time.
+//
+//   Machine m(Profile("wavetracer"), 384 * 384);
+//   Multi t = Mul(a, b, fmt);                     // rounded/fitted like fixed::Mul
+//   Multi hit = t < tBest;                        // a 1-bit multi (u1.0)
+//   Where(hit, [&] { tBest = t; }).Elsewhere([&] { miss = miss + one; });
+//   if (ReduceOr(hit)) ...;  fixed::Fixed nearest = ReduceMin(t);
+//
+// Every operation is bit-exact with the fixed/ function of the same name (same result
+// bits, overflow flag per PE in Machine::OverflowPlane()) and charges its schedule's
+// cycles (bitserial/cost.h) to the machine's report. A new result is computed in every PE;
+// assigning into an existing multi (operator=) writes only the active PEs, as MultiC does.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "bitserial/machine.h"
+#include "fixed/format.h"
+
+namespace zephyr::bitserial {
+
+// A host value, as MultiC's uni.
+struct Uni {
+  fixed::Fixed value;
+};
+
+class Multi {
+ public:
+  Multi() = default;
+  // A new variable in PE memory (placed internal if it fits, else external, unless
+  // `space` is given); its bits start at zero.
+  Multi(Machine& machine, fixed::Format format, std::string name = "multi",
+        std::optional<Space> space = std::nullopt);
+  Multi(const Multi& other);  // a copy (charged)
+  Multi(Multi&& other) noexcept;
+  // Assignment writes the active PEs only (converting with the default policy if the
+  // formats differ); an empty Multi takes the other's value outright.
+  Multi& operator=(const Multi& other);
+  Multi& operator=(Multi&& other);
+  ~Multi();
+
+  bool Empty() const { return machine_ == nullptr; }
+  Machine& GetMachine() const { return *machine_; }
+  const fixed::Format& Format() const { return format_; }
+  int Width() const { return format_.Width(); }
+  Space GetSpace() const { return alloc_.space; }
+  const Allocation& GetAllocation() const { return alloc_; }
+  Operand AsOperand() const { return {format_, alloc_.space}; }
+  const Word* Plane(int i) const { return planes_ + i * machine_->WordsPerPlane(); }
+  Word* Plane(int i) { return planes_ + i * machine_->WordsPerPlane(); }
+
+  // Host transfers (charged to the host class): one value per virtual PE, in PE order;
+  // PEs past the vector's end get 0. Values must have this multi's format.
+  void Load(const std::vector<fixed::Fixed>& values);
+  void LoadRaw(const std::vector<int64_t>& raw);  // two's-complement raw integers
+  std::vector<fixed::Fixed> Read() const;
+  std::vector<int64_t> ReadRaw() const;  // widths <= 64
+  // One PE's value, for tests and debugging (not charged).
+  fixed::Fixed At(int64_t pe) const;
+  bool BitAt(int i, int64_t pe) const {
+    return (Plane(i)[pe >> 6] >> (pe & 63)) & 1;
+  }
+
+ private:
+  void Release();
+  Machine* machine_ = nullptr;
+  fixed::Format format_;
+  Allocation alloc_;
+  Word* planes_ = nullptr;
+};
+
+// ---- arithmetic (each as the fixed/ function of the same name) ----------------------------
+Multi Add(const Multi& a, const Multi& b, fixed::Format out, fixed::Policy p = {});
+Multi Sub(const Multi& a, const Multi& b, fixed::Format out, fixed::Policy p = {});
+Multi Neg(const Multi& a, fixed::Format out, fixed::Policy p = {});
+Multi Abs(const Multi& a, fixed::Format out, fixed::Policy p = {});
+Multi Min(const Multi& a, const Multi& b, fixed::Format out, fixed::Policy p = {});
+Multi Max(const Multi& a, const Multi& b, fixed::Format out, fixed::Policy p = {});
+Multi Mul(const Multi& a, const Multi& b, fixed::Format out, fixed::Policy p = {});
+Multi Mul(const Multi& a, const Uni& b, fixed::Format out, fixed::Policy p = {});
+Multi Square(const Multi& a, fixed::Format out, fixed::Policy p = {});
+Multi Shift(const Multi& a, int k, fixed::Format out, fixed::Policy p = {});
+Multi Convert(const Multi& a, fixed::Format out, fixed::Policy p = {});
+// mask ? a : b, rounded and fitted to out.
+Multi Select(const Multi& mask, const Multi& a, const Multi& b, fixed::Format out,
+             fixed::Policy p = {});
+// A uni value in every PE (its own format).
+Multi Broadcast(Machine& m, const fixed::Fixed& value);
+
+// ---- comparisons and logic: 1-bit multis (u1.0) ------------------------------------------
+fixed::Format BoolFormat();
+Multi Less(const Multi& a, const Multi& b);
+Multi LessEqual(const Multi& a, const Multi& b);
+Multi Equal(const Multi& a, const Multi& b);
+Multi And(const Multi& a, const Multi& b);
+Multi Or(const Multi& a, const Multi& b);
+Multi Xor(const Multi& a, const Multi& b);
+Multi Not(const Multi& a);
+
+// Operators with exact result formats (never overflow): + - * unary-, and comparisons.
+Multi operator+(const Multi& a, const Multi& b);
+Multi operator-(const Multi& a, const Multi& b);
+Multi operator*(const Multi& a, const Multi& b);
+Multi operator-(const Multi& a);
+inline Multi operator<(const Multi& a, const Multi& b) { return Less(a, b); }
+inline Multi operator<=(const Multi& a, const Multi& b) { return LessEqual(a, b); }
+inline Multi operator>(const Multi& a, const Multi& b) { return Less(b, a); }
+inline Multi operator>=(const Multi& a, const Multi& b) { return LessEqual(b, a); }
+inline Multi operator==(const Multi& a, const Multi& b) { return Equal(a, b); }
+inline Multi operator&&(const Multi& a, const Multi& b) { return And(a, b); }
+inline Multi operator||(const Multi& a, const Multi& b) { return Or(a, b); }
+inline Multi operator!(const Multi& a) { return Not(a); }
+
+// ---- activity: where / elsewhere ---------------------------------------------------------
+// RAII: while a WhereScope lives, only PEs where `mask` (a 1-bit multi) is 1 are active;
+// Elsewhere() switches to the PEs of the enclosing activity where it is 0.
+class WhereScope {
+ public:
+  explicit WhereScope(const Multi& mask);
+  ~WhereScope();
+  void Elsewhere();
+  WhereScope(const WhereScope&) = delete;
+  WhereScope& operator=(const WhereScope&) = delete;
+
+ private:
+  Machine* machine_;
+  Word* mask_;
+  bool elsewhere_ = false;
+};
+
+class WhereClause {
+ public:
+  WhereClause(const Multi& mask) : mask_(mask) {}
+  template <typename F>
+  void Elsewhere(F&& body) {
+    WhereScope scope(mask_);
+    scope.Elsewhere();
+    body();
+  }
+
+ private:
+  const Multi& mask_;
+};
+
+template <typename F>
+WhereClause Where(const Multi& mask, F&& body) {
+  {
+    WhereScope scope(mask);
+    body();
+  }
+  return WhereClause(mask);
+}
+
+// ---- reductions over the active PEs into a uni ---------------------------------------------
+// Or/And/Xor are bitwise over the value's bits; with no active PE they give 0, all ones, 0.
+fixed::Fixed ReduceOr(const Multi& a);
+fixed::Fixed ReduceAnd(const Multi& a);
+fixed::Fixed ReduceXor(const Multi& a);
+bool Any(const Multi& mask);  // ReduceOr of a 1-bit multi
+// The exact sum, in a format with ceil(log2(virtual PEs)) more integer bits.
+fixed::Fixed ReduceSum(const Multi& a);
+// With no active PE: Max gives the format's smallest value, Min its largest.
+fixed::Fixed ReduceMax(const Multi& a);
+fixed::Fixed ReduceMin(const Multi& a);
+
+// ---- mesh communication ---------------------------------------------------------------------
+// Each PE takes the value of the PE `distance` steps back along `axis` of the machine's
+// shape (x = 0 fastest): out(c) = a(c - distance·e_axis). Edge rule: a PE whose source is
+// outside the mesh receives 0 (no wrap-around); every virtual-PE layer is its own mesh.
+Multi MeshShift(const Multi& a, int axis, int distance);
+
+}  // namespace zephyr::bitserial

@@ -1,0 +1,80 @@
+// bitserial/profile.h — machine profiles: the geometry and the cycle cost of every micro-op.
+//
+// Machine timing is data (STYLE.md): a profile is a named table of micro-op costs plus the
+// machine's geometry and clock. The engine never special-cases a machine; the MPP's
+// published figures (Batcher 1980) fall out of the same schedules as the WaveTracer's, with
+// different numbers in the table. Any entry can be overridden at run time ("name=value");
+// a profile with a missing entry is rejected naming it.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace zephyr::bitserial {
+
+// The micro-ops of a 1-bit PE datapath (docs/bitserial.md, "Micro-ops").
+enum class MicroOp : int {
+  ReadInternal,      // read one bit of internal PE memory into the ALU
+  WriteInternal,     // write one ALU output bit to internal memory (gated by activity)
+  ReadExternal,      // the same for external PE memory
+  WriteExternal,
+  AluStep,           // one boolean / full-adder step (sum + carry flag, or a logic op)
+  FlagOp,            // clear/set/latch a PE flag (carry, mask register, overflow latch)
+  AccumulatorRead,   // read a bit of the multiply partial-product accumulator
+  AccumulatorWrite,  // write a bit of it (MPP: a shift register; WaveTracer: memory)
+  ActivitySet,       // load/set/clear the activity flag (where / elsewhere)
+  MeshHop,           // move one bit-plane one PE along a mesh axis
+  ReduceBit,         // one global reduction over a bit-plane (OR tree / count) to the host
+  BroadcastBit,      // the controller broadcasts one host bit to every PE
+  HostPlane,         // move one bit-plane (one bit of every PE) between host and array
+  kCount
+};
+inline constexpr int kMicroOpCount = static_cast<int>(MicroOp::kCount);
+const char* MicroOpName(MicroOp op);  // "readInternal", ... (the profile's entry names)
+
+// The cycle classes of the report.
+enum class CycleClass : int { Alu, InternalMemory, ExternalMemory, Communication, Reduction,
+                              Host, kCount };
+inline constexpr int kCycleClassCount = static_cast<int>(CycleClass::kCount);
+const char* CycleClassName(CycleClass c);  // "alu", "internalMemory", ...
+CycleClass ClassOf(MicroOp op);
+
+// A mesh shape: extents along each axis, x fastest (PE index = x + X*(y + Y*z)).
+struct MeshShape {
+  std::vector<int> extent;  // {64,128}, {16,32,16}, {128,128}
+  int Size() const;
+  std::string Name() const;  // "64x128"
+};
+
+struct MachineProfile {
+  std::string name;
+  std::string source;           // where the numbers come from
+  double clockHz = 0;           // cycles per second
+  int physicalPes = 0;          // PEs in the array
+  int64_t internalBitsPerPe = 0;
+  int64_t externalBitsPerPe = 0;
+  std::vector<MeshShape> shapes;  // the shapes software may choose; [0] is the default
+  std::array<double, kMicroOpCount> cost{};  // cycles per micro-op
+  std::array<std::string, kMicroOpCount> note{};  // "Batcher 1980 ..." or "assumed: ..."
+
+  double Cost(MicroOp op) const { return cost[static_cast<int>(op)]; }
+  // "readExternal=3": overrides one entry; throws UserError on an unknown name or value.
+  void Override(const std::string& assignment);
+  // The profile's table as readable text (one row per micro-op with its note).
+  std::string Table() const;
+};
+
+// Builds a named profile from its table ("wavetracer", "mpp"); throws UserError for an
+// unknown name (listing the known ones) or a table that lacks an entry (naming it).
+MachineProfile Profile(const std::string& name);
+std::vector<std::string> ProfileNames();
+
+// The check behind Profile(): every micro-op must have an entry. Exposed for the tests.
+// `entries` maps entry names to (cost, note).
+MachineProfile ProfileFromTable(const std::string& name,
+                                const std::map<std::string, std::pair<double, std::string>>& entries);
+
+}  // namespace zephyr::bitserial

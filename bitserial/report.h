@@ -1,0 +1,52 @@
+// bitserial/report.h — cycles charged by a program, by class, by operation and by layer.
+//
+// Every virtual-PE layer runs the same instruction stream (SIMD), so each layer is
+// charged the same cycles; the total is the per-layer figure × the number of layers, and
+// the report lists the layers so a reader sees where the time goes.
+#pragma once
+
+#include <array>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "bitserial/cost.h"
+#include "bitserial/profile.h"
+
+namespace zephyr::bitserial {
+
+class CycleReport {
+ public:
+  CycleReport(const MachineProfile* profile, int layers) : profile_(profile), layers_(layers) {}
+
+  // Charges one call of `op` whose per-layer micro-op counts are `counts`.
+  void Charge(const std::string& op, const MicroOpCounts& counts);
+  void Clear();
+
+  int Layers() const { return layers_; }
+  double LayerCycles() const;  // one layer's instruction stream
+  double TotalCycles() const { return LayerCycles() * layers_; }
+  double ClassCycles(CycleClass c) const { return byClass_[static_cast<int>(c)] * layers_; }
+  // Total cycles charged to `op` over all layers (0 if never charged) and its call count.
+  double OpCycles(const std::string& op) const;
+  int64_t OpCalls(const std::string& op) const;
+  double ModelledSeconds() const { return TotalCycles() / profile_->clockHz; }
+
+  // {"profile", "clockHz", "layers", "totalCycles", "modelledSeconds", "byClass": {...},
+  //  "byLayer": [...], "byOp": {"add": {"calls", "cycles", "byClass", "microOps"}}}
+  nlohmann::json Json() const;
+  std::string Table() const;
+
+ private:
+  struct OpStats {
+    int64_t calls = 0;
+    MicroOpCounts counts;
+    std::array<double, kCycleClassCount> byClass{};
+  };
+  const MachineProfile* profile_;
+  int layers_;
+  std::array<double, kCycleClassCount> byClass_{};  // per layer
+  std::map<std::string, OpStats> ops_;              // per layer
+};
+
+}  // namespace zephyr::bitserial
