@@ -63,17 +63,32 @@ void WritePng(const std::string& path, const Image& image) {
 }
 
 Image ReadPng(const std::string& path) {
-  png_image img{};
-  img.version = PNG_IMAGE_VERSION;
-  if (!png_image_begin_read_from_file(&img, path.c_str()))
-    throw UserError(path + ": cannot read PNG: " + img.message);
-  img.format = PNG_FORMAT_RGB;
-  std::vector<uint8_t> data(PNG_IMAGE_SIZE(img));
-  if (!png_image_finish_read(&img, nullptr, data.data(), 0, nullptr))
-    throw UserError(path + ": cannot read PNG: " + img.message);
-  Image out(int(img.width), int(img.height));
-  for (size_t i = 0; i < out.pixels.size(); ++i)
-    out.pixels[i] = {data[3 * i] / 255.0, data[3 * i + 1] / 255.0, data[3 * i + 2] / 255.0};
+  // The low-level API on purpose: the simplified one converts files tagged gAMA 1.0 (as
+  // POV-Ray writes them with File_Gamma=1.0) to sRGB, and we compare raw 8-bit values.
+  File f(std::fopen(path.c_str(), "rb"));
+  if (!f) throw UserError(path + ": cannot open the PNG file");
+  png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+  png_infop info = png ? png_create_info_struct(png) : nullptr;
+  if (!info) {
+    png_destroy_read_struct(&png, nullptr, nullptr);
+    throw UserError(path + ": libpng could not start");
+  }
+  if (setjmp(png_jmpbuf(png))) {
+    png_destroy_read_struct(&png, &info, nullptr);
+    throw UserError(path + ": not a readable PNG file");
+  }
+  png_init_io(png, f.get());
+  png_read_png(png, info,
+               PNG_TRANSFORM_STRIP_16 | PNG_TRANSFORM_STRIP_ALPHA | PNG_TRANSFORM_PACKING |
+                   PNG_TRANSFORM_EXPAND | PNG_TRANSFORM_GRAY_TO_RGB,
+               nullptr);
+  const int w = int(png_get_image_width(png, info)), h = int(png_get_image_height(png, info));
+  png_bytepp rows = png_get_rows(png, info);
+  Image out(w, h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x)
+      out.At(x, y) = {rows[y][3 * x] / 255.0, rows[y][3 * x + 1] / 255.0, rows[y][3 * x + 2] / 255.0};
+  png_destroy_read_struct(&png, &info, nullptr);
   return out;
 }
 
