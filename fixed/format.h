@@ -19,10 +19,12 @@
 
 namespace zephyr::fixed {
 
-using BigInt = boost::multiprecision::cpp_int;
-
-// The widest operand we support; products and aligned sums use wider temporaries.
-inline constexpr int kMaxWidth = 256;
+// The widest format we support is 128 bits. Raw values and every temporary (a 256-bit
+// product, a 384-bit shifted dividend) fit a fixed 512-bit integer, which needs no heap;
+// ZEPHYR_CHECKs guard the bound.
+inline constexpr int kMaxWidth = 128;
+using BigInt = boost::multiprecision::number<boost::multiprecision::cpp_int_backend<
+    512, 512, boost::multiprecision::signed_magnitude, boost::multiprecision::unchecked, void>>;
 
 // A format: signedness, integer bits, fraction bits. Value = raw × 2^-fracBits, where raw
 // is a two's-complement integer of Width() bits (signed) or a plain unsigned integer.
