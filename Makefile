@@ -51,7 +51,7 @@ ZEPHYR := $(BIN)/zephyr
 TESTS  := $(BIN)/zephyr_tests
 
 # ---------------------------------------------------------------------------
-.PHONY: all build test run bench charts fuzz clean help setup
+.PHONY: all build test run bench charts fuzz fuzz-smoke clean help setup
 
 help: ## List the targets
 	@grep -E '^[a-z][a-zA-Z_-]*:.*## ' $(MAKEFILE_LIST) | sed 's/:.*## /\t/' | \
@@ -68,6 +68,7 @@ build: $(ZEPHYR) $(TESTS) $(BENCH_BINS)
 test: setup ## Build and run every test (GoogleTest; FILTER=... to select)
 	$(Q)$(MAKE) --no-print-directory -j$(JOBS) $(TESTS) $(ZEPHYR)
 	$(Q)$(TESTS) --gtest_brief=1 $(if $(FILTER),--gtest_filter='$(FILTER)')
+	$(Q)$(if $(FILTER),true,$(MAKE) --no-print-directory fuzz-smoke)
 
 # Defaults for `make run`: a generated 384×384 random-sphere scene, the default method.
 METHOD  ?= $(DEFAULT_METHOD)
@@ -88,6 +89,29 @@ bench: setup ## Build and run the benchmarks (figures printed; medians of repeat
 charts: setup ## Run the experiment sweeps and draw the charts under docs/results/ (QUICK=1: small)
 	$(Q)$(MAKE) --no-print-directory -j$(JOBS) $(ZEPHYR)
 	$(Q)QUICK='$(QUICK)' bash tools/charts.sh
+
+# The NFF reader under libFuzzer with AddressSanitizer and UBSan (Debian's clang-14).
+# `make fuzz` runs FUZZ_RUNS inputs; `make test` runs a few seconds of it (fuzz-smoke).
+FUZZ_CXX  ?= clang++-14
+FUZZ_RUNS ?= 1000000
+FUZZ_BIN  := $(BUILD)/fuzz/nff_fuzz
+FUZZ_SRCS := tests/fuzz/nff_fuzz.cpp hosts/nff.cpp hosts/scene.cpp hosts/geometry.cpp hosts/trace.cpp
+FUZZ_RUN   = mkdir -p $(BUILD)/fuzz/corpus && $(FUZZ_BIN) -max_len=4096 -timeout=10 \
+             $(BUILD)/fuzz/corpus tests/fuzz/corpus
+$(FUZZ_BIN): $(FUZZ_SRCS) $(wildcard hosts/*.h fixed/*.h)
+	$(call say,FUZZCXX,$@)
+	@mkdir -p $(@D)
+	$(Q)$(FUZZ_CXX) -std=c++20 -O1 -g -I. -fsanitize=fuzzer,address,undefined \
+	  -fno-sanitize-recover=all $(FUZZ_SRCS) -o $@
+
+fuzz: ## Fuzz the NFF reader: FUZZ_RUNS inputs (default 10^6) under ASan+UBSan
+	$(Q)$(MAKE) --no-print-directory $(FUZZ_BIN)
+	$(Q)$(FUZZ_RUN) -runs=$(FUZZ_RUNS)
+
+fuzz-smoke: # a few seconds of fuzzing, part of `make test` (skipped without clang)
+	$(Q)if command -v $(FUZZ_CXX) >/dev/null; then $(MAKE) --no-print-directory $(FUZZ_BIN) && \
+	  $(FUZZ_RUN) -max_total_time=5 2>&1 | tail -n 3; test $${PIPESTATUS[0]} -eq 0; \
+	  else echo "fuzz-smoke: $(FUZZ_CXX) not found, skipped"; fi
 
 clean: ## Remove build/ and out/
 	$(Q)rm -rf $(BUILD) out
