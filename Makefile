@@ -72,7 +72,8 @@ test: setup ## Build and run every test (GoogleTest; FILTER=... to select)
 
 # Defaults for `make run`: a generated 384×384 random-sphere scene, the default method.
 METHOD  ?= $(DEFAULT_METHOD)
-DEFAULT_METHOD := simd
+# seq is the only method so far; simd once issue 5 lands.
+DEFAULT_METHOD := seq
 WORKERS ?= 2
 FRAME   ?= 64
 SPHERES ?= 32
