@@ -1,0 +1,117 @@
+// bench_bitserial: host speed of the bit-serial engine (issue 3's targets) against a naive
+// emulator kept only here (one byte per PE bit, plain loops, as PIMeval stores one bool per
+// bit). Prints medians of repeats on one core; not a test.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdint>
+#include <random>
+#include <vector>
+
+#include "bitserial/multi.h"
+
+using namespace zephyr;
+using namespace zephyr::bitserial;
+using Clock = std::chrono::steady_clock;
+
+template <typename F>
+double MedianSeconds(int repeats, F&& f) {
+  std::vector<double> t;
+  for (int i = 0; i < repeats; ++i) {
+    auto t0 = Clock::now();
+    f();
+    t.push_back(std::chrono::duration<double>(Clock::now() - t0).count());
+  }
+  std::sort(t.begin(), t.end());
+  return t[t.size() / 2];
+}
+
+// ---- the naive emulator: one byte per bit, bit-major like the planes --------------------
+struct NaiveMulti {
+  int width;
+  std::vector<uint8_t> bits;  // bits[i * pes + pe]
+};
+
+void NaiveAdd(const NaiveMulti& a, const NaiveMulti& b, NaiveMulti& out, int pes) {
+  for (int pe = 0; pe < pes; ++pe) {
+    uint8_t carry = 0;
+    for (int i = 0; i < out.width; ++i) {
+      uint8_t x = a.bits[i * pes + pe], y = b.bits[i * pes + pe];
+      out.bits[i * pes + pe] = x ^ y ^ carry;
+      carry = (x & y) | (carry & (x ^ y));
+    }
+  }
+}
+
+// Unsigned shift-and-add, the low out.width bits (enough to time the loops).
+void NaiveMul(const NaiveMulti& a, const NaiveMulti& b, NaiveMulti& out, int pes) {
+  std::fill(out.bits.begin(), out.bits.end(), 0);
+  for (int pe = 0; pe < pes; ++pe)
+    for (int j = 0; j < b.width; ++j) {
+      uint8_t m = b.bits[j * pes + pe], carry = 0;
+      for (int i = 0; i + j < out.width; ++i) {
+        uint8_t x = i < a.width ? (a.bits[i * pes + pe] & m) : 0;
+        uint8_t acc = out.bits[(i + j) * pes + pe];
+        out.bits[(i + j) * pes + pe] = acc ^ x ^ carry;
+        carry = (acc & x) | (carry & (acc ^ x));
+      }
+    }
+}
+
+NaiveMulti NaiveFrom(const Multi& m, int pes) {
+  NaiveMulti n{m.Width(), std::vector<uint8_t>(static_cast<size_t>(m.Width()) * pes)};
+  for (int i = 0; i < m.Width(); ++i)
+    for (int pe = 0; pe < pes; ++pe) n.bits[i * pes + pe] = m.BitAt(i, pe);
+  return n;
+}
+
+int main() {
+  std::mt19937_64 rng(1);
+  const fixed::Format f32 = fixed::Format::Signed(31, 0), f16 = fixed::Format::Signed(15, 0);
+  fmt::print("bitserial engine, one core, Highway target {}\n", Kernels().target);
+
+  for (int64_t pes : {int64_t{8192}, int64_t{384 * 384}}) {
+    Machine m(Profile("wavetracer"), pes);
+    std::vector<int64_t> ra(pes), rb(pes);
+    for (auto& x : ra) x = static_cast<int32_t>(rng());
+    for (auto& x : rb) x = static_cast<int32_t>(rng());
+    Multi a(m, f32, "a"), b(m, f32, "b");
+    a.LoadRaw(ra);
+    b.LoadRaw(rb);
+    for (auto& x : ra) x = static_cast<int16_t>(x);
+    for (auto& x : rb) x = static_cast<int16_t>(x);
+    Multi a16(m, f16, "a16"), b16(m, f16, "b16");
+    a16.LoadRaw(ra);
+    b16.LoadRaw(rb);
+    const int reps = pes == 8192 ? 2001 : 201;
+    m.Report().Clear();
+    double tAdd = MedianSeconds(reps, [&] { Multi r = Add(a, b, f32); });
+    const double addCycles = m.Report().OpCycles("add") / reps;
+    double tMul = MedianSeconds(reps / 4 + 1, [&] { Multi r = Mul(a16, b16, f32); });
+    const double mulCycles = m.Report().OpCycles("mul") / (reps / 4 + 1);
+    const double clock = m.Profile().clockHz;
+    fmt::print("\n{} virtual PEs ({} layer{}), profile wavetracer at {:g} Hz\n", pes, m.Layers(),
+               m.Layers() == 1 ? "" : "s", clock);
+    fmt::print("  32-bit add      : {:9.0f} ns  {:7.0f} machine cycles  {:6.3g} Gcycles/host s  "
+               "real-time factor {:.1f}\n", tAdd * 1e9, addCycles, addCycles / tAdd / 1e9,
+               addCycles / clock / tAdd);
+    fmt::print("  16x16 multiply  : {:9.0f} ns  {:7.0f} machine cycles  {:6.3g} Gcycles/host s  "
+               "real-time factor {:.1f}\n", tMul * 1e9, mulCycles, mulCycles / tMul / 1e9,
+               mulCycles / clock / tMul);
+    if (pes == 8192) {
+      NaiveMulti na = NaiveFrom(a, 8192), nb = NaiveFrom(b, 8192), no = na;
+      NaiveMulti na16 = NaiveFrom(a16, 8192), nb16 = NaiveFrom(b16, 8192), no32 = na;
+      double nAdd = MedianSeconds(21, [&] { NaiveAdd(na, nb, no, 8192); });
+      double nMul = MedianSeconds(5, [&] { NaiveMul(na16, nb16, no32, 8192); });
+      // Check the naive add agrees on a PE so the compiler cannot drop it.
+      Multi r = Add(a, b, f32);
+      bool same = true;
+      for (int i = 0; i < 32; ++i) same &= no.bits[i * 8192 + 77] == r.BitAt(i, 77);
+      fmt::print("  naive emulator (byte per bit): add {:.0f} ns ({:.0f}x slower), multiply {:.0f} ns "
+                 "({:.0f}x slower){}\n", nAdd * 1e9, nAdd / tAdd, nMul * 1e9, nMul / tMul,
+                 same ? "" : "  [MISMATCH]");
+    }
+  }
+  return 0;
+}
