@@ -128,3 +128,26 @@ TEST(BitserialCycles, ProfilesAreDataAndCheckedByName) {
 
 }  // namespace
 }  // namespace zephyr::bitserial
+
+#include "hosts/command.h"
+
+namespace zephyr::bitserial {
+namespace {
+
+TEST(BitserialCycles, CyclesCommandPrintsBatchersFigures) {
+  const char* add[] = {"zephyr", "cycles", "--profile", "mpp", "--op", "add", "--bits", "8"};
+  testing::internal::CaptureStdout();
+  EXPECT_EQ(RunZephyr(8, add), 0);
+  EXPECT_NE(testing::internal::GetCapturedStdout().find(": 25 cycles per layer"), std::string::npos);
+  const char* mul[] = {"zephyr", "cycles", "--profile", "mpp", "--op", "mul", "--bits", "8", "--json"};
+  testing::internal::CaptureStdout();
+  EXPECT_EQ(RunZephyr(9, mul), 0);
+  EXPECT_NE(testing::internal::GetCapturedStdout().find("\"cycles\": 88.0"), std::string::npos);
+  const char* bad[] = {"zephyr", "cycles", "--op", "teleport"};
+  testing::internal::CaptureStderr();
+  EXPECT_NE(RunZephyr(4, bad), 0);
+  EXPECT_NE(testing::internal::GetCapturedStderr().find("'teleport'"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace zephyr::bitserial
