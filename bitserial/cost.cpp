@@ -157,9 +157,9 @@ fixed::Format AbsFormat(const fixed::Format& a) {
   return {a.isSigned, a.intBits + (a.isSigned ? 1 : 0), a.fracBits};
 }
 fixed::Format UnionFormat(const fixed::Format& a, const fixed::Format& b) {
-  bool s = a.isSigned || b.isSigned;
-  int ia = a.intBits + (s && !a.isSigned ? 0 : 0), ib = b.intBits;
-  return {s, std::max(ia, ib), std::max(a.fracBits, b.fracBits)};
+  // An unsigned u(i) fits a signed s(i): the sign bit is not counted in intBits.
+  return {a.isSigned || b.isSigned, std::max(a.intBits, b.intBits),
+          std::max(a.fracBits, b.fracBits)};
 }
 
 MicroOpCounts AddCost(Operand a, Operand b, Operand out, fixed::Policy p) {
