@@ -67,8 +67,8 @@ build: $(ZEPHYR) $(TESTS) $(BENCH_BINS)
 
 test: setup ## Build and run every test (GoogleTest; FILTER=... to select)
 	$(Q)$(MAKE) --no-print-directory -j$(JOBS) $(TESTS) $(ZEPHYR)
-	$(Q)$(TESTS) --gtest_brief=1 $(if $(FILTER),--gtest_filter='$(FILTER)')
 	$(Q)$(if $(FILTER),true,$(MAKE) --no-print-directory fuzz-smoke)
+	$(Q)bash tools/test.sh $(TESTS) $(if $(FILTER),--gtest_filter='$(FILTER)')
 
 # Defaults for `make run`: a generated 384×384 random-sphere scene, the default method.
 METHOD  ?= $(DEFAULT_METHOD)

@@ -153,8 +153,9 @@ TEST(FixedExhaustive, BinaryOpsAllPairsWidthUpTo8) {
         Policy p = kPolicies[k % 4];
         for (const BinaryOp& op : kBinaryOps) {
           CheckBinary(op, a, b, f, p, failures);  // the operands' own format
-          CheckBinary(op, a, b, outs[(k * 7 + 3) % outs.size()], kPolicies[(k / 4) % 4],
-                      failures);
+          if (k % 3 == 0)  // a third of the pairs also into a rotating other format
+            CheckBinary(op, a, b, outs[(k * 7 + 3) % outs.size()], kPolicies[(k / 4) % 4],
+                        failures);
         }
         EXPECT_EQ(Compare(a, b), ref::Compare(a, b));
       }
