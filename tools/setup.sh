@@ -12,7 +12,7 @@ PACKAGES=(
   clang libclang-rt-14-dev   # libFuzzer + sanitizers for `make fuzz`
   povray                     # independent reference renderer (SPEC §6)
   libembree-dev              # outside speed reference in `make bench` (SPEC §6)
-  gnuplot-nox                # `make charts`
+  gnuplot-nox jq             # `make charts` (tools/charts.sh: bash + jq + gnuplot, no Python)
 )
 
 missing=()

@@ -1,0 +1,90 @@
+// `make charts` end to end in its QUICK mode (tools/charts.sh): the sweeps run with whatever
+// methods the zephyr program has, and every CSV and PNG the docs cite is written and holds
+// data. Keeps the chart tool chain working while the methods change (issue 7).
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <unistd.h>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// The repository root: the working directory under `make test`, else found upward from
+// the test binary (build/.../bin/zephyr_tests).
+fs::path RepoRoot() {
+  for (fs::path p = fs::current_path(); !p.empty(); p = p.parent_path()) {
+    if (fs::exists(p / "tools/charts.sh")) return p;
+    if (p == p.root_path()) break;
+  }
+  for (fs::path p = fs::read_symlink("/proc/self/exe").parent_path(); !p.empty(); p = p.parent_path()) {
+    if (fs::exists(p / "tools/charts.sh")) return p;
+    if (p == p.root_path()) break;
+  }
+  return {};
+}
+
+int CountDataRows(const fs::path& csv) {
+  std::ifstream f(csv);
+  std::string line;
+  int rows = -1;  // the header
+  while (std::getline(f, line)) rows += !line.empty();
+  return rows;
+}
+
+bool IsPng(const fs::path& png) {
+  std::ifstream f(png, std::ios::binary);
+  char magic[8] = {};
+  f.read(magic, 8);
+  return f && std::string(magic + 1, 3) == "PNG" && fs::file_size(png) > 1000;
+}
+
+TEST(ChartsQuick, EverySweepWritesItsCsvAndChart) {
+  const fs::path root = RepoRoot();
+  ASSERT_FALSE(root.empty()) << "tools/charts.sh not found";
+  const fs::path zephyr = fs::read_symlink("/proc/self/exe").parent_path() / "zephyr";
+  ASSERT_TRUE(fs::exists(zephyr)) << zephyr << " not built";
+  const fs::path out = fs::temp_directory_path() / ("zephyr_charts_" + std::to_string(getpid()));
+  fs::remove_all(out);
+  const std::string cmd = "QUICK=1 ZEPHYR='" + zephyr.string() + "' OUT='" + out.string() +
+                          "' bash '" + (root / "tools/charts.sh").string() + "' > '" +
+                          (out.string() + ".log") + "' 2>&1";
+  const int status = std::system(cmd.c_str());
+  if (status != 0) {
+    std::ifstream log(out.string() + ".log");
+    ADD_FAILURE() << "charts.sh failed:\n" << std::string(std::istreambuf_iterator<char>(log), {});
+  }
+  ASSERT_EQ(status, 0);
+
+  // QUICK: 2 object counts, 2 frame sizes; the stability scans have many rows.
+  const struct { const char* csv; int minRows; } tables[] = {
+      {"fig05_seq_vs_simd", 2}, {"fig06_seq_vs_dist", 2}, {"fig07_hetero_vs_dist_2children", 2},
+      {"fig10_data_flow", 2},   {"fig11_pixels", 2},      {"fig12_all_methods", 2},
+      {"stability_distance", 100}, {"stability_overflow", 10}, {"runs", 2}};
+  for (const auto& t : tables) {
+    const fs::path csv = out / (std::string(t.csv) + ".csv");
+    ASSERT_TRUE(fs::exists(csv)) << csv;
+    EXPECT_GE(CountDataRows(csv), t.minRows) << csv;
+  }
+  for (const char* png : {"fig05_seq_vs_simd", "fig06_seq_vs_dist", "fig07_hetero_vs_dist_2children",
+                          "fig10_data_flow", "fig11_pixels", "fig12_all_methods",
+                          "stability_wrong_hits", "stability_t_error", "stability_overflow",
+                          "speed_vs_accuracy_pct_wrong", "speed_vs_accuracy_t_error",
+                          "speed_vs_accuracy_psnr"})
+    EXPECT_TRUE(IsPng(out / (std::string(png) + ".png"))) << png;
+  // The sequential method is always there: its Fig 5 times are measured, positive numbers.
+  std::ifstream fig5(out / "fig05_seq_vs_simd.csv");
+  std::string line;
+  std::getline(fig5, line);
+  while (std::getline(fig5, line)) {
+    const std::string seq = line.substr(line.find(',') + 1, line.find(',', line.find(',') + 1) - line.find(',') - 1);
+    EXPECT_GT(std::stod(seq), 0) << line;
+  }
+  fs::remove_all(out);
+  fs::remove(out.string() + ".log");
+}
+
+}  // namespace

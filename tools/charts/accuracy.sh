@@ -1,0 +1,69 @@
+# tools/charts/accuracy.sh — the speed-against-accuracy sweep; sourced by tools/charts.sh
+# (uses its ZEPHYR, OUT, WORK, GP, FRAC, REF_COUNT, scene, has_method, has_command, say, skip).
+#
+# For each fraction width in FRAC: the SIMD primary pass at --frac-bits N (cycles per
+# primary pass and emulator host time from the render report), and its accuracy against
+# the exact reference (`zephyr accuracy`, JSON): % of pixels with a wrong first object, max
+# and mean error in t, PSNR. The sequential tracer in float32 and float64 adds two points
+# (host time; accuracy from `zephyr accuracy --method seq` when it supports that). The
+# planner's own choice (no --frac-bits) is one more row, marked planned=1.
+
+ACC=$OUT/accuracy.csv
+echo "kind,frac_bits,cycles,host_s,pct_wrong,t_err_max,t_err_mean,psnr,planned" >"$ACC"
+
+# The accuracy figures, wherever the report puts them: keys that name them.
+JQ_ACC='
+  def num(re): first(paths(numbers) as $p | select(($p[-1] | tostring) | test(re; "i"))
+                     | getpath($p)) // null;
+  [ num("^(pct|percent)_?wrong|wrong.*(pct|percent)|first_?object.*(pct|percent)|mismatch.*(pct|percent)"),
+    num("t_?err.*max|max.*t_?err"), num("t_?err.*mean|mean.*t_?err"), num("psnr") ]
+  | map(if . == null then "NaN" else tostring end) | join(",")'
+JQ_CYCLES='first(paths(numbers) as $p | select(($p | map(tostring) | join(".")) | test("cycles.*total|total_?cycles"; "i")) | getpath($p)) // null | tostring'
+
+acc_scene=$(scene "$REF_COUNT")
+# accuracy_row KIND FRAC PLANNED [flags...] — one render + one accuracy run, one row.
+accuracy_row() {
+  local kind=$1 bits=$2 planned=$3; shift 3
+  local rj=$WORK/acc-render-$kind-$bits.json aj=$WORK/acc-$kind-$bits.json
+  local method=simd; [ "$kind" = fixed ] || method=seq
+  if ! "$ZEPHYR" render --method $method --scene "$acc_scene" --report "$rj" --no-progress "$@" \
+       >"$WORK/last.log" 2>&1; then
+    say "failed: render --method $method $*"; tail -n 5 "$WORK/last.log" >&2; return 0
+  fi
+  local cycles host acc="NaN,NaN,NaN,NaN"
+  cycles=$(jq -r "$JQ_CYCLES" "$rj"); [ "$cycles" = null ] && cycles=NaN
+  host=$(jq -r '.phases.render' "$rj")
+  if has_command accuracy && "$ZEPHYR" accuracy --method $method --scene "$acc_scene" --report "$aj" "$@" \
+       >"$WORK/last.log" 2>&1; then
+    acc=$(jq -r "$JQ_ACC" "$aj")
+  else
+    say "no accuracy figures for $kind $bits (zephyr accuracy missing or failed)"
+  fi
+  echo "$kind,$bits,$cycles,$host,$acc,$planned" >>"$ACC"
+}
+
+ACC_NOTE="$REF_COUNT random spheres, ${SIZE}x${SIZE}; labels = fraction bits"
+if has_method simd && has_command accuracy; then
+  for bits in $FRAC; do accuracy_row fixed "$bits" 0 --frac-bits "$bits"; done
+  accuracy_row fixed planned 1
+else
+  skip "speed vs accuracy sweep (needs render --method simd and zephyr accuracy)"
+  ACC_NOTE="SIMD method / zephyr accuracy not available yet (skipped). $ACC_NOTE"
+fi
+if has_method seq; then
+  accuracy_row float32 NaN 0 --precision float
+  accuracy_row float64 NaN 0 --precision double
+fi
+# The planner's row has no numeric width in the CSV: label it by the width it chose, if known.
+sed -i 's/^fixed,planned,/fixed,NaN,/' "$ACC"
+
+acc_empty=1
+awk -F, 'NR > 1 && $1 == "fixed" && $3 != "NaN" { f = 1 } END { exit !f }' "$ACC" && acc_empty=0
+for spec in "5:pct_wrong:% of pixels with a wrong first object:0" \
+            "6:t_error:max error in t (scene units):1" \
+            "8:psnr:PSNR of the image against the exact reference (dB):0"; do
+  IFS=: read -r xcol tag xl logx <<<"$spec"
+  gnuplot -e "in='$ACC'; out='$OUT/speed_vs_accuracy_$tag.png'; xcol=$xcol; logx=$logx; \
+ttl='Speed against accuracy: $xl'; xl='$xl'; note='$ACC_NOTE'; empty=$acc_empty" "$GP/accuracy.gp"
+  say "wrote $OUT/speed_vs_accuracy_$tag.png"
+done
