@@ -29,6 +29,18 @@ RenderMethodRegistration::RenderMethodRegistration(std::string name, std::string
   Methods().emplace(std::move(name), MethodEntry{std::move(description), std::move(method)});
 }
 
+namespace {
+std::vector<std::function<void(CLI::App&, RenderOptions&)>>& FlagAdders() {
+  static std::vector<std::function<void(CLI::App&, RenderOptions&)>> adders;
+  return adders;
+}
+}  // namespace
+
+RenderFlagRegistration::RenderFlagRegistration(
+    std::function<void(CLI::App& command, RenderOptions& options)> add) {
+  FlagAdders().push_back(std::move(add));
+}
+
 std::vector<std::string> RenderMethodNames() {
   std::vector<std::string> names;
   for (const auto& [name, entry] : Methods()) names.push_back(name);
@@ -119,6 +131,7 @@ CommandRegistration reg("render", [](CLI::App& program) {
   cmd->add_option("--sphere-test", *sphereTest, "Sphere test form: hb (Hearn-Baker) or naive")
       ->capture_default_str();
   cmd->add_flag("--no-progress", *noProgress, "No progress bar even on a terminal");
+  for (const auto& add : FlagAdders()) add(*cmd, *o);
   cmd->callback([o, positional, precision, sphereTest, noProgress] {
     RenderOptions options = *o;
     if (!positional->empty()) {

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -15,6 +16,8 @@
 #include "hosts/image.h"
 #include "hosts/scene.h"
 #include "hosts/trace.h"
+
+namespace CLI { class App; }
 
 namespace zephyr {
 
@@ -28,6 +31,7 @@ struct RenderOptions {
   std::string dumpPrimary;  // CSV of primary hits ("" = none)
   TraceOptions trace;       // depth, precision, sphere test
   bool progress = true;     // progress bar when stderr is a terminal
+  std::map<std::string, std::string> extra;  // method-specific flags, by flag name
 };
 
 // One primary-ray record per pixel for --dump-primary; `flags` is method-specific (0 = plain
@@ -48,6 +52,12 @@ using RenderMethod =
 
 struct RenderMethodRegistration {
   RenderMethodRegistration(std::string name, std::string description, RenderMethod method);
+};
+
+// A method's own flags: `add` puts options on the render command, storing their values in
+// options.extra (e.g. hosts/render_simd.cpp adds --frac-bits).
+struct RenderFlagRegistration {
+  explicit RenderFlagRegistration(std::function<void(CLI::App& command, RenderOptions& options)> add);
 };
 
 // The registered method names, sorted.

@@ -1,0 +1,370 @@
+// hosts/simd.cpp — the SIMD/sequential method's planner, primary pass and host shading
+// (docs/simd.md).
+#include "hosts/simd.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "bitserial/multi.h"
+#include "fixed/check.h"
+#include "hosts/simd_ops.h"
+
+namespace zephyr::simd {
+
+using bitserial::Machine;
+using bitserial::Multi;
+using bitserial::Space;
+using bitserial::Uni;
+using fixed::Fixed;
+using fixed::Format;
+
+UncertainPolicy ParseUncertainPolicy(const std::string& name) {
+  if (name == "recompute") return UncertainPolicy::kRecompute;
+  if (name == "keep") return UncertainPolicy::kKeep;
+  if (name == "fail") return UncertainPolicy::kFail;
+  throw UserError("--uncertain: expected recompute, keep or fail, got '" + name + "'");
+}
+const char* UncertainPolicyName(UncertainPolicy p) {
+  return p == UncertainPolicy::kRecompute ? "recompute" : p == UncertainPolicy::kKeep ? "keep" : "fail";
+}
+
+namespace {
+
+int CeilLog2(double x) { return x <= 1 ? 0 : int(std::ceil(std::log2(x))); }
+
+bitserial::MachineProfile MakeProfile(const SimdOptions& o) {
+  bitserial::MachineProfile p = bitserial::Profile(o.profile);
+  for (const std::string& a : o.profileOverrides) p.Override(a);
+  return p;
+}
+
+// The array tests untransformed spheres; every other primitive is tested on the host in
+// double for every pixel (docs/simd.md, "What runs where").
+bool OnArray(const Primitive& p) { return p.Kind() == ShapeKind::kSphere && !p.transform; }
+
+// Integer bits for values of magnitude up to `bound` (at least 1).
+int IntBitsFor(double bound) { return std::max(1, CeilLog2(bound + 1)); }
+
+}  // namespace
+
+PrimaryPlan PlanPrimaryPass(const Scene& scene, const SimdOptions& options) {
+  const bitserial::MachineProfile profile = MakeProfile(options);
+  const Camera& cam = scene.camera;
+  PrimaryPlan plan;
+  plan.width = cam.width, plan.height = cam.height;
+  plan.virtualPes = int64_t(cam.width) * cam.height;
+  plan.layers = int((plan.virtualPes + profile.physicalPes - 1) / profile.physicalPes);
+  double farthest = 1, rMin = 1e300, rMax = 0;
+  int arrayObjects = 0;
+  for (size_t i = 0; i < scene.objects.size(); ++i) {
+    const Primitive& p = scene.objects[i];
+    if (!OnArray(p)) {
+      plan.hostObjects.push_back(int(i));
+      continue;
+    }
+    const Sphere& s = std::get<Sphere>(p.shape);
+    farthest = std::max(farthest, Length(s.center - cam.from) + s.radius);
+    rMin = std::min(rMin, s.radius);
+    rMax = std::max(rMax, s.radius);
+    ++arrayObjects;
+  }
+  if (arrayObjects == 0) rMin = rMax = 1;
+  // Distances: t and the eye-to-centre terms reach `farthest`; one more bit for tca ± root.
+  plan.distIntBits = options.formats.intBits >= 0 ? options.formats.intBits : IntBitsFor(farthest) + 1;
+  // Fraction bits: the t error bound (≈ 60·D·2^-F, docs/simd.md) at most 1/64 of the
+  // smallest radius, and never coarser than 2^-10.
+  const int planned = std::clamp(CeilLog2(64.0 * 60.0 * farthest / rMin), 10, 40);
+  plan.fracBits = options.formats.fracBits >= 0 ? options.formats.fracBits : planned;
+  plan.dirFracBits = options.formats.dirFracBits >= 0 ? options.formats.dirFracBits : plan.fracBits;
+  if (plan.fracBits > 56 || plan.dirFracBits > 60 || plan.distIntBits > 40)
+    throw UserError(fmt::format("formats too wide for the primary pass: {} integer bits, {} fraction "
+                                "bits, {} direction fraction bits (limits 40, 56, 60)",
+                                plan.distIntBits, plan.fracBits, plan.dirFracBits));
+  const int L = plan.distIntBits, F = plan.fracBits, R = IntBitsFor(rMax);
+  plan.objectBits = std::max(1, CeilLog2(double(scene.objects.size()) + 1));
+  plan.direction = Format::Signed(1, plan.dirFracBits);
+  plan.length = Format::Signed(L, F);
+  plan.t = Format::Signed(L, F);
+  plan.object = Format::Unsigned(plan.objectBits, 0);
+  const std::string dist = fmt::format("farthest point of an array object is {:.4g} from the eye", farthest);
+  plan.formats = {
+      {"direction d (x,y,z)", plan.direction, "unit components in [-1,1]; fraction bits = F"},
+      {"eye-to-centre f (uni)", plan.length, dist},
+      {"tca = f·d, cross f×d", plan.length, "|f·d|, |f×d| <= |f|"},
+      {"cross, clamped", Format::Signed(R, F), fmt::format("only |f×d| <= r = {:.4g} can hit; larger saturate (a miss)", rMax)},
+      {"squares, their sum", Format::Unsigned(2 * R + 2, F), "three squares of the clamped cross product"},
+      {"discriminant r²−|f×d|²", Format::Signed(2 * R + 2, F), "difference of the above"},
+      {"root √disc", Format::Unsigned(R + 1, F), "half the discriminant's integer bits"},
+      {"t = tca ∓ root", plan.t, "t <= farthest (one bit of headroom)"},
+      {"object index + 1", plan.object, fmt::format("{} objects, 0 = none", scene.objects.size())},
+  };
+  // Error bounds (docs/simd.md, "Error bounds").
+  const double ed = std::ldexp(1.0, -plan.dirFracBits), ulp = std::ldexp(1.0, -F);
+  const double eTca = std::sqrt(3.0) * farthest * ed + 3 * ulp;
+  const double eCross = 2 * farthest * ed + 3 * ulp;
+  plan.grazingFraction = 1.0 / 8;
+  double eRoot = 0;
+  for (size_t i = 0; i < scene.objects.size(); ++i) {
+    if (!OnArray(scene.objects[i])) continue;
+    const double r = std::get<Sphere>(scene.objects[i].shape).radius;
+    const double eDisc = 2 * std::sqrt(3.0) * r * eCross + 3 * eCross * eCross + 5 * ulp;
+    eRoot = std::max(eRoot, eDisc / (r * plan.grazingFraction) + ulp);
+  }
+  plan.tErrorBound = eTca + eRoot + 2 * ulp;
+  plan.tieThreshold = 2 * plan.tErrorBound;
+  // Memory per virtual PE: the matrix (object, t, d, two flag bits) plus the temporaries
+  // of one sphere test (tca, 3 cross, 3 clamped, 3 squares, sum, disc, root, t0, t1, t and
+  // the 1-bit masks), the near-tie and grazing trackers.
+  plan.matrixBitsPerPe = plan.objectBits + plan.t.Width() + 3 * plan.direction.Width() + 2;
+  const int wl = plan.length.Width(), ws = 2 * R + 3 + F;
+  plan.memoryBitsPerPe = plan.matrixBitsPerPe + 2 * plan.t.Width() + 6 * wl + 3 * (R + 1 + F) +
+                         5 * ws + 4 * plan.t.Width() + 8;
+  plan.internalCapacity = profile.internalBitsPerPe / plan.layers;
+  plan.externalCapacity = profile.externalBitsPerPe / plan.layers;
+  if (plan.memoryBitsPerPe > plan.internalCapacity + plan.externalCapacity)
+    throw UserError(fmt::format(
+        "the scene does not fit the {} array: the primary pass needs about {} bits per virtual "
+        "PE (t {}, direction {}, {} layers for {}x{} pixels) but each virtual PE has {} internal + "
+        "{} external bits; use a smaller image or fewer bits (--frac-bits, --int-bits)",
+        profile.name, plan.memoryBitsPerPe, plan.t.Name(), plan.direction.Name(), plan.layers,
+        cam.width, cam.height, plan.internalCapacity, plan.externalCapacity));
+  return plan;
+}
+
+nlohmann::json PrimaryPlan::Json() const {
+  nlohmann::json j = {{"width", width}, {"height", height}, {"virtualPes", virtualPes},
+                      {"layers", layers}, {"distIntBits", distIntBits}, {"fracBits", fracBits},
+                      {"dirFracBits", dirFracBits}, {"objectBits", objectBits},
+                      {"tErrorBound", tErrorBound}, {"tieThreshold", tieThreshold},
+                      {"grazingFraction", grazingFraction}, {"memoryBitsPerPe", memoryBitsPerPe},
+                      {"matrixBitsPerPe", matrixBitsPerPe}, {"internalCapacity", internalCapacity},
+                      {"externalCapacity", externalCapacity}, {"hostObjects", hostObjects.size()}};
+  for (const PlannedFormat& f : formats)
+    j["formats"].push_back({{"quantity", f.quantity}, {"format", f.format.Name()}, {"reason", f.reason}});
+  return j;
+}
+
+std::string PrimaryPlan::Text() const {
+  std::string s = fmt::format("{}x{} pixels = {} virtual PEs in {} layer(s)\n", width, height,
+                              virtualPes, layers);
+  for (const PlannedFormat& f : formats)
+    s += fmt::format("  {:<26} {:<8} {}\n", f.quantity, f.format.Name(), f.reason);
+  s += fmt::format("error bound on t (certain pixels): {:.3g}; near tie below {:.3g}; grazing when "
+                   "disc < (r/{:g})^2\n",
+                   tErrorBound, tieThreshold, 1 / grazingFraction);
+  s += fmt::format("memory per virtual PE: ~{} bits (matrix {} bits, external) of {} internal + {} "
+                   "external\n",
+                   memoryBitsPerPe, matrixBitsPerPe, internalCapacity, externalCapacity);
+  if (!hostObjects.empty())
+    s += fmt::format("{} object(s) (transformed spheres, cones, polygons) are tested on the host in "
+                     "double\n",
+                     hostObjects.size());
+  return s;
+}
+
+nlohmann::json PrimaryPass::Json() const {
+  return {{"plan", plan.Json()},
+          {"cycles", cycles},
+          {"hostSeconds", hostSeconds},
+          {"modelledSeconds", modelledSeconds},
+          {"realTimeFactor", hostSeconds > 0 ? modelledSeconds / hostSeconds : 0.0},
+          {"recomputeSeconds", recomputeSeconds},
+          {"uncertain", {{"overflow", overflowPixels}, {"grazing", grazingPixels},
+                         {"nearTie", tiePixels}, {"recomputed", recomputedPixels}}}};
+}
+
+namespace {
+
+Fixed Constant(double x, Format f) {
+  return fixed::FromDouble(x, f, {fixed::Rounding::Nearest, fixed::OverflowPolicy::Saturate});
+}
+
+// The narrowest format with F fraction bits that holds x (a uni constant: a multiply by it
+// costs one row per one bit).
+Fixed Tight(double x, int frac) { return Constant(x, Format::Signed(IntBitsFor(std::abs(x)), frac)); }
+
+}  // namespace
+
+PrimaryPass RunPrimaryPass(const Scene& scene, const SimdOptions& options) {
+  PrimaryPass pass;
+  pass.plan = PlanPrimaryPass(scene, options);
+  const PrimaryPlan& plan = pass.plan;
+  const Camera& cam = scene.camera;
+  const auto start = std::chrono::steady_clock::now();
+  Machine m(MakeProfile(options), plan.virtualPes);
+  const int F = plan.fracBits;
+  const Format T = plan.t, L = plan.length;
+  int rBits = 1;
+  for (const Primitive& p : scene.objects)
+    if (OnArray(p)) rBits = std::max(rBits, IntBitsFor(std::get<Sphere>(p.shape).radius));
+  const Format clamped = Format::Signed(rBits, F), square = Format::Unsigned(2 * rBits + 2, F),
+               discF = Format::Signed(2 * rBits + 2, F), rootF = Format::Unsigned(rBits + 1, F);
+  const fixed::Policy saturate{fixed::Rounding::Floor, fixed::OverflowPolicy::Saturate};
+
+  // The per-pixel matrix, in external memory in this order (docs/simd.md, "Matrix layout").
+  Multi object(m, plan.object, "matrix.object", Space::External);
+  Multi tBest(m, T, "matrix.t", Space::External);
+  Multi d[3] = {Multi(m, plan.direction, "matrix.dx", Space::External),
+                Multi(m, plan.direction, "matrix.dy", Space::External),
+                Multi(m, plan.direction, "matrix.dz", Space::External)};
+  Multi grazeFlag(m, bitserial::BoolFormat(), "matrix.grazing", Space::External);
+  Multi tieFlag(m, bitserial::BoolFormat(), "matrix.nearTie", Space::External);
+
+  // The host computes each pixel's eye ray and loads the directions (one plane per bit).
+  const PrimaryRays rays(cam);
+  {
+    std::vector<int64_t> raw[3];
+    for (auto& r : raw) r.resize(plan.virtualPes);
+    for (int y = 0; y < cam.height; ++y)
+      for (int x = 0; x < cam.width; ++x) {
+        const Vec3 dir = rays.At(x, y).direction;
+        for (int k = 0; k < 3; ++k)
+          raw[k][size_t(y) * cam.width + x] = std::llround(std::ldexp(dir[k], plan.dirFracBits));
+      }
+    for (int k = 0; k < 3; ++k) d[k].LoadRaw(raw[k]);
+  }
+  const Fixed tMax{T, T.MaxRaw()};
+  tBest = Broadcast(m, tMax);
+  Multi tGraze = Broadcast(m, tMax), tTie = Broadcast(m, tMax);
+  const Multi zero = Broadcast(m, Fixed{Format::Unsigned(1, 0), 0});
+  const Multi hither = Broadcast(m, Tight(std::max(cam.hither, 0.0), F));
+  const Multi tieEps = Broadcast(m, Tight(plan.tieThreshold, F));
+
+  for (size_t i = 0; i < scene.objects.size(); ++i) {
+    const Primitive& prim = scene.objects[i];
+    if (!OnArray(prim)) continue;
+    const Sphere& s = std::get<Sphere>(prim.shape);
+    const Vec3 fd = s.center - cam.from;  // eye to centre: a uni
+    const Uni f[3] = {{Tight(fd.x, F)}, {Tight(fd.y, F)}, {Tight(fd.z, F)}};
+    // tca = f·d, the distance along the ray to the closest approach.
+    Multi tca = Add(Add(Mul(d[0], f[0], L), Mul(d[1], f[1], L), L), Mul(d[2], f[2], L), L);
+    // Hearn–Baker: |f − (f·d)d| = |f × d| for unit d; only |f×d| <= r can hit, so each
+    // component is clamped to r's integer bits (saturation there means a miss, not an error).
+    Multi c[3] = {Sub(Mul(d[2], f[1], L), Mul(d[1], f[2], L), L),
+                  Sub(Mul(d[0], f[2], L), Mul(d[2], f[0], L), L),
+                  Sub(Mul(d[1], f[0], L), Mul(d[0], f[1], L), L)};
+    Multi sum;
+    WithExpectedSaturation(m, [&] {
+      Multi sq[3];
+      for (int k = 0; k < 3; ++k) sq[k] = Square(Convert(c[k], clamped, saturate), square, saturate);
+      sum = Add(Add(sq[0], sq[1], square, saturate), sq[2], square, saturate);
+    });
+    const Multi disc = Sub(Broadcast(m, Tight(s.radius * s.radius, F)), sum, discF);
+    const Multi root = SqrtFloor(disc, rootF);
+    const Multi t0 = Sub(tca, root, T), t1 = Add(tca, root, T);
+    const Multi t = Select(hither < t0, t0, t1, T);  // the far root when the eye is inside
+    const Multi valid = (zero <= disc) && (hither < t);
+    // Near tie with the best so far; grazing (|disc| small) with the ray's tca in front.
+    Multi gap;  // |t − tBest|, clamped: only gaps below the threshold matter
+    WithExpectedSaturation(m, [&] { gap = Abs(t - tBest, Format::Unsigned(L.intBits + 1, F), saturate); });
+    const Multi tie = valid && (gap < tieEps);
+    Where(tie, [&] { tTie = Min(t, tBest, T); });
+    const double graze = s.radius * plan.grazingFraction;
+    Multi absDisc;
+    WithExpectedSaturation(m, [&] { absDisc = Abs(disc, Format::Unsigned(discF.intBits, F), saturate); });
+    const Multi grazing = (absDisc < Broadcast(m, Tight(graze * graze, F))) && (hither < tca);
+    Where(grazing, [&] { tGraze = Min(tGraze, tca, T); });
+    const Multi closer = valid && (t < tBest);
+    Where(closer, [&] {
+      tBest = t;
+      object = Broadcast(m, Fixed{plan.object, fixed::BigInt(i + 1)});
+    });
+  }
+  // A flagged candidate matters only if it is not clearly behind the final nearest hit.
+  // (tMax marks "none"; the limit's exact format cannot overflow.)
+  const Multi limit = tBest + tieEps, none = Broadcast(m, tMax);
+  grazeFlag = (tGraze <= limit) && (tGraze < none);
+  tieFlag = (tTie <= limit) && (tTie < none);
+
+  // Move the matrix to the host (charged to the host link).
+  const std::vector<int64_t> objRaw = object.ReadRaw(), tRaw = tBest.ReadRaw(),
+                             dRaw[3] = {d[0].ReadRaw(), d[1].ReadRaw(), d[2].ReadRaw()},
+                             grazeRaw = grazeFlag.ReadRaw(), tieRaw = tieFlag.ReadRaw();
+  m.Charge("hostRead", bitserial::HostTransferCost(1));  // the overflow flags
+  pass.hostSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  const bitserial::CycleReport& report = m.Report();
+  pass.modelledSeconds = report.ModelledSeconds();
+  pass.cycles = report.Json();
+  const bitserial::PeMemory& mem = m.Memory();
+  pass.cycles["memory"] = {
+      {"internal", {{"peakBitsPerPe", mem.PeakUsed(Space::Internal)}, {"capacityBitsPerPe", mem.Capacity(Space::Internal)}}},
+      {"external", {{"peakBitsPerPe", mem.PeakUsed(Space::External)}, {"capacityBitsPerPe", mem.Capacity(Space::External)}}}};
+  pass.cycles["hostSeconds"] = pass.hostSeconds;
+  pass.cycles["realTimeFactor"] = pass.modelledSeconds / pass.hostSeconds;
+  pass.cycleTable = report.Table() +
+                    fmt::format("memory per virtual PE: internal {} of {} bits, external {} of {} bits\n"
+                                "modelled time {:.4f} s at {:g} MHz; host time {:.4f} s; real-time factor {:.2f}\n",
+                                mem.PeakUsed(Space::Internal), mem.Capacity(Space::Internal),
+                                mem.PeakUsed(Space::External), mem.Capacity(Space::External),
+                                pass.modelledSeconds, m.Profile().clockHz / 1e6, pass.hostSeconds,
+                                pass.modelledSeconds / pass.hostSeconds);
+
+  // The host side: decode the matrix, test host objects, handle uncertain pixels.
+  const auto hostStart = std::chrono::steady_clock::now();
+  PrimaryMatrix& out = pass.matrix;
+  out.width = cam.width, out.height = cam.height;
+  out.hits.resize(plan.virtualPes);
+  out.flags.assign(plan.virtualPes, 0);
+  const double tieThreshold = plan.tieThreshold, hitherD = std::max(cam.hither, 0.0);
+  for (int64_t pe = 0; pe < plan.virtualPes; ++pe) {
+    PrimaryHit& h = out.hits[pe];
+    h.direction = Normalize(Vec3{std::ldexp(double(dRaw[0][pe]), -plan.dirFracBits),
+                                 std::ldexp(double(dRaw[1][pe]), -plan.dirFracBits),
+                                 std::ldexp(double(dRaw[2][pe]), -plan.dirFracBits)});
+    h.object = int(objRaw[pe]) - 1;
+    h.t = h.object >= 0 ? std::ldexp(double(tRaw[pe]), -F) : 0.0;
+    uint32_t& fl = out.flags[pe];
+    if (m.Overflow(pe)) fl |= kOverflow;
+    if (grazeRaw[pe]) fl |= kGrazing;
+    if (tieRaw[pe]) fl |= kNearTie;
+    if (!plan.hostObjects.empty()) {
+      const PrimaryRay ray = rays.At(int(pe % cam.width), int(pe / cam.width));
+      for (int obj : plan.hostObjects) {
+        const auto th = IntersectObject(scene, obj, ray.origin, ray.direction, hitherD);
+        if (!th) continue;
+        if (h.object >= 0 && std::abs(*th - h.t) < tieThreshold) fl |= kNearTie;
+        if (h.object < 0 || *th < h.t) h.object = obj, h.t = *th;
+      }
+    }
+    if (fl & kOverflow) ++pass.overflowPixels;
+    if (fl & kGrazing) ++pass.grazingPixels;
+    if (fl & kNearTie) ++pass.tiePixels;
+  }
+  const int64_t uncertain = std::count_if(out.flags.begin(), out.flags.end(), [](uint32_t f) { return f != 0; });
+  if (options.uncertain == UncertainPolicy::kFail && uncertain > 0)
+    throw UserError(fmt::format("--uncertain fail: {} uncertain pixel(s): {} overflow, {} grazing, {} near tie",
+                                uncertain, pass.overflowPixels, pass.grazingPixels, pass.tiePixels));
+  if (options.uncertain == UncertainPolicy::kRecompute && uncertain > 0) {
+    TraceOptions trace;
+    trace.depth = 1;
+    const auto tracer = Tracer::Create(scene, trace);
+    TraceStats stats;
+    for (int64_t pe = 0; pe < plan.virtualPes; ++pe) {
+      if (!out.flags[pe]) continue;
+      out.hits[pe] = tracer->FirstHit(rays.At(int(pe % cam.width), int(pe / cam.width)), stats);
+      out.flags[pe] |= kRecomputed;
+      ++pass.recomputedPixels;
+    }
+  }
+  pass.recomputeSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - hostStart).count();
+  return pass;
+}
+
+void ShadeRegion(const Tracer& tracer, const PrimaryMatrix& matrix, int x0, int y0, int w, int h,
+                 std::vector<Vec3>& out, TraceStats& stats) {
+  ZEPHYR_CHECK(x0 >= 0 && y0 >= 0 && w >= 0 && h >= 0 && x0 + w <= matrix.width &&
+               y0 + h <= matrix.height);
+  out.resize(size_t(w) * h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const PrimaryHit& hit = matrix.hits[size_t(y0 + y) * matrix.width + x0 + x];
+      ++stats.rays[int(RayKind::kPrimary)];
+      out[size_t(y) * w + x] = tracer.ShadeFromPrimaryHit(hit, stats);
+    }
+}
+
+}  // namespace zephyr::simd
