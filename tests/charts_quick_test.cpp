@@ -73,7 +73,7 @@ TEST(ChartsQuick, EverySweepWritesItsCsvAndChart) {
                           "fig10_data_flow", "fig11_pixels", "fig12_all_methods",
                           "stability_wrong_hits", "stability_t_error", "stability_overflow",
                           "speed_vs_accuracy_pct_wrong", "speed_vs_accuracy_t_error",
-                          "speed_vs_accuracy_psnr"})
+                          "speed_vs_accuracy_psnr", "uncertain_pixels"})
     EXPECT_TRUE(IsPng(out / (std::string(png) + ".png"))) << png;
   // The sequential method is always there: its Fig 5 times are measured, positive numbers.
   std::ifstream fig5(out / "fig05_seq_vs_simd.csv");

@@ -10,6 +10,11 @@
 
 ACC=$OUT/accuracy.csv
 echo "kind,frac_bits,cycles,host_s,pct_wrong,t_err_max,t_err_mean,psnr,planned" >"$ACC"
+# Uncertain pixels the SIMD pass detected (its report's "uncertain" counts), by width.
+UNC=$OUT/uncertain_pixels.csv
+echo "fraction bits,overflow,grazing,near tie,recomputed on the host" >"$UNC"
+JQ_UNC='first(.. | objects | select(has("nearTie"))) // {} |
+  [.overflow, .grazing, .nearTie, .recomputed] | map(if . == null then "NaN" else tostring end) | join(",")'
 
 # The accuracy figures, wherever the report puts them: keys that name them.
 JQ_ACC='
@@ -40,15 +45,18 @@ accuracy_row() {
     say "no accuracy figures for $kind $bits (zephyr accuracy missing or failed)"
   fi
   echo "$kind,$bits,$cycles,$host,$acc,$planned" >>"$ACC"
+  [ "$kind" = fixed ] && [ "$planned" = 0 ] && echo "$bits,$(jq -r "$JQ_UNC" "$rj")" >>"$UNC"
+  return 0
 }
 
 ACC_NOTE="$REF_COUNT random spheres, ${SIZE}x${SIZE}; labels = fraction bits"
-if has_method simd && has_command accuracy; then
+if has_method simd; then
   for bits in $FRAC; do accuracy_row fixed "$bits" 0 --frac-bits "$bits"; done
   accuracy_row fixed planned 1
+  has_command accuracy || ACC_NOTE="zephyr accuracy not available yet: no accuracy figures. $ACC_NOTE"
 else
-  skip "speed vs accuracy sweep (needs render --method simd and zephyr accuracy)"
-  ACC_NOTE="SIMD method / zephyr accuracy not available yet (skipped). $ACC_NOTE"
+  skip "speed vs accuracy sweep (needs render --method simd)"
+  ACC_NOTE="SIMD method not available yet (skipped). $ACC_NOTE"
 fi
 if has_method seq; then
   accuracy_row float32 NaN 0 --precision float
@@ -67,3 +75,6 @@ for spec in "5:pct_wrong:% of pixels with a wrong first object:0" \
 ttl='Speed against accuracy: $xl'; xl='$xl'; note='$ACC_NOTE'; empty=$acc_empty" "$GP/accuracy.gp"
   say "wrote $OUT/speed_vs_accuracy_$tag.png"
 done
+chart uncertain_pixels "Uncertain pixels the SIMD pass detects, by fraction width" \
+  "fraction bits (--frac-bits)" "pixels" 0 0 "$(note_for simd) $ACC_NOTE" \
+  "overflow / grazing (discriminant within the error bound of 0) / near tie (two t within the bound)"

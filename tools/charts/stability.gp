@@ -9,6 +9,7 @@ set title ttl
 set xlabel 'sphere distance D (radii)'
 set ylabel yl
 set logscale x 2
+set format x '2^{%L}'
 if (logy) set logscale y
 set grid
 set key outside right top box
