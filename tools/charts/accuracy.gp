@@ -19,7 +19,7 @@ set logscale y
 set logscale y2
 if (logx) set logscale x
 set grid
-set key outside bottom center horizontal box
+set key top right box opaque font ',9'
 set bmargin 8
 if (strlen(note) > 0) set label 1 note at screen 0.02, screen 0.05 left font ',8'
 if (exists('note2') && strlen(note2) > 0) set label 3 note2 at screen 0.02, screen 0.02 left font ',8'
@@ -29,7 +29,7 @@ if (empty) {
   plot 1.5 notitle lc rgb 'white'
 } else {
   plot in using (strcol(1) eq 'fixed' ? column(xcol) : NaN):3 with linespoints lw 2 pt 7 title 'SIMD cycles (fixed, by fraction bits)', \
-       ''  using (strcol(1) eq 'fixed' ? column(xcol) : NaN):3:(sprintf('%d', column(2))) with labels offset 0,1 font ',8' notitle, \
+       ''  using (strcol(1) eq 'fixed' ? column(xcol) : NaN):3:(column(2) == column(2) ? sprintf('%d', column(2)) : 'planned') with labels offset 0,1 font ',8' notitle, \
        ''  using (strcol(1) eq 'fixed' ? column(xcol) : NaN):4 axes x1y2 with linespoints lw 1 dt 2 pt 6 title 'SIMD emulator host time', \
        ''  using (strcol(1) eq 'fixed' && column(9) == 1 ? column(xcol) : NaN):3 with points pt 3 ps 3 lc rgb 'red' title "planner's choice", \
        ''  using (strcol(1) eq 'float32' ? column(xcol) : NaN):4 axes x1y2 with points pt 5 ps 2 title 'seq float32 (host time)', \
