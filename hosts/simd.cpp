@@ -361,8 +361,18 @@ void ShadeRegion(const Tracer& tracer, const PrimaryMatrix& matrix, int x0, int 
   out.resize(size_t(w) * h);
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x) {
-      const PrimaryHit& hit = matrix.hits[size_t(y0 + y) * matrix.width + x0 + x];
+      PrimaryHit hit = matrix.hits[size_t(y0 + y) * matrix.width + x0 + x];
       ++stats.rays[int(RayKind::kPrimary)];
+      // A fixed-point t is off by up to the plan's bound, enough to put the hit point on
+      // the wrong side of the surface so secondary rays re-hit it (SPEC §4). The host
+      // refines t against the one object the array found (one double test, not N).
+      if (hit.object >= 0) {
+        const Scene& scene = tracer.GetScene();
+        const double tMin = std::max(scene.camera.hither, 0.0);
+        if (auto t = IntersectObject(scene, hit.object, scene.camera.from, hit.direction, tMin,
+                                     tracer.Options().sphereTest))
+          hit.t = *t;
+      }
       out[size_t(y) * w + x] = tracer.ShadeFromPrimaryHit(hit, stats);
     }
 }
