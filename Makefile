@@ -96,14 +96,15 @@ charts: setup ## Run the experiment sweeps and draw the charts under docs/result
 FUZZ_CXX  ?= clang++-14
 FUZZ_RUNS ?= 1000000
 FUZZ_BIN  := $(BUILD)/fuzz/nff_fuzz
-FUZZ_SRCS := tests/fuzz/nff_fuzz.cpp hosts/nff.cpp hosts/scene.cpp hosts/geometry.cpp hosts/trace.cpp
+FUZZ_SRCS := tests/fuzz/nff_fuzz.cpp hosts/nff.cpp hosts/scene.cpp hosts/geometry.cpp hosts/trace.cpp \
+             hosts/sphere_kernels.cpp
 FUZZ_RUN   = mkdir -p $(BUILD)/fuzz/corpus && $(FUZZ_BIN) -max_len=4096 -timeout=10 \
              $(BUILD)/fuzz/corpus tests/fuzz/corpus
 $(FUZZ_BIN): $(FUZZ_SRCS) $(wildcard hosts/*.h fixed/*.h)
 	$(call say,FUZZCXX,$@)
 	@mkdir -p $(@D)
 	$(Q)$(FUZZ_CXX) -std=c++20 -O1 -g -I. -fsanitize=fuzzer,address,undefined \
-	  -fno-sanitize-recover=all $(FUZZ_SRCS) -o $@
+	  -fno-sanitize-recover=all $(FUZZ_SRCS) -o $@ $$(pkg-config --cflags --libs libhwy)
 
 fuzz: ## Fuzz the NFF reader: FUZZ_RUNS inputs (default 10^6) under ASan+UBSan
 	$(Q)$(MAKE) --no-print-directory $(FUZZ_BIN)

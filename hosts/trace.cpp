@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "fixed/check.h"
+#include "hosts/sphere_kernels.h"
 
 namespace zephyr {
 
@@ -252,6 +253,15 @@ class TracerT final : public Tracer {
     for (const Primitive& p : scene.objects) {
       objects_.push_back(Prepare<T>(p));
       ++kindCount_[int(p.Kind())];
+      // Untransformed spheres go to the vector kernel; the rest stay on the scalar path.
+      const Prepared<T>& obj = objects_.back();
+      const int index = int(objects_.size()) - 1;
+      if (obj.kind == ShapeKind::kSphere && !obj.transformed) {
+        spheres_.Push(obj.centre, obj.radius2);
+        sphereObject_.push_back(index);
+      } else {
+        scalarObjects_.push_back(index);
+      }
     }
     // Secondary rays start this far along, so they do not re-hit their own surface.
     // Float keeps ~7 digits: 1e-4 of the scene's size is well above its rounding.
@@ -277,13 +287,18 @@ class TracerT final : public Tracer {
  private:
   int Nearest(const V& o, const V& d, T tMin, TraceStats& stats, T& tBest) const {
     for (int k = 0; k < kShapeKinds; ++k) stats.tests[k] += kindCount_[k];
-    tBest = std::numeric_limits<T>::infinity();
+    // The same answer as one scalar pass over objects_ in order keeping strictly nearer
+    // roots: the kernel (bit-identical to IntersectSphere) gives the nearest untransformed
+    // sphere, lowest index among equal t; the rest join it with ties to the lower index.
     int best = -1;
+    const int32_t k = NearestSphere(options_.sphereTest, spheres_, o, d, tMin, &tBest);
+    if (k >= 0) best = sphereObject_[k];
     T roots[2];
-    for (size_t i = 0; i < objects_.size(); ++i) {
-      if (Intersect(objects_[i], options_.sphereTest, o, d, tMin, roots) > 0 && roots[0] < tBest) {
+    for (const int i : scalarObjects_) {
+      if (Intersect(objects_[i], options_.sphereTest, o, d, tMin, roots) > 0 &&
+          (roots[0] < tBest || (roots[0] == tBest && i < best))) {
         tBest = roots[0];
-        best = int(i);
+        best = i;
       }
     }
     return best;
@@ -365,6 +380,9 @@ class TracerT final : public Tracer {
   }
 
   std::vector<Prepared<T>> objects_;
+  SphereArrays<T> spheres_;          // the untransformed spheres, for NearestSphere
+  std::vector<int> sphereObject_;    // spheres_ index -> objects_ index (increasing)
+  std::vector<int> scalarObjects_;   // every other object, in order
   uint64_t kindCount_[kShapeKinds] = {};
   T epsilon_, hither_;
 };
