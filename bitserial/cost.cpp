@@ -258,6 +258,149 @@ MicroOpCounts MulUniCost(Operand a, const fixed::Fixed& k, Operand out, fixed::P
                  ProductFormat(a.format, k.format), out, p);
 }
 
+DivShape DivideShape(const fixed::Format& a, const fixed::Format& b, const fixed::Format& out,
+                     fixed::Policy p) {
+  DivShape s;
+  const int nearestBit = p.rounding == fixed::Rounding::Nearest ? 1 : 0;
+  s.shift = b.fracBits + out.fracBits + nearestBit - a.fracBits;
+  s.dividendBits = a.Width() + std::max(s.shift, 0);
+  s.divisorZeros = std::max(-s.shift, 0);
+  s.divisorBits = b.Width() + s.divisorZeros;
+  // A quotient bit i can be 1 only if |a| >= |b|·2^i >= 2^(divisorZeros + i).
+  s.skipped = std::min(s.divisorZeros, s.dividendBits);
+  s.steps = s.dividendBits - s.skipped;
+  s.canBeNegative = a.isSigned || b.isSigned;
+  const int frac = out.fracBits + nearestBit;
+  // The floor quotient is below 2^m in magnitude: m bits, or m+1 with a sign.
+  s.quotient = {s.canBeNegative, s.dividendBits - frac, frac};
+  return s;
+}
+
+SqrtShape SquareRootShape(const fixed::Format& a, const fixed::Format& out) {
+  SqrtShape s;
+  s.shift = 2 * out.fracBits - a.fracBits;
+  s.radicandBits = std::max(0, a.Width() - (a.isSigned ? 1 : 0) + s.shift);
+  s.rootBits = (s.radicandBits + 1) / 2;
+  return s;
+}
+
+// Restoring division (docs/bitserial.md): magnitudes into internal memory, one
+// subtract-and-restore per quotient bit with the partial remainder in the accumulator,
+// the floor correction for a negative quotient, the usual round-and-fit pass, and the
+// divide-by-zero replacement.
+MicroOpCounts DivCost(Operand a, Operand b, Operand out, fixed::Policy p) {
+  const DivShape s = DivideShape(a.format, b.format, out.format, p);
+  const int wa = a.format.Width(), wb = b.format.Width(), wo = out.format.Width();
+  const int d = s.divisorBits;
+  MicroOpCounts c;
+  // |x|: the sign into a flag, then one conditional-complement pass written to memory.
+  auto magnitude = [&](Operand x) {
+    const int w = x.format.Width();
+    c.Add(Read(x.space));
+    c.Add(MicroOp::FlagOp);
+    c.Add(Read(x.space), w);
+    c.Add(MicroOp::AluStep, w);
+    c.Add(MicroOp::WriteInternal, w);
+  };
+  if (a.format.isSigned) magnitude(a);
+  if (b.format.isSigned) magnitude(b);
+  const MicroOp readA = a.format.isSigned ? MicroOp::ReadInternal : Read(a.space);
+  const MicroOp readB = b.format.isSigned ? MicroOp::ReadInternal : Read(b.space);
+  // b == 0: an OR over b's bits, latched.
+  c.Add(Read(b.space), wb);
+  c.Add(MicroOp::AluStep, wb);
+  c.Add(MicroOp::FlagOp);
+  // The skipped leading quotient bits leave the dividend's top bits as the remainder.
+  c.Add(readA, s.skipped);
+  c.Add(MicroOp::AccumulatorWrite, s.skipped);
+  const int lowA = std::max(s.shift, 0);  // dividend bits below this are zero
+  for (int i = s.steps - 1; i >= 0; --i) {
+    c.Add(MicroOp::FlagOp);  // set the carry: R' + ~D + 1
+    for (int q = 0; q <= d; ++q) {
+      if (q == 0) {
+        if (i >= lowA) c.Add(readA);  // bring down dividend bit i
+      } else {
+        c.Add(MicroOp::AccumulatorRead);  // remainder bit q-1
+      }
+      if (q >= s.divisorZeros && q < d) c.Add(readB);
+      c.Add(MicroOp::AluStep);
+      if (q < d) c.Add(MicroOp::AccumulatorWrite);  // the difference; bit d is its sign
+    }
+    c.Add(MicroOp::FlagOp);       // latch the sign: the quotient bit is the write mask
+    c.Add(MicroOp::WriteInternal);  // the quotient bit
+    c.Add(MicroOp::AccumulatorRead, d);   // restore: the difference replaces the
+    c.Add(MicroOp::AccumulatorWrite, d);  // remainder where the quotient bit is 1
+  }
+  const int m = s.dividendBits;
+  if (s.canBeNegative) {
+    // floor of a negative quotient: -Q - (R != 0) = ~Q + (R == 0), where the signs differ.
+    c.Add(MicroOp::AccumulatorRead, d);
+    c.Add(MicroOp::AluStep, d);
+    c.Add(MicroOp::FlagOp);  // R == 0
+    if (a.format.isSigned) c.Add(Read(a.space));
+    if (b.format.isSigned) c.Add(Read(b.space));
+    c.Add(MicroOp::AluStep);
+    c.Add(MicroOp::FlagOp);  // the quotient's sign
+    c.Add(MicroOp::ReadInternal, m);
+    c.Add(MicroOp::AluStep, m + 1);
+    c.Add(MicroOp::WriteInternal, m + 1);
+  }
+  c += AlignedPass({{Operand{s.quotient, Space::Internal}, 0}}, s.quotient, out, p);
+  // Where b == 0: the end of the range on a's side (written under the latched mask).
+  c.Add(MicroOp::FlagOp);
+  if (a.format.isSigned) c.Add(Read(a.space));
+  c.Add(Write(out.space), wo);
+  (void)wa;
+  return c;
+}
+
+// Restoring square root (docs/bitserial.md): per root bit, bring down two radicand bits,
+// subtract 4·root + 1 from the partial remainder (accumulator) and restore where negative.
+MicroOpCounts SqrtCost(Operand a, Operand out, fixed::Policy p) {
+  const SqrtShape s = SquareRootShape(a.format, out.format);
+  const int wo = out.format.Width();
+  const int ma = a.format.Width() - (a.format.isSigned ? 1 : 0);
+  const int nr = s.rootBits;
+  MicroOpCounts c;
+  for (int j = 0; j < nr; ++j) {  // j root bits decided; this step finds bit i
+    const int i = nr - 1 - j;
+    const int n = j + 3;                      // positions of R' - (4Y + 1), sign on top
+    const int remainderBits = j == 0 ? 0 : j + 1;  // R <= 2Y < 2^(j+1)
+    c.Add(MicroOp::FlagOp);
+    for (int q = 0; q < n; ++q) {
+      if (q < 2) {
+        const int bit = 2 * i + q - s.shift;  // radicand bit 2i+q is a's bit `bit`
+        if (bit >= 0 && bit < ma) c.Add(Read(a.space));
+      } else if (q - 2 < remainderBits) {
+        c.Add(MicroOp::AccumulatorRead);
+      }
+      if (q >= 2 && q < j + 2) c.Add(MicroOp::ReadInternal);  // root bit (trial 4Y + 1)
+      c.Add(MicroOp::AluStep);
+      if (q < n - 1) c.Add(MicroOp::AccumulatorWrite);
+    }
+    c.Add(MicroOp::FlagOp);
+    c.Add(MicroOp::WriteInternal);  // the root bit
+    c.Add(MicroOp::AccumulatorRead, j + 2);
+    c.Add(MicroOp::AccumulatorWrite, j + 2);
+  }
+  if (a.format.isSigned) {  // a < 0: the sign is the invalid mask
+    c.Add(Read(a.space));
+    c.Add(MicroOp::FlagOp);
+  }
+  if (nr > 0) {
+    const fixed::Format root{false, nr - out.format.fracBits, out.format.fracBits};
+    c += AlignedPass({{Operand{root, Space::Internal}, 0}}, root, out,
+                     {fixed::Rounding::Floor, p.overflow});
+  } else {
+    c.Add(Write(out.space), wo);  // the root is 0
+  }
+  if (a.format.isSigned) {  // zeros written where a < 0
+    c.Add(MicroOp::FlagOp);
+    c.Add(Write(out.space), wo);
+  }
+  return c;
+}
+
 MicroOpCounts LogicCost(Operand a, bool binary, Space outSpace) {
   MicroOpCounts c;
   c.Add(Read(a.space), binary ? 2 : 1);

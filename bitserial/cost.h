@@ -57,6 +57,32 @@ MicroOpCounts MinMaxCost(Operand a, Operand b, Operand out, fixed::Policy p);
 MicroOpCounts MulCost(Operand a, Operand b, Operand out, fixed::Policy p);
 // Rows only for the constant's one bits (the controller skips zero bits).
 MicroOpCounts MulUniCost(Operand a, const fixed::Fixed& c, Operand out, fixed::Policy p);
+// Restoring division (docs/bitserial.md, "Divide and square root"): the shape of the
+// divider, shared by the engine and its schedule. The quotient is floor(|a|·2^shift / |b|)
+// (shift = fb + fo - fa, one more for Nearest), sign-corrected to the floor of the signed
+// quotient, then rounded (Nearest: the extra bit) and fitted like every other result.
+struct DivShape {
+  int shift;          // the quotient's scale (see above)
+  int dividendBits;   // m: planes of |a|·2^max(shift, 0) (the low max(shift, 0) are zero)
+  int divisorZeros;   // max(-shift, 0): zero low planes of the scaled divisor
+  int divisorBits;    // d = width of b + divisorZeros (the partial remainder has d bits)
+  int skipped;        // leading quotient bits known to be zero: min(divisorZeros, m)
+  int steps;          // quotient bits computed, one subtract-and-restore each: m - skipped
+  bool canBeNegative; // a or b signed: the magnitude quotient needs the floor correction
+  fixed::Format quotient;  // the exact floor quotient (fo + Nearest fraction bits)
+};
+DivShape DivideShape(const fixed::Format& a, const fixed::Format& b, const fixed::Format& out,
+                     fixed::Policy p);
+// Restoring square root of a's non-negative bits scaled by 2^shift (shift = 2·fo - fa).
+struct SqrtShape {
+  int shift;
+  int radicandBits;  // max(0, magnitude bits of a + shift)
+  int rootBits;      // ceil(radicandBits / 2): one subtract-and-restore step each
+};
+SqrtShape SquareRootShape(const fixed::Format& a, const fixed::Format& out);
+MicroOpCounts DivCost(Operand a, Operand b, Operand out, fixed::Policy p);
+// Sqrt always rounds down (fixed::Sqrt); only p.overflow matters.
+MicroOpCounts SqrtCost(Operand a, Operand out, fixed::Policy p);
 MicroOpCounts LogicCost(Operand a, bool binary, Space outSpace);  // 1-bit and/or/xor/not
 MicroOpCounts CopyCost(Operand a, Operand out);  // masked assignment
 MicroOpCounts BroadcastCost(Operand out);        // a uni value into every PE

@@ -35,6 +35,8 @@ Machine::Machine(MachineProfile profile, int64_t virtualPes, int shapeIndex)
   ones_ = AcquirePlanes(1);
   std::memset(ones_, 0xff, words_ * sizeof(Word));
   overflow_ = AcquirePlanes(1);
+  divideByZero_ = AcquirePlanes(1);
+  invalid_ = AcquirePlanes(1);
   ClearFlags();
   Word* base = AcquirePlanes(1);  // the PEs that exist
   for (size_t w = 0; w < words_; ++w) {
@@ -47,7 +49,9 @@ Machine::Machine(MachineProfile profile, int64_t virtualPes, int shapeIndex)
 
 Machine::~Machine() = default;
 
-void Machine::ClearFlags() { std::memset(overflow_, 0, words_ * sizeof(Word)); }
+void Machine::ClearFlags() {
+  for (Word* f : {overflow_, divideByZero_, invalid_}) std::memset(f, 0, words_ * sizeof(Word));
+}
 
 Word* Machine::AcquirePlanes(int planes) {
   ZEPHYR_CHECK_GE(planes, 1);

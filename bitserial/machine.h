@@ -56,7 +56,12 @@ class Machine {
   // Sticky per-PE flags, set only where active (fixed::Status per virtual PE).
   Word* OverflowPlane() { return overflow_; }
   bool Overflow(int64_t pe) const { return (overflow_[pe >> 6] >> (pe & 63)) & 1; }
-  void ClearFlags();
+  // fixed::Status::divideByZero (Div) and ::invalid (Sqrt of a negative value), likewise.
+  Word* DivideByZeroPlane() { return divideByZero_; }
+  bool DivideByZero(int64_t pe) const { return (divideByZero_[pe >> 6] >> (pe & 63)) & 1; }
+  Word* InvalidPlane() { return invalid_; }
+  bool Invalid(int64_t pe) const { return (invalid_[pe >> 6] >> (pe & 63)) & 1; }
+  void ClearFlags();  // all three
 
   const Word* ZeroPlane() const { return zero_; }
   const Word* OnesPlane() const { return ones_; }
@@ -88,6 +93,8 @@ class Machine {
   std::map<int, std::vector<Word*>> free_;
   std::vector<Word*> activity_;
   Word* overflow_;
+  Word* divideByZero_;
+  Word* invalid_;
   Word* zero_;
   Word* ones_;
   std::map<std::pair<int, int>, Word*> edgeMasks_;

@@ -45,7 +45,7 @@ struct Scratch {
 // Steps 2 and 3 of fixed/'s rule: the exact value (w planes at `base`, `frac` fraction
 // bits, signed or not) rounded and fitted into `out`.
 void RoundFitInto(Machine& m, const Word* base, int w, bool isSigned, int frac, Multi& out,
-                  Policy policy) {
+                  Policy policy, const Word* act) {
   const int wo = out.Width();
   const int lo = frac - out.Format().fracBits;
   const int k = std::max(wo + 1, w - lo + 2);
@@ -65,8 +65,14 @@ void RoundFitInto(Machine& m, const Word* base, int w, bool isSigned, int frac, 
                     out.Format().isSigned,
                     policy.overflow == fixed::OverflowPolicy::Saturate,
                     m.OverflowPlane(),
-                    m.Activity()};
+                    act};
   m.Kernels().roundFit(args, m.WordsPerPlane());
+}
+
+// The same, with overflow flagged in the active PEs.
+void RoundFitInto(Machine& m, const Word* base, int w, bool isSigned, int frac, Multi& out,
+                  Policy policy) {
+  RoundFitInto(m, base, w, isSigned, frac, out, policy, m.Activity());
 }
 
 // a + b or a - b (subtract), exactly, then rounded and fitted.
@@ -442,6 +448,175 @@ Multi Square(const Multi& a, Format out, Policy p) {
   Multi r(m, out, "square");
   m.Charge("square", MulCost(a.AsOperand(), a.AsOperand(), r.AsOperand(), p));
   MulByMulti(a, a, r, p);
+  return r;
+}
+
+// ---- division and square root --------------------------------------------------------------
+
+namespace {
+
+using PlaneList = std::vector<const Word*>;
+
+// |x| into x.Width() scratch planes: 0 - x where the sign is set (|min| fits unsigned).
+void MagnitudeInto(const Multi& x, Word* base) {
+  Machine& m = x.GetMachine();
+  const int w = x.Width();
+  NegExact(x, base, w);
+  auto& pa = m.PointersA();
+  auto& pb = m.PointersB();
+  auto& po = m.PointersOut();
+  pa.clear(), pb.clear(), po.clear();
+  for (int q = 0; q < w; ++q) {
+    pa.push_back(base + q * m.WordsPerPlane());
+    pb.push_back(x.Plane(q));
+    po.push_back(base + q * m.WordsPerPlane());
+  }
+  m.Kernels().select(x.Plane(w - 1), pa.data(), pb.data(), po.data(), w, m.WordsPerPlane());
+}
+
+// One step of a restoring divider or square root: T = r - t over n = r.size() positions
+// (t has n entries), bit = (T >= 0) = NOT T's top plane, and T's low n-1 planes replace r
+// where bit is 1. T lives in `buf` (n planes, none of them r's or t's); `next` gets the
+// new remainder (n-1 planes of buf).
+void SubtractRestore(Machine& m, const PlaneList& r, const PlaneList& t, Word* buf, Word* bit,
+                     PlaneList& next) {
+  const size_t words = m.WordsPerPlane();
+  const int n = static_cast<int>(r.size());
+  std::vector<Word*> diff(n);
+  for (int q = 0; q < n; ++q) diff[q] = buf + q * words;
+  AddArgs args{r.data(), t.data(), diff.data(), n, true, true, 0, false, nullptr, nullptr};
+  m.Kernels().add(args, words);
+  m.Kernels().logic(LogicOp::Not, diff[n - 1], nullptr, bit, words);
+  m.Kernels().select(bit, diff.data(), r.data(), diff.data(), n - 1, words);
+  next.assign(diff.begin(), diff.begin() + (n - 1));
+}
+
+}  // namespace
+
+Multi Div(const Multi& a, const Multi& b, Format out, Policy p) {
+  CheckSameMachine(a, b);
+  Machine& m = a.GetMachine();
+  Multi r(m, out, "div");
+  m.Charge("div", DivCost(a.AsOperand(), b.AsOperand(), r.AsOperand(), p));
+  const size_t words = m.WordsPerPlane();
+  const PlaneKernels& k = m.Kernels();
+  const Format &fa = a.Format(), &fb = b.Format();
+  const int wa = a.Width(), wb = b.Width(), wo = r.Width();
+  const DivShape s = DivideShape(fa, fb, out, p);
+  const int mBits = s.dividendBits, d = s.divisorBits;
+
+  // Magnitudes; the dividend |a|·2^max(shift,0) and divisor |b|·2^max(-shift,0) as planes.
+  Scratch magA(m, wa), magB(m, wb);
+  if (fa.isSigned) MagnitudeInto(a, magA.p);
+  if (fb.isSigned) MagnitudeInto(b, magB.p);
+  const int lowA = std::max(s.shift, 0);
+  auto dividend = [&](int i) -> const Word* {
+    if (i < lowA) return m.ZeroPlane();
+    return fa.isSigned ? magA.Plane(i - lowA) : a.Plane(i - lowA);
+  };
+  PlaneList divisor(d + 1, m.ZeroPlane());
+  for (int q = 0; q < wb; ++q)
+    divisor[s.divisorZeros + q] = fb.isSigned ? magB.Plane(q) : b.Plane(q);
+
+  // One quotient bit per step, most significant first; the skipped top bits are zero and
+  // leave the dividend's top bits as the first partial remainder.
+  Scratch quo(m, mBits), buf(m, 2 * (d + 1));
+  for (int i = s.steps; i < mBits; ++i) std::memset(quo.Plane(i), 0, sizeof(Word) * words);
+  PlaneList rem(d, m.ZeroPlane()), shifted(d + 1);
+  for (int j = 0; j < s.skipped; ++j) rem[j] = dividend(s.steps + j);
+  for (int i = s.steps - 1, step = 0; i >= 0; --i, ++step) {
+    shifted[0] = dividend(i);  // R' = 2R + dividend bit i
+    for (int q = 0; q < d; ++q) shifted[q + 1] = rem[q];
+    SubtractRestore(m, shifted, divisor, buf.Plane((step & 1) * (d + 1)), quo.Plane(i), rem);
+  }
+
+  // b == 0 (no overflow is flagged there), then the floor of the signed quotient.
+  Scratch flags(m, 4);
+  Word* zeroDivisor = flags.Plane(0);
+  Word* keep = flags.Plane(1);
+  {
+    PlaneList bits, zeros(wb, m.ZeroPlane());
+    for (int q = 0; q < wb; ++q) bits.push_back(b.Plane(q));
+    k.equal(bits.data(), zeros.data(), wb, zeroDivisor, words);
+  }
+  k.logic(LogicOp::AndNot, m.Activity(), zeroDivisor, keep, words);
+  const Word* signA = fa.isSigned ? a.Plane(wa - 1) : m.ZeroPlane();
+  const Word* signB = fb.isSigned ? b.Plane(wb - 1) : m.ZeroPlane();
+  if (s.canBeNegative) {
+    // Where the signs differ: floor(-Q - frac) = -Q - (R != 0) = ~Q + (R == 0).
+    Word* exactRem = flags.Plane(2);
+    Word* neg = flags.Plane(3);
+    PlaneList zeros(d, m.ZeroPlane());
+    k.equal(rem.data(), zeros.data(), d, exactRem, words);
+    k.logic(LogicOp::Xor, signA, signB, neg, words);
+    const int w = mBits + 1;
+    Scratch exact(m, w);
+    PlaneList carry(w, m.ZeroPlane()), q(w, m.ZeroPlane());
+    carry[0] = exactRem;
+    for (int i = 0; i < mBits; ++i) q[i] = quo.Plane(i);
+    std::vector<Word*> po(w);
+    for (int i = 0; i < w; ++i) po[i] = exact.Plane(i);
+    AddArgs args{carry.data(), q.data(), po.data(), w, true, false, 0, false, nullptr, nullptr};
+    k.add(args, words);
+    k.select(neg, po.data(), q.data(), po.data(), w, words);
+    RoundFitInto(m, exact.p, w, true, s.quotient.fracBits, r, p, keep);
+  } else {
+    RoundFitInto(m, quo.p, mBits, false, s.quotient.fracBits, r, p, keep);
+  }
+
+  // Where b == 0: the end of out's range on a's side, and the divideByZero flag.
+  Word* notSignA = flags.Plane(2);
+  k.logic(LogicOp::Not, signA, nullptr, notSignA, words);
+  PlaneList ends(wo, notSignA);
+  if (out.isSigned) ends[wo - 1] = signA;
+  std::vector<Word*> ro(wo);
+  for (int i = 0; i < wo; ++i) ro[i] = r.Plane(i);
+  k.select(zeroDivisor, ends.data(), ro.data(), ro.data(), wo, words);
+  k.logic(LogicOp::And, zeroDivisor, m.Activity(), keep, words);
+  k.logic(LogicOp::Or, m.DivideByZeroPlane(), keep, m.DivideByZeroPlane(), words);
+  return r;
+}
+
+Multi Sqrt(const Multi& a, Format out, Policy p) {
+  Machine& m = a.GetMachine();
+  Multi r(m, out, "sqrt");
+  m.Charge("sqrt", SqrtCost(a.AsOperand(), r.AsOperand(), p));
+  const size_t words = m.WordsPerPlane();
+  const PlaneKernels& k = m.Kernels();
+  const Format& fa = a.Format();
+  const SqrtShape s = SquareRootShape(fa, out);
+  const int ma = a.Width() - (fa.isSigned ? 1 : 0);
+  const int nr = s.rootBits;
+  auto radicand = [&](int j) -> const Word* {  // bit j of a's magnitude bits × 2^shift
+    const int q = j - s.shift;
+    return q >= 0 && q < ma ? a.Plane(q) : m.ZeroPlane();
+  };
+  const Word* neg = fa.isSigned ? a.Plane(a.Width() - 1) : m.ZeroPlane();
+  Scratch keep(m, 1);
+  k.logic(LogicOp::AndNot, m.Activity(), neg, keep.p, words);
+  if (nr > 0) {
+    // Root bit i: R' = 4R + (radicand bits 2i+1, 2i); if R' >= 4Y + 1, subtract it and
+    // set the bit. With j bits decided, R <= 2Y < 2^(j+1), so j+3 positions hold the
+    // difference with its sign.
+    Scratch root(m, nr), buf(m, 2 * (nr + 2));
+    PlaneList rem{m.ZeroPlane()}, shifted, trial;
+    for (int j = 0; j < nr; ++j) {
+      const int i = nr - 1 - j;
+      shifted = {radicand(2 * i), radicand(2 * i + 1)};
+      shifted.insert(shifted.end(), rem.begin(), rem.end());
+      trial = {m.OnesPlane(), m.ZeroPlane()};
+      for (int t = i + 1; t < nr; ++t) trial.push_back(root.Plane(t));
+      trial.resize(shifted.size(), m.ZeroPlane());
+      SubtractRestore(m, shifted, trial, buf.Plane((j & 1) * (nr + 2)), root.Plane(i), rem);
+    }
+    RoundFitInto(m, root.p, nr, false, out.fracBits, r, {fixed::Rounding::Floor, p.overflow},
+                 keep.p);
+  }
+  if (fa.isSigned) {  // a < 0: 0 and the invalid flag
+    for (int i = 0; i < r.Width(); ++i) k.logic(LogicOp::AndNot, r.Plane(i), neg, r.Plane(i), words);
+    k.logic(LogicOp::And, neg, m.Activity(), keep.p, words);
+    k.logic(LogicOp::Or, m.InvalidPlane(), keep.p, m.InvalidPlane(), words);
+  }
   return r;
 }
 

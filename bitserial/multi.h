@@ -8,7 +8,8 @@
 //   if (ReduceOr(hit)) ...;  fixed::Fixed nearest = ReduceMin(t);
 //
 // Every operation is bit-exact with the fixed/ function of the same name (same result
-// bits, overflow flag per PE in Machine::OverflowPlane()) and charges its schedule's
+// bits, overflow flag per PE in Machine::OverflowPlane(); Div and Sqrt also set the
+// DivideByZero / Invalid planes) and charges its schedule's
 // cycles (bitserial/cost.h) to the machine's report. A new result is computed in every PE;
 // assigning into an existing multi (operator=) writes only the active PEs, as MultiC does.
 #pragma once
@@ -83,6 +84,14 @@ Multi Max(const Multi& a, const Multi& b, fixed::Format out, fixed::Policy p = {
 Multi Mul(const Multi& a, const Multi& b, fixed::Format out, fixed::Policy p = {});
 Multi Mul(const Multi& a, const Uni& b, fixed::Format out, fixed::Policy p = {});
 Multi Square(const Multi& a, fixed::Format out, fixed::Policy p = {});
+// Restoring division, one quotient bit per step (docs/bitserial.md). As fixed::Div: the
+// exact quotient rounded and fitted; where b == 0 the result is out's largest value if
+// a >= 0, its smallest if a < 0, and the PE's DivideByZero flag is set (not Overflow).
+Multi Div(const Multi& a, const Multi& b, fixed::Format out, fixed::Policy p = {});
+// Restoring square root, one root bit per step. As fixed::Sqrt: the floor of the exact
+// root (p.rounding is ignored), fitted with p.overflow; where a < 0 the result is 0 and
+// the PE's Invalid flag is set.
+Multi Sqrt(const Multi& a, fixed::Format out, fixed::Policy p = {});
 Multi Shift(const Multi& a, int k, fixed::Format out, fixed::Policy p = {});
 Multi Convert(const Multi& a, fixed::Format out, fixed::Policy p = {});
 // mask ? a : b, rounded and fitted to out.

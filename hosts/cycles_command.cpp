@@ -79,13 +79,14 @@ void RunCycles(const CyclesOptions& o) {
       {"select", {"select", [&] { Multi mask = Multi(m, BoolFormat(), "mask"); m.Report().Clear();
                                    return Select(mask, a, b, out, policy); }}},
       {"shift", {"shift", [&] { return Shift(a, 1, out, policy); }}},
+      {"div", {"div", [&] { return Div(a, b, out, policy); }}},
+      {"sqrt", {"sqrt", [&] { return Sqrt(a, out, policy); }}},
   };
   auto it = ops.find(o.op);
   if (it == ops.end()) {
     std::string known;
     for (auto& [name, v] : ops) known += (known.empty() ? "" : ", ") + name;
-    throw UserError(fmt::format("--op '{}' is not an operation (known: {}; div and sqrt are "
-                                "not implemented yet)", o.op, known));
+    throw UserError(fmt::format("--op '{}' is not an operation (known: {})", o.op, known));
   }
   m.Report().Clear();
   Multi r = it->second.second();
@@ -113,7 +114,7 @@ CommandRegistration reg("cycles", [](CLI::App& program) {
       "cycles", "Print the machine cycles of one bit-serial operation on one virtual-PE layer");
   cmd->add_option("--profile", opts->profile, "Machine profile (wavetracer, mpp)");
   cmd->add_option("--op", opts->op,
-                  "Operation: add sub neg abs mul mul-uni square compare min max select shift");
+                  "Operation: add sub neg abs mul mul-uni square div sqrt compare min max select shift");
   cmd->add_option("--bits", opts->bits, "Width of the first operand (and of the result)");
   cmd->add_option("--bits2", opts->bits2, "Width of the second operand / the constant (default --bits)");
   cmd->add_option("--frac", opts->frac, "Fraction bits of the operands");

@@ -9,6 +9,7 @@
 
 #include "bitserial/multi.h"
 #include "fixed/format.h"
+#include "tests/bitserial_testing.h"
 
 namespace zephyr::bitserial {
 namespace {
@@ -16,6 +17,7 @@ namespace {
 using fixed::Fixed;
 using fixed::Format;
 using fixed::Policy;
+using namespace testutil;
 
 Fixed RandomFixed(const Format& f, std::mt19937_64& rng) {
   fixed::BigInt bits = 0;
@@ -30,11 +32,6 @@ std::vector<Fixed> Values(const Format& f, int n, std::mt19937_64& rng) {
   for (int i = 0; i < n; ++i) v.push_back(RandomFixed(f, rng));
   return v;
 }
-
-const Policy kPolicies[] = {{fixed::Rounding::Floor, fixed::OverflowPolicy::Wrap},
-                            {fixed::Rounding::Nearest, fixed::OverflowPolicy::Wrap},
-                            {fixed::Rounding::Floor, fixed::OverflowPolicy::Saturate},
-                            {fixed::Rounding::Nearest, fixed::OverflowPolicy::Saturate}};
 
 using EngineBinary = std::function<Multi(const Multi&, const Multi&, Format, Policy)>;
 using RefBinary = std::function<Fixed(const Fixed&, const Fixed&, Format, Policy, fixed::Status*)>;
@@ -103,34 +100,14 @@ std::vector<BinaryOp> UnaryOps() {
   };
 }
 
-// Formats of width <= 6, signed and unsigned, with different splits.
-std::vector<Format> SmallFormats() {
-  return {Format::Signed(2, 3), Format::Unsigned(3, 3), Format::Signed(0, 2), Format::Unsigned(1, 0),
-          Format::Signed(4, 0), Format::Unsigned(0, 5)};
-}
-
-// Runs `body` once per compiled Highway target (hwy's own test pattern).
-void ForEachTarget(const std::function<void()>& body) {
-  for (int64_t target : hwy::SupportedAndGeneratedTargets()) {
-    hwy::SetSupportedTargetsForTest(target);
-    body();
-  }
-  hwy::SetSupportedTargetsForTest(0);
-}
-
 TEST(BitserialArith, ExhaustiveSmallWidthsEveryTarget) {
   ForEachTarget([] {
     Machine m(Profile("wavetracer"));
     const std::vector<Format> formats = SmallFormats();
     for (const Format& fa : formats)
       for (const Format& fb : formats) {
-        // Every pair of values: fa has 2^wa values, fb 2^wb; at most 4096 pairs.
         std::vector<Fixed> a, b;
-        for (int i = 0; i < (1 << fa.Width()); ++i)
-          for (int j = 0; j < (1 << fb.Width()); ++j) {
-            a.push_back(Fixed::FromBits(fa, i));
-            b.push_back(Fixed::FromBits(fb, j));
-          }
+        AllPairs(fa, fb, a, b);
         for (const Format& out : {fa, Format::Signed(1, 2), Format::Unsigned(2, 4)})
           for (const Policy& p : kPolicies) {
             for (const BinaryOp& op : BinaryOps()) CheckBinary(m, op.name, a, b, out, p, op.engine, op.ref);

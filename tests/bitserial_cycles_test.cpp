@@ -7,33 +7,14 @@
 
 #include "bitserial/multi.h"
 #include "fixed/check.h"
+#include "tests/bitserial_testing.h"
 
 namespace zephyr::bitserial {
 namespace {
 
 using fixed::Format;
-
-// Runs `op` on fresh random operands of format f and returns the cycles charged to `name`.
-template <typename Op>
-double Cycles(const std::string& profile, const Format& fa, const Format& fb, const char* name,
-              Op op, uint64_t seed = 1, int64_t virtualPes = 0) {
-  Machine m(Profile(profile), virtualPes);
-  std::mt19937_64 rng(seed);
-  std::vector<int64_t> ra(m.VirtualPes()), rb(m.VirtualPes());
-  for (auto& x : ra) x = static_cast<int64_t>(rng() >> (64 - fa.Width()));
-  for (auto& x : rb) x = static_cast<int64_t>(rng() >> (64 - fb.Width()));
-  Multi a(m, fa, "a"), b(m, fb, "b");
-  a.LoadRaw(ra);
-  b.LoadRaw(rb);
-  Multi r = op(a, b);
-  EXPECT_EQ(m.Report().OpCalls(name), 1);
-  return m.Report().OpCycles(name);
-}
-
-void ExpectFormula(double got, double formula, const std::string& what) {
-  EXPECT_EQ(got, formula) << what;
-  EXPECT_NE(got, formula - 1) << what;  // one cycle fewer is not accepted
-}
+using testutil::Cycles;
+using testutil::ExpectFormula;
 
 TEST(BitserialCycles, MppReproducesBatcher1980) {
   // 8-bit add = 25 cycles (6553 MOPS on 16384 PEs at 100 ns), 8x8 multiply = 88 (1861 MOPS).
