@@ -51,7 +51,7 @@ ZEPHYR := $(BIN)/zephyr
 TESTS  := $(BIN)/zephyr_tests
 
 # ---------------------------------------------------------------------------
-.PHONY: all build test run bench charts fuzz fuzz-smoke clean help setup
+.PHONY: all binaries test run bench charts fuzz fuzz-smoke clean help setup
 
 help: ## List the targets
 	@grep -E '^[a-z][a-zA-Z_-]*:.*## ' $(MAKEFILE_LIST) | sed 's/:.*## /\t/' | \
@@ -61,9 +61,9 @@ setup: ## Install any missing Debian packages (idempotent; quick when all are th
 	$(Q)bash tools/setup.sh
 
 all: setup ## Build the zephyr program, the tests and the benchmarks
-	$(Q)$(MAKE) --no-print-directory -j$(JOBS) build
+	$(Q)$(MAKE) --no-print-directory -j$(JOBS) binaries
 
-build: $(ZEPHYR) $(TESTS) $(BENCH_BINS)
+binaries: $(ZEPHYR) $(TESTS) $(BENCH_BINS)
 
 test: setup ## Build and run every test (GoogleTest; FILTER=... to select)
 	$(Q)$(MAKE) --no-print-directory -j$(JOBS) $(TESTS) $(ZEPHYR)
