@@ -11,6 +11,7 @@
 #include "bitserial/multi.h"
 #include "fixed/check.h"
 #include "hosts/simd_ops.h"
+#include "hosts/simd_shapes.h"
 
 namespace zephyr::simd {
 
@@ -41,9 +42,17 @@ bitserial::MachineProfile MakeProfile(const SimdOptions& o) {
   return p;
 }
 
-// The array tests untransformed spheres; every other primitive is tested on the host in
-// double for every pixel (docs/simd.md, "What runs where").
-bool OnArray(const Primitive& p) { return p.Kind() == ShapeKind::kSphere && !p.transform; }
+// Cones are tested on the host in double for every pixel (docs/simd.md, "What runs where").
+bool OnArray(const Primitive& p) { return p.Kind() != ShapeKind::kCone; }
+
+PassFormats FormatsOf(const PrimaryPlan& plan, const Scene& scene) {
+  PassFormats pf;
+  pf.fracBits = plan.fracBits;
+  pf.dirFracBits = plan.dirFracBits;
+  pf.t = plan.t;
+  pf.hither = std::max(scene.camera.hither, 0.0);
+  return pf;
+}
 
 // Integer bits for values of magnitude up to `bound` (at least 1).
 int IntBitsFor(double bound) { return std::max(1, CeilLog2(bound + 1)); }
@@ -57,25 +66,46 @@ PrimaryPlan PlanPrimaryPass(const Scene& scene, const SimdOptions& options) {
   plan.width = cam.width, plan.height = cam.height;
   plan.virtualPes = int64_t(cam.width) * cam.height;
   plan.layers = int((plan.virtualPes + profile.physicalPes - 1) / profile.physicalPes);
-  double farthest = 1, rMin = 1e300, rMax = 0;
+  // The scene's range: the farthest point of an array object and the smallest feature
+  // (a sphere's radius, an ellipsoid's smallest semi-axis, a polygon's shortest edge / 2).
+  double farthest = 1, rMin = 1e300, rMax = 1;
   int arrayObjects = 0;
+  PassFormats probe;
+  probe.fracBits = probe.dirFracBits = 16;
   for (size_t i = 0; i < scene.objects.size(); ++i) {
     const Primitive& p = scene.objects[i];
     if (!OnArray(p)) {
       plan.hostObjects.push_back(int(i));
       continue;
     }
-    const Sphere& s = std::get<Sphere>(p.shape);
-    farthest = std::max(farthest, Length(s.center - cam.from) + s.radius);
-    rMin = std::min(rMin, s.radius);
-    rMax = std::max(rMax, s.radius);
+    farthest = std::max(farthest, BoundObject(scene, int(i), probe).farthest);
+    double feature = 1e300;
+    if (const Sphere* s = std::get_if<Sphere>(&p.shape)) {
+      feature = s->radius;
+      if (p.transform) {  // smallest semi-axis r·σ_min(T) >= r / ‖T⁻¹‖_F
+        const Affine inv = p.transform->Inverse();
+        double norm = 0;
+        for (int r = 0; r < 3; ++r)
+          for (int c = 0; c < 3; ++c) norm += inv.m[r][c] * inv.m[r][c];
+        feature /= std::sqrt(norm);
+      }
+      rMax = std::max(rMax, s->radius);
+    } else if (const Polygon* poly = std::get_if<Polygon>(&p.shape)) {
+      for (size_t k = 0; k < poly->vertices.size(); ++k) {
+        const Vec3 a = p.transform ? p.transform->ApplyPoint(poly->vertices[k]) : poly->vertices[k];
+        const Vec3 b = p.transform ? p.transform->ApplyPoint(poly->vertices[(k + 1) % poly->vertices.size()])
+                                   : poly->vertices[(k + 1) % poly->vertices.size()];
+        feature = std::min(feature, Length(a - b) / 2);
+      }
+    }
+    rMin = std::min(rMin, feature);
     ++arrayObjects;
   }
-  if (arrayObjects == 0) rMin = rMax = 1;
+  if (arrayObjects == 0 || !(rMin > 0) || rMin > 1e299) rMin = 1;
   // Distances: t and the eye-to-centre terms reach `farthest`; one more bit for tca ± root.
   plan.distIntBits = options.formats.intBits >= 0 ? options.formats.intBits : IntBitsFor(farthest) + 1;
   // Fraction bits: the t error bound (≈ 60·D·2^-F, docs/simd.md) at most 1/64 of the
-  // smallest radius, and never coarser than 2^-10.
+  // smallest feature, and never coarser than 2^-10.
   const int planned = std::clamp(CeilLog2(64.0 * 60.0 * farthest / rMin), 10, 40);
   plan.fracBits = options.formats.fracBits >= 0 ? options.formats.fracBits : planned;
   plan.dirFracBits = options.formats.dirFracBits >= 0 ? options.formats.dirFracBits : plan.fracBits;
@@ -101,19 +131,24 @@ PrimaryPlan PlanPrimaryPass(const Scene& scene, const SimdOptions& options) {
       {"t = tca ∓ root", plan.t, "t <= farthest (one bit of headroom)"},
       {"object index + 1", plan.object, fmt::format("{} objects, 0 = none", scene.objects.size())},
   };
-  // Error bounds (docs/simd.md, "Error bounds").
-  const double ed = std::ldexp(1.0, -plan.dirFracBits), ulp = std::ldexp(1.0, -F);
-  const double eTca = std::sqrt(3.0) * farthest * ed + 3 * ulp;
-  const double eCross = 2 * farthest * ed + 3 * ulp;
+  // Error bounds per object, derived from these formats (docs/simd.md, "Error bounds").
+  const PassFormats pf = FormatsOf(plan, scene);
   plan.grazingFraction = 1.0 / 8;
-  double eRoot = 0;
+  int ellipsoids = 0, polygons = 0, ellipsoidBits = 0;
   for (size_t i = 0; i < scene.objects.size(); ++i) {
     if (!OnArray(scene.objects[i])) continue;
-    const double r = std::get<Sphere>(scene.objects[i].shape).radius;
-    const double eDisc = 2 * std::sqrt(3.0) * r * eCross + 3 * eCross * eCross + 5 * ulp;
-    eRoot = std::max(eRoot, eDisc / (r * plan.grazingFraction) + ulp);
+    const ObjectBounds b = BoundObject(scene, int(i), pf);
+    if (!b.alwaysUncertain) plan.tErrorBound = std::max(plan.tErrorBound, b.tError);
+    else ++plan.alwaysUncertainObjects;
+    if (b.kind == ShapeKind::kPolygon) ++polygons;
+    if (b.kind == ShapeKind::kSphere && b.transformed) ++ellipsoids, ellipsoidBits = std::max(ellipsoidBits, b.intBits);
   }
-  plan.tErrorBound = eTca + eRoot + 2 * ulp;
+  if (ellipsoids)
+    plan.formats.push_back({"ellipsoid d' = T⁻¹d, f·d', f×d'", Format::Signed(ellipsoidBits, F),
+                            fmt::format("{} transformed sphere(s): |f|·|d'|, |d'| <= Σ|T⁻¹ row|; t = (f·d' ∓ √disc)/|d'|² by division", ellipsoids)});
+  if (polygons)
+    plan.formats.push_back({"polygon edge/plane ĝ·d, n̂·d", Format::Signed(1, F),
+                            fmt::format("{} polygon(s): unit uni normals (T folded in on the host); t = dist/(n̂·d) by division", polygons)});
   plan.tieThreshold = 2 * plan.tErrorBound;
   // Memory per virtual PE: the matrix (object, t, d, two flag bits) plus the temporaries
   // of one sphere test (tca, 3 cross, 3 clamped, 3 squares, sum, disc, root, t0, t1, t and
@@ -159,8 +194,7 @@ std::string PrimaryPlan::Text() const {
                    "external\n",
                    memoryBitsPerPe, matrixBitsPerPe, internalCapacity, externalCapacity);
   if (!hostObjects.empty())
-    s += fmt::format("{} object(s) (transformed spheres, cones, polygons) are tested on the host in "
-                     "double\n",
+    s += fmt::format("{} cone(s)/cylinder(s) are tested on the host in double\n",
                      hostObjects.size());
   return s;
 }
@@ -197,12 +231,8 @@ PrimaryPass RunPrimaryPass(const Scene& scene, const SimdOptions& options) {
   Machine m(MakeProfile(options), plan.virtualPes);
   const int F = plan.fracBits;
   const Format T = plan.t, L = plan.length;
-  int rBits = 1;
-  for (const Primitive& p : scene.objects)
-    if (OnArray(p)) rBits = std::max(rBits, IntBitsFor(std::get<Sphere>(p.shape).radius));
-  const Format clamped = Format::Signed(rBits, F), square = Format::Unsigned(2 * rBits + 2, F),
-               discF = Format::Signed(2 * rBits + 2, F), rootF = Format::Unsigned(rBits + 1, F);
   const fixed::Policy saturate{fixed::Rounding::Floor, fixed::OverflowPolicy::Saturate};
+  const PassFormats pf = FormatsOf(plan, scene);
 
   // The per-pixel matrix, in external memory in this order (docs/simd.md, "Matrix layout").
   Multi object(m, plan.object, "matrix.object", Space::External);
@@ -229,47 +259,22 @@ PrimaryPass RunPrimaryPass(const Scene& scene, const SimdOptions& options) {
   const Fixed tMax{T, T.MaxRaw()};
   tBest = Broadcast(m, tMax);
   Multi tGraze = Broadcast(m, tMax), tTie = Broadcast(m, tMax);
-  const Multi zero = Broadcast(m, Fixed{Format::Unsigned(1, 0), 0});
-  const Multi hither = Broadcast(m, Tight(std::max(cam.hither, 0.0), F));
   const Multi tieEps = Broadcast(m, Tight(plan.tieThreshold, F));
 
   for (size_t i = 0; i < scene.objects.size(); ++i) {
-    const Primitive& prim = scene.objects[i];
-    if (!OnArray(prim)) continue;
-    const Sphere& s = std::get<Sphere>(prim.shape);
-    const Vec3 fd = s.center - cam.from;  // eye to centre: a uni
-    const Uni f[3] = {{Tight(fd.x, F)}, {Tight(fd.y, F)}, {Tight(fd.z, F)}};
-    // tca = f·d, the distance along the ray to the closest approach.
-    Multi tca = Add(Add(Mul(d[0], f[0], L), Mul(d[1], f[1], L), L), Mul(d[2], f[2], L), L);
-    // Hearn–Baker: |f − (f·d)d| = |f × d| for unit d; only |f×d| <= r can hit, so each
-    // component is clamped to r's integer bits (saturation there means a miss, not an error).
-    Multi c[3] = {Sub(Mul(d[2], f[1], L), Mul(d[1], f[2], L), L),
-                  Sub(Mul(d[0], f[2], L), Mul(d[2], f[0], L), L),
-                  Sub(Mul(d[1], f[0], L), Mul(d[0], f[1], L), L)};
-    Multi sum;
-    WithExpectedSaturation(m, [&] {
-      Multi sq[3];
-      for (int k = 0; k < 3; ++k) sq[k] = Square(Convert(c[k], clamped, saturate), square, saturate);
-      sum = Add(Add(sq[0], sq[1], square, saturate), sq[2], square, saturate);
-    });
-    const Multi disc = Sub(Broadcast(m, Tight(s.radius * s.radius, F)), sum, discF);
-    const Multi root = SqrtFloor(disc, rootF);
-    const Multi t0 = Sub(tca, root, T), t1 = Add(tca, root, T);
-    const Multi t = Select(hither < t0, t0, t1, T);  // the far root when the eye is inside
-    const Multi valid = (zero <= disc) && (hither < t);
-    // Near tie with the best so far; grazing (|disc| small) with the ray's tca in front.
-    Multi gap;  // |t − tBest|, clamped: only gaps below the threshold matter
-    WithExpectedSaturation(m, [&] { gap = Abs(t - tBest, Format::Unsigned(L.intBits + 1, F), saturate); });
-    const Multi tie = valid && (gap < tieEps);
-    Where(tie, [&] { tTie = Min(t, tBest, T); });
-    const double graze = s.radius * plan.grazingFraction;
-    Multi absDisc;
-    WithExpectedSaturation(m, [&] { absDisc = Abs(disc, Format::Unsigned(discF.intBits, F), saturate); });
-    const Multi grazing = (absDisc < Broadcast(m, Tight(graze * graze, F))) && (hither < tca);
-    Where(grazing, [&] { tGraze = Min(tGraze, tca, T); });
-    const Multi closer = valid && (t < tBest);
+    if (!OnArray(scene.objects[i])) continue;
+    const ObjectBounds bounds = BoundObject(scene, int(i), pf);
+    const Candidate c = TestObject(m, scene, int(i), d, pf, bounds);
+    // Near tie with the best so far (|t − tBest|, clamped: only gaps below the threshold
+    // matter); an uncertain candidate keeps the lowest t its true hit could have.
+    Multi gap;
+    WithExpectedSaturation(m, [&] { gap = Abs(c.t - tBest, Format::Unsigned(L.intBits + 1, F), saturate); });
+    const Multi tie = c.hit && (gap < tieEps);
+    Where(tie, [&] { tTie = Min(c.t, tBest, T); });
+    Where(c.uncertain, [&] { tGraze = Min(tGraze, c.tLow, T); });
+    const Multi closer = c.hit && (c.t < tBest);
     Where(closer, [&] {
-      tBest = t;
+      tBest = c.t;
       object = Broadcast(m, Fixed{plan.object, fixed::BigInt(i + 1)});
     });
   }

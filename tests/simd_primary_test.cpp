@@ -43,8 +43,9 @@ TEST(SimdPrimary, FirstObjectAgreesOnEveryPixelSphereflake) {
   EXPECT_EQ(ObjectMismatches(pass.matrix, want), 0);
   // Where the hit is certain, t is within the stated bound of the double tracer's t.
   for (size_t i = 0; i < want.size(); ++i)
-    if (pass.matrix.flags[i] == 0 && want[i].object >= 0)
+    if (pass.matrix.flags[i] == 0 && want[i].object >= 0) {
       ASSERT_NEAR(pass.matrix.hits[i].t, want[i].t, pass.plan.tErrorBound) << i;
+    }
 }
 
 TEST(SimdPrimary, ColoursAgreeWithSequentialWhereTheHitIsTheSame) {
@@ -156,6 +157,68 @@ TEST(SimdPrimary, UncertainPixelsAreFlaggedAndRecomputed) {
   const PrimaryPass g = RunPrimaryPass(graze, keep);
   EXPECT_TRUE(g.matrix.flags[10 * 33 + 16] & kGrazing);
   EXPECT_FALSE(g.matrix.flags[16 * 33 + 16] & kGrazing);
+}
+
+}  // namespace
+}  // namespace zephyr::simd
+
+namespace zephyr::simd {
+namespace {
+
+// Soundness of the error bounds: at every fraction width, recompute must repair every pixel
+// whose first object differs from the double tracer, and the flagged pixels are counted.
+TEST(SimdPrimary, RecomputeRepairsEveryPixelAtLowWidths) {
+  const Scene scene = GenerateRandomSpheres({.count = 64, .seed = 1, .width = 64, .height = 64});
+  const auto want = SequentialHits(scene);
+  int64_t previousFlagged = -1;
+  for (int bits : {4, 6, 8, 12}) {
+    SimdOptions o;
+    o.formats.fracBits = bits;
+    const PrimaryPass pass = RunPrimaryPass(scene, o);
+    EXPECT_EQ(ObjectMismatches(pass.matrix, want), 0) << bits << " fraction bits";
+    const int64_t flagged = std::count_if(pass.matrix.flags.begin(), pass.matrix.flags.end(),
+                                          [](uint32_t f) { return f != 0; });
+    EXPECT_EQ(pass.recomputedPixels, flagged);
+    EXPECT_EQ(pass.Json()["uncertain"]["recomputed"].get<int64_t>(), flagged);
+    EXPECT_GT(flagged, 0) << bits;  // at these widths some pixels are always uncertain
+    if (previousFlagged >= 0) {
+      EXPECT_LE(flagged, previousFlagged) << bits;  // wider: fewer
+    }
+    previousFlagged = flagged;
+    // With `keep`, every pixel whose object differs is one the pass flagged.
+    o.uncertain = UncertainPolicy::kKeep;
+    const PrimaryPass kept = RunPrimaryPass(scene, o);
+    int unflaggedWrong = 0, wrong = 0;
+    for (size_t i = 0; i < want.size(); ++i)
+      if (kept.matrix.hits[i].object != want[i].object) ++wrong, unflaggedWrong += kept.matrix.flags[i] == 0;
+    EXPECT_EQ(unflaggedWrong, 0) << bits << " fraction bits, " << wrong << " wrong";
+  }
+}
+
+TEST(SimdPrimary, TransformedPrimitivesRunOnTheArray) {
+  const Scene scene = GenerateTransformedShowcase(64, 64);
+  const PrimaryPass pass = RunPrimaryPass(scene, {});
+  EXPECT_EQ(ObjectMismatches(pass.matrix, SequentialHits(scene)), 0);
+  // Only the cones stay on the host; the ellipsoid's and polygons' divisions are on the array.
+  for (int i : pass.plan.hostObjects) EXPECT_EQ(scene.objects[i].Kind(), ShapeKind::kCone);
+  EXPECT_LT(pass.plan.hostObjects.size(), scene.objects.size() / 2);
+  EXPECT_GT(pass.cycles["byOp"]["div"]["cycles"].get<double>(), 0) << pass.cycles.dump();
+  const auto want = SequentialHits(scene);
+  for (int bits : {6, 10, 16}) {
+    SimdOptions o;
+    o.formats.fracBits = bits;
+    EXPECT_EQ(ObjectMismatches(RunPrimaryPass(scene, o).matrix, want), 0) << bits;
+    // Unflagged pixels are right, and their t within the stated bound.
+    o.uncertain = UncertainPolicy::kKeep;
+    const PrimaryPass kept = RunPrimaryPass(scene, o);
+    for (size_t i = 0; i < want.size(); ++i) {
+      if (kept.matrix.flags[i] != 0) continue;
+      ASSERT_EQ(kept.matrix.hits[i].object, want[i].object) << bits << " bits, pixel " << i;
+      if (want[i].object >= 0 && scene.objects[want[i].object].Kind() != ShapeKind::kCone) {
+        ASSERT_NEAR(kept.matrix.hits[i].t, want[i].t, kept.plan.tErrorBound) << bits << " bits, pixel " << i;
+      }
+    }
+  }
 }
 
 }  // namespace
