@@ -72,8 +72,8 @@ test: setup ## Build and run every test (GoogleTest; FILTER=... to select)
 
 # Defaults for `make run`: a generated 384×384 random-sphere scene, the default method.
 METHOD  ?= $(DEFAULT_METHOD)
-# seq is the only method so far; simd once issue 5 lands.
-DEFAULT_METHOD := seq
+# simd until the heterogeneous method lands (issue 6), then hetero.
+DEFAULT_METHOD := simd
 WORKERS ?= 2
 FRAME   ?= 64
 SPHERES ?= 32
