@@ -1,7 +1,8 @@
 // hosts/simd_accuracy.cpp — `zephyr accuracy SCENE`: the SIMD primary pass against an exact
 // reference (SPEC §4). For every pixel (or a stated random sample) the first hit is
 // recomputed with 128-bit binary floats (fixed/reference.h RefReal) along the same double
-// eye ray: spheres exactly by Hearn–Baker; other primitives in double (stated in the output).
+// eye ray: spheres, ellipsoids (ray through T⁻¹) and polygons; cones in double (stated in the
+// output). Also the PSNR of the final image against the sequential method in double.
 #include <CLI/CLI.hpp>
 #include <cmath>
 #include <cstdio>
@@ -10,6 +11,7 @@
 #include "fixed/check.h"
 #include "fixed/reference.h"
 #include "hosts/command.h"
+#include "hosts/image.h"
 #include "hosts/nff.h"
 #include "hosts/render.h"
 #include "hosts/simd.h"
@@ -19,19 +21,62 @@ namespace {
 
 using Real = fixed::reference::RefReal;
 
-// The nearest sphere root beyond tMin along o + t·d, exactly (d is the double unit vector).
-std::optional<Real> ExactSphere(const Sphere& s, const Vec3& o, const Vec3& d, double tMin) {
-  const Real fx = Real(s.center.x) - o.x, fy = Real(s.center.y) - o.y, fz = Real(s.center.z) - o.z;
-  const Real dx = d.x, dy = d.y, dz = d.z;
-  const Real dd = dx * dx + dy * dy + dz * dz;
-  const Real tca = (fx * dx + fy * dy + fz * dz) / dd;
-  const Real vx = fx - tca * dx, vy = fy - tca * dy, vz = fz - tca * dz;
-  const Real disc = (Real(s.radius) * s.radius - (vx * vx + vy * vy + vz * vz)) / dd;
+struct RVec {
+  Real x, y, z;
+  Real operator[](int i) const { return i == 0 ? x : i == 1 ? y : z; }
+};
+RVec Make(const Vec3& v) { return {Real(v.x), Real(v.y), Real(v.z)}; }
+RVec Minus(const RVec& a, const RVec& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+Real Dot(const RVec& a, const RVec& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+
+// The nearest sphere root beyond tMin along o + t·d (d not necessarily unit), exactly.
+std::optional<Real> ExactSphere(const RVec& c, double radius, const RVec& o, const RVec& d, double tMin) {
+  const RVec f = Minus(c, o);
+  const Real dd = Dot(d, d);
+  const Real tca = Dot(f, d) / dd;
+  const RVec v = {f.x - tca * d.x, f.y - tca * d.y, f.z - tca * d.z};
+  const Real disc = (Real(radius) * radius - Dot(v, v)) / dd;
   if (disc < 0) return std::nullopt;
   const Real root = sqrt(disc);
   if (tca - root > tMin) return tca - root;
   if (tca + root > tMin) return tca + root;
   return std::nullopt;
+}
+
+// The ray mapped by T⁻¹ (the inverse as the scene computes it, in double; then exact).
+void ToObject(const Primitive& p, RVec& o, RVec& d) {
+  if (!p.transform) return;
+  const Affine inv = p.transform->Inverse();
+  auto row = [&](int r, const RVec& v, bool point) {
+    return Real(inv.m[r][0]) * v.x + Real(inv.m[r][1]) * v.y + Real(inv.m[r][2]) * v.z +
+           (point ? Real(inv.m[r][3]) : Real(0));
+  };
+  o = {row(0, o, true), row(1, o, true), row(2, o, true)};
+  d = {row(0, d, false), row(1, d, false), row(2, d, false)};
+}
+
+// A polygon exactly: its plane (Newell's normal) and the even-odd test in the projection
+// that drops the normal's largest axis, all in 128-bit arithmetic.
+std::optional<Real> ExactPolygon(const Polygon& poly, const RVec& o, const RVec& d, double tMin) {
+  const size_t n = poly.vertices.size();
+  std::vector<RVec> v;
+  for (const Vec3& p : poly.vertices) v.push_back(Make(p));
+  RVec nn{0, 0, 0};
+  for (size_t i = 0; i < n; ++i) {
+    const RVec &a = v[i], &b = v[(i + 1) % n];
+    nn = {nn.x + (a.y - b.y) * (a.z + b.z), nn.y + (a.z - b.z) * (a.x + b.x), nn.z + (a.x - b.x) * (a.y + b.y)};
+  }
+  const Real nd = Dot(nn, d);
+  if (nd == 0) return std::nullopt;
+  const Real t = Dot(nn, Minus(v[0], o)) / nd;
+  if (!(t > tMin)) return std::nullopt;
+  const RVec hit = {o.x + t * d.x, o.y + t * d.y, o.z + t * d.z};
+  const Real ax = abs(nn.x), ay = abs(nn.y), az = abs(nn.z);
+  const int drop = (ax >= ay && ax >= az) ? 0 : (ay >= az ? 1 : 2);
+  std::vector<Real> uv;
+  for (const RVec& p : v) uv.push_back(p[(drop + 1) % 3]), uv.push_back(p[(drop + 2) % 3]);
+  if (!InsidePolygon2D(uv, hit[(drop + 1) % 3], hit[(drop + 2) % 3])) return std::nullopt;
+  return t;
 }
 
 CommandRegistration reg("accuracy", [](CLI::App& program) {
@@ -71,8 +116,12 @@ CommandRegistration reg("accuracy", [](CLI::App& program) {
       for (size_t i = 0; i < s.objects.size(); ++i) {
         std::optional<Real> t;
         const Primitive& p = s.objects[i];
-        if (p.Kind() == ShapeKind::kSphere && !p.transform) {
-          t = ExactSphere(std::get<Sphere>(p.shape), ray.origin, ray.direction, tMin);
+        RVec o = Make(ray.origin), d = Make(ray.direction);
+        ToObject(p, o, d);
+        if (const Sphere* sp = std::get_if<Sphere>(&p.shape)) {
+          t = ExactSphere(Make(sp->center), sp->radius, o, d, tMin);
+        } else if (const Polygon* poly = std::get_if<Polygon>(&p.shape)) {
+          t = ExactPolygon(*poly, o, d, tMin);
         } else {
           if (auto td = IntersectObject(s, int(i), ray.origin, ray.direction, tMin)) t = Real(*td);
           ++nonSphere;
@@ -90,24 +139,33 @@ CommandRegistration reg("accuracy", [](CLI::App& program) {
       sumErr += err;
       ++compared;
     }
+    // PSNR of the final image (SIMD primary pass + host shading) against the sequential
+    // method in double, over every pixel.
+    const auto tracer = Tracer::Create(s, TraceOptions{});
+    TraceStats stats;
+    Image simdImage(c.width, c.height), seqImage(c.width, c.height);
+    ShadeRegion(*tracer, pass.matrix, 0, 0, c.width, c.height, simdImage.pixels, stats);
+    RenderRegion(*tracer, 0, 0, c.width, c.height, seqImage.pixels, stats);
+    const double psnr = Psnr(simdImage, seqImage);
     nlohmann::json j = {{"scene", *scene}, {"pixels", which.size()},
                         {"sampled", which.size() < size_t(pixels)},
                         {"firstObjectDiffers", differ},
                         {"firstObjectDiffersPercent", 100.0 * differ / which.size()},
                         {"tMaxError", maxErr}, {"tMeanError", compared ? sumErr / compared : 0.0},
                         {"tErrorBound", pass.plan.tErrorBound},
-                        {"nonSphereTestsInDouble", nonSphere},
+                        {"coneTestsInDouble", nonSphere}, {"psnrDb", std::isfinite(psnr) ? nlohmann::json(psnr) : nlohmann::json("inf")},
                         {"uncertain", pass.Json()["uncertain"]}};
     if (*json) {
       std::printf("%s\n", j.dump(2).c_str());
       return;
     }
-    std::printf("%s: %zu pixel(s)%s; reference: 128-bit Hearn-Baker for spheres%s\n", scene->c_str(),
+    std::printf("%s: %zu pixel(s)%s; reference: 128-bit spheres, ellipsoids, polygons%s\n", scene->c_str(),
                 which.size(), j["sampled"].get<bool>() ? " (random sample, seed 1)" : " (every pixel)",
-                nonSphere ? ", double for other primitives" : "");
+                nonSphere ? ", cones in double" : "");
     std::printf("first object differs: %lld (%.4f %%)\n", (long long)differ, 100.0 * differ / which.size());
     std::printf("t error where the object agrees: max %.3g, mean %.3g (bound for certain pixels %.3g)\n",
                 maxErr, compared ? sumErr / compared : 0.0, pass.plan.tErrorBound);
+    std::printf("PSNR of the final image against the sequential method (double): %.2f dB\n", psnr);
     std::printf("uncertain: %lld overflow, %lld grazing, %lld near tie, %lld recomputed\n",
                 (long long)pass.overflowPixels, (long long)pass.grazingPixels,
                 (long long)pass.tiePixels, (long long)pass.recomputedPixels);
