@@ -323,7 +323,7 @@ PrimaryPass RunPrimaryPass(const Scene& scene, const SimdOptions& options) {
     h.object = int(objRaw[pe]) - 1;
     h.t = h.object >= 0 ? std::ldexp(double(tRaw[pe]), -F) : 0.0;
     uint32_t& fl = out.flags[pe];
-    if (m.Overflow(pe)) fl |= kOverflow;
+    if (m.Overflow(pe) || m.DivideByZero(pe)) fl |= kOverflow;  // Invalid: √ of a miss
     if (grazeRaw[pe]) fl |= kGrazing;
     if (tieRaw[pe]) fl |= kNearTie;
     if (!plan.hostObjects.empty()) {

@@ -293,7 +293,7 @@ Candidate TestSphere(Machine& m, const Sphere& s, const Vec3& eye, const Multi (
   // component is clamped to r's integer bits (saturation there means a miss, not an error).
   const Multi sum = CrossSquared(m, d, f, L, clamped, square);
   const Multi disc = Sub(Broadcast(m, Tight(s.radius * s.radius, F)), sum, discF);
-  const Multi root = SqrtFloor(disc, rootF);
+  const Multi root = Sqrt(disc, rootF);
   const Multi t0 = Sub(tca, root, T), t1 = Add(tca, root, T);
   const Multi hither = Broadcast(m, Tight(pf.hither, F));
   Candidate out;
@@ -333,7 +333,7 @@ Candidate TestEllipsoid(Machine& m, const Primitive& p, const Vec3& eye, const M
   const Multi dd = Add(Add(Square(dp[0], ddF), Square(dp[1], ddF), ddF), Square(dp[2], ddF), ddF);
   const Multi r2dd = Mul(dd, Uni{Tight(s.radius * s.radius, F)}, square);
   const Multi disc = Sub(r2dd, sum, discF);
-  const Multi root = SqrtFloor(disc, rootF);
+  const Multi root = Sqrt(disc, rootF);
   const Format numF = Format::Signed(b.intBits + 1, F);
   const Multi num0 = Sub(tcaN, root, numF), num1 = Add(tcaN, root, numF);
   const Multi hd = pf.hither > 0 ? Mul(dd, Uni{Tight(pf.hither, F)}, numF) : Broadcast(m, Fixed{numF, 0});
@@ -343,7 +343,7 @@ Candidate TestEllipsoid(Machine& m, const Primitive& p, const Vec3& eye, const M
   out.uncertain = b.alwaysUncertain ? (Zero(m) <= num1) : Near(m, disc, b.grazeBand, F) ||
                   Near(m, num0 - hd, b.tError * ddMax + pf.Ulp(), F);
   const Multi numPos = Max(num, Zero(m), numF);
-  Where(out.hit || out.uncertain, [&] { out.t = DivPositive(numPos, dd, pf.t); });
+  Where(out.hit || out.uncertain, [&] { out.t = Div(numPos, dd, pf.t, kSaturate); });
   out.tLow = SubBound(m, out.t, b.slack, pf.t);
   return out;
 }
@@ -387,7 +387,7 @@ Candidate TestPolygon(Machine& m, const Primitive& p, const Vec3& eye, const Mul
   Candidate out;
   const Multi front = zero < den;
   const Multi cand = front && (inside || edgeUncertain);
-  Where(cand, [&] { out.t = DivPositive(num, den, pf.t); });
+  Where(cand, [&] { out.t = Div(num, den, pf.t, kSaturate); });
   const Multi hither = Broadcast(m, Tight(pf.hither, F));
   out.hit = cand && inside && (hither < out.t);
   const Multi nearHither = b.alwaysUncertain ? Broadcast(m, Fixed{Format::Unsigned(1, 0), 1})
