@@ -1,0 +1,158 @@
+#include "hosts/mpi_session.h"
+
+#define OMPI_SKIP_MPICXX 1  // the C API only
+#include <mpi.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <thread>
+
+#include "fixed/check.h"
+
+namespace zephyr {
+
+namespace {
+void CheckMpi(int code, const char* what) {
+  if (code == MPI_SUCCESS) return;
+  char text[MPI_MAX_ERROR_STRING];
+  int length = 0;
+  MPI_Error_string(code, text, &length);
+  throw UserError(std::string("MPI ") + what + " failed: " + std::string(text, length));
+}
+
+}  // namespace
+
+void FinalizeMpiAtExit() {
+  int finalized = 0;
+  MPI_Finalized(&finalized);
+  if (finalized) return;
+  MpiSession& mpi = MpiSession::Get();
+  mpi.ReleaseChildren();
+  if (mpi.unresponsiveChild_) {
+    // MPI_Finalize would wait for the stuck child forever, and MPI_Abort has been seen to
+    // wedge mpirun 4.1.4; a rank that exits without finalizing makes mpirun end the job.
+    std::fprintf(stderr,
+                 "zephyr: a child stopped answering and may never finish; leaving "
+                 "without MPI_Finalize so that mpirun ends the job (the outputs are "
+                 "written)\n");
+    std::fflush(stdout);
+    std::fflush(stderr);
+    std::_Exit(3);
+  }
+  MPI_Finalize();
+}
+
+void MpiSession::MarkGone(int rank, bool knownDead) {
+  released_[rank] = true;
+  if (!knownDead) unresponsiveChild_ = true;
+}
+
+MpiSession& MpiSession::Get() {
+  static MpiSession* session = new MpiSession;  // never destroyed: used by the at-exit hook
+  return *session;
+}
+
+MpiSession::MpiSession() {
+  int initialized = 0;
+  MPI_Initialized(&initialized);
+  if (!initialized) {
+    CheckMpi(MPI_Init(nullptr, nullptr), "MPI_Init");
+    std::atexit(FinalizeMpiAtExit);
+  }
+  // Errors come back as codes (turned into UserError) instead of aborting the job, so the
+  // parent can say what happened and keep its checkpoint.
+  MPI_Comm_set_errhandler(MPI_COMM_WORLD, MPI_ERRORS_RETURN);
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
+  MPI_Comm_size(MPI_COMM_WORLD, &size_);
+  char name[MPI_MAX_PROCESSOR_NAME];
+  int length = 0;
+  MPI_Get_processor_name(name, &length);
+  host_.assign(name, length);
+  sentSequence_.assign(size_, 0);
+  receivedSequence_.assign(size_, 0);
+  released_.assign(size_, false);
+}
+
+void MpiSession::ReleaseChildren() {
+  if (rank_ != 0) return;
+  TrafficAccount unused;
+  for (int r = 1; r < size_; ++r) {
+    if (released_[r]) continue;
+    try {
+      Send(r, {.kind = MessageKind::kStop}, {}, unused);
+    } catch (const UserError&) {
+      released_[r] = true;
+    }
+  }
+}
+
+void MpiSession::Send(int rank, MessageHeader header, std::span<const std::byte> payload,
+                      TrafficAccount& account) {
+  ZEPHYR_CHECK(rank >= 0 && rank < size_ && rank != rank_);
+  header.payloadBytes = payload.size();
+  header.sequence = sentSequence_[rank]++;
+  std::vector<std::byte> message = EncodeMessage(header, payload);
+  // The tag is the kind, for anyone watching the traffic; the receiver trusts the header.
+  CheckMpi(MPI_Send(message.data(), int(message.size()), MPI_BYTE, rank, int(header.kind),
+                    MPI_COMM_WORLD),
+           "send");
+  account.Add(header.kind, payload.size());
+  if (header.kind == MessageKind::kStop) released_[rank] = true;
+}
+
+std::optional<ReceivedMessage> MpiSession::TryReceive(int source, TrafficAccount& account) {
+  int flag = 0;
+  MPI_Status status;
+  CheckMpi(
+      MPI_Iprobe(source < 0 ? MPI_ANY_SOURCE : source, MPI_ANY_TAG, MPI_COMM_WORLD, &flag, &status),
+      "probe");
+  if (!flag) return std::nullopt;
+  int count = 0;
+  MPI_Get_count(&status, MPI_BYTE, &count);
+  std::vector<std::byte> message(std::size_t(count < 0 ? 0 : count));
+  CheckMpi(MPI_Recv(message.data(), count, MPI_BYTE, status.MPI_SOURCE, status.MPI_TAG,
+                    MPI_COMM_WORLD, MPI_STATUS_IGNORE),
+           "receive");
+  ReceivedMessage received;
+  received.source = status.MPI_SOURCE;
+  const std::string sender = "rank " + std::to_string(received.source);
+  received.header = DecodeHeader(message, sender);
+  if (status.MPI_TAG != int(received.header.kind))
+    throw UserError("malformed message from " + sender + ": tag " + std::to_string(status.MPI_TAG) +
+                    " disagrees with its header's kind");
+  if (received.header.sequence != receivedSequence_[received.source])
+    throw UserError("unexpected message from " + sender + ": sequence number " +
+                    std::to_string(received.header.sequence) + ", expected " +
+                    std::to_string(receivedSequence_[received.source]));
+  ++receivedSequence_[received.source];
+  received.payload.assign(message.begin() + MessageHeader::kBytes, message.end());
+  account.Add(received.header.kind, received.payload.size());
+  return received;
+}
+
+std::optional<ReceivedMessage> MpiSession::Receive(int source, TrafficAccount& account,
+                                                   double timeoutSeconds) {
+  auto start = std::chrono::steady_clock::now();
+  PollBackoff backoff;
+  for (;;) {
+    if (auto m = TryReceive(source, account)) return m;
+    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() >
+        timeoutSeconds)
+      return std::nullopt;
+    backoff.Wait();
+  }
+}
+
+void PollBackoff::Wait() {
+  if (micros_ == 0) {
+    micros_ = 10;
+    std::this_thread::yield();
+    return;
+  }
+  std::this_thread::sleep_for(std::chrono::microseconds(micros_));
+  micros_ = std::min(maxMicros_, micros_ * 2);
+}
+
+}  // namespace zephyr

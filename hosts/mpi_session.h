@@ -1,0 +1,76 @@
+// hosts/mpi_session.h — MPI, started only by the methods that need it.
+//
+// `zephyr render --method seq` never touches MPI; dist and hetero call MpiSession::Get(),
+// which runs MPI_Init once (a program started without mpirun becomes a 1-rank "singleton"
+// job) and MPI_Finalize at exit. Messages are byte vectors framed by mpi_protocol.h; every
+// send and receive is counted in a TrafficAccount by kind.
+#pragma once
+
+#include <cstddef>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "hosts/mpi_protocol.h"
+
+namespace zephyr {
+
+void FinalizeMpiAtExit();
+
+struct ReceivedMessage {
+  int source = -1;
+  MessageHeader header;
+  std::vector<std::byte> payload;
+};
+
+class MpiSession {
+ public:
+  static MpiSession& Get();  // MPI_Init on first use
+  int Rank() const { return rank_; }
+  int Size() const { return size_; }
+  const std::string& Host() const { return host_; }
+
+  // Sends header+payload to `rank` (header.payloadBytes and .sequence are filled in) and
+  // counts it in `account`. Throws UserError if MPI reports an error.
+  void Send(int rank, MessageHeader header, std::span<const std::byte> payload,
+            TrafficAccount& account);
+  // A message from `source` (or any rank when source < 0) if one is waiting; it is checked by
+  // DecodeHeader (throws UserError when malformed) and counted in `account`.
+  std::optional<ReceivedMessage> TryReceive(int source, TrafficAccount& account);
+  // Waits for a message, sleeping between polls so a waiting process leaves its core to the
+  // ones that compute (OpenMPI's blocking receive spins); gives up after timeoutSeconds.
+  std::optional<ReceivedMessage> Receive(int source, TrafficAccount& account,
+                                         double timeoutSeconds);
+
+  // Rank 0: a lost child is never sent anything again, not even the final stop. A child
+  // that is not known to be dead (it stopped answering) may never reach MPI_Finalize, so
+  // rank 0 then exits without MPI_Finalize and mpirun ends the job (see docs/distributed.md).
+  void MarkGone(int rank, bool knownDead);
+  // Rank 0, at exit (also after an error): sends a stop to every child that has not had one,
+  // so no child waits for work forever and MPI_Finalize can complete.
+  void ReleaseChildren();
+
+ private:
+  MpiSession();
+  int rank_ = 0, size_ = 1;
+  std::string host_;
+  std::vector<std::uint64_t> sentSequence_;      // per destination
+  std::vector<std::uint64_t> receivedSequence_;  // per source
+  std::vector<bool> released_;                   // per rank: sent a stop, or gone
+  bool unresponsiveChild_ = false;
+  friend void FinalizeMpiAtExit();
+};
+
+// Sleeps between polls: short right after activity, growing to `maxMicros` when idle.
+class PollBackoff {
+ public:
+  explicit PollBackoff(int maxMicros = 1000) : maxMicros_(maxMicros) {}
+  void Reset() { micros_ = 0; }
+  void Wait();
+
+ private:
+  int micros_ = 0, maxMicros_;
+};
+
+}  // namespace zephyr
