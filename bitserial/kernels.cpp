@@ -5,6 +5,9 @@
 #include "hwy/highway.h"
 
 #include "bitserial/kernels.h"
+#include "hwy/aligned_allocator.h"
+
+#include <algorithm>
 
 HWY_BEFORE_NAMESPACE();
 namespace zephyr::bitserial::HWY_NAMESPACE {
@@ -87,26 +90,110 @@ void RoundFit(const RoundFitArgs& g, size_t words) {
   }
 }
 
+// (a & m) ^ inv: a multiplier row's term, complemented for a subtracted row.
+HWY_INLINE V AndXor(V a, V m, V inv) {
+#if HWY_TARGET <= HWY_AVX3
+  return V{_mm512_ternarylogic_epi64(a.raw, m.raw, inv.raw, 0x6A)};
+#else
+  return hn::Xor(hn::And(a, m), inv);
+#endif
+}
+
+// Per-thread scratch for one strip of the multiply: reused, grown on demand, never shared.
+V* StripBuffer(size_t vectors) {
+  thread_local hwy::AlignedFreeUniquePtr<uint64_t[]> buffer;
+  thread_local size_t capacity = 0;
+  const size_t need = vectors * hn::Lanes(D());
+  if (need > capacity) {
+    buffer = hwy::AllocateAligned<uint64_t>(need);
+    capacity = need;
+  }
+  return reinterpret_cast<V*>(buffer.get());
+}
+
+// G rows of the product added into acc[lo..p) column by column: the G carries stay in
+// registers, so each full adder costs one L1 load and no store. x = (a << shift) & m ^ inv
+// with a's planes zero below bit 0 (aBuf[-p..-1] = 0): a subtracted row (inv = ones, carry
+// in 1) is neutral below its shift, as ~0 + carry 1 passes the sum through with carry 1.
+template <int G, bool kOnes>
+HWY_NOINLINE void MulRows(const V* aBuf, const V* m, const V* inv, const int* shift, int lo,
+                          int p, V* acc) {
+  V carry[G], mr[G], ir[G];
+  const V* ar[G];
+  HWY_UNROLL(8)
+  for (int r = 0; r < G; ++r) {
+    ir[r] = inv[r];
+    mr[r] = kOnes ? inv[r] : m[r];
+    carry[r] = inv[r];  // a subtracted row adds ~x + 1
+    ar[r] = aBuf - std::min(shift[r], p);  // a row shifted past the top adds nothing
+  }
+  for (int i = lo; i < p; ++i) {
+    V s = acc[i];
+    HWY_UNROLL(8)
+    for (int r = 0; r < G; ++r) {
+      const V x = kOnes ? hn::Xor(ar[r][i], ir[r]) : AndXor(ar[r][i], mr[r], ir[r]);
+      FullAdd(s, x, carry[r], s);
+    }
+    acc[i] = s;
+  }
+}
+
+template <bool kOnes>
+void MulRowsAny(int g, const V* aBuf, const V* m, const V* inv, const int* shift, int lo,
+                int p, V* acc) {
+  switch (g) {
+    case 1: return MulRows<1, kOnes>(aBuf, m, inv, shift, lo, p, acc);
+    case 2: return MulRows<2, kOnes>(aBuf, m, inv, shift, lo, p, acc);
+    case 3: return MulRows<3, kOnes>(aBuf, m, inv, shift, lo, p, acc);
+    case 4: return MulRows<4, kOnes>(aBuf, m, inv, shift, lo, p, acc);
+    case 5: return MulRows<5, kOnes>(aBuf, m, inv, shift, lo, p, acc);
+    case 6: return MulRows<6, kOnes>(aBuf, m, inv, shift, lo, p, acc);
+    case 7: return MulRows<7, kOnes>(aBuf, m, inv, shift, lo, p, acc);
+    default: return MulRows<8, kOnes>(aBuf, m, inv, shift, lo, p, acc);
+  }
+}
+
+constexpr int kMulGroup = 8;
+
+// Strip-mined: for each vector of PEs, a's planes are copied once into an L1 buffer (so
+// planes a layer-stride apart never fight over cache sets), the product accumulates in an
+// L1 column buffer, kMulGroup rows at a time, and each output plane is stored once.
 void Mul(const MulArgs& g, size_t words) {
   const D d;
   const size_t lanes = hn::Lanes(d);
-  const V ones = hn::Set(d, ~uint64_t{0});
+  const int p = g.p;
+  // Layout: p zero vectors (a below bit 0), p vectors of a, p of acc, rows of m and inv.
+  V* buf = StripBuffer(3 * static_cast<size_t>(p) + 2 * static_cast<size_t>(g.rows) + 1);
+  V* aBuf = buf + p;
+  V* acc = aBuf + p;
+  V* m = acc + p;
+  V* inv = m + g.rows;
+  for (int i = 0; i < p; ++i) buf[i] = hn::Zero(d);
+  bool ones = true;
+  for (int r = 0; r < g.rows; ++r) {
+    ones &= g.row[r] == g.row[0];
+    inv[r] = g.sub[r] ? hn::Set(d, ~uint64_t{0}) : hn::Zero(d);
+  }
+  // A row list of one repeated plane that is all ones (a uni constant's rows) needs no AND.
+  if (g.rows > 0 && ones) {
+    for (size_t w = 0; w < words && ones; ++w) ones = g.row[0][w] == ~uint64_t{0};
+  }
   for (size_t w = 0; w < words; w += lanes) {
-    for (int i = 0; i < g.p; ++i) hn::Store(hn::Zero(d), d, g.out[i] + w);
-    for (int r = 0; r < g.rows; ++r) {
-      const V m = hn::Load(d, g.row[r] + w);
-      const bool sub = g.sub[r] != 0;
-      V carry = sub ? ones : hn::Zero(d);
-      const int s = g.shift[r];
-      for (int i = s; i < g.p; ++i) {
-        V x = hn::And(hn::Load(d, g.a[i - s] + w), m);
-        if (sub) x = hn::Not(x);
-        const V acc = hn::Load(d, g.out[i] + w);
-        V sum;
-        FullAdd(acc, x, carry, sum);
-        hn::Store(sum, d, g.out[i] + w);
-      }
+    for (int i = 0; i < p; ++i) {
+      aBuf[i] = hn::Load(d, g.a[i] + w);
+      acc[i] = hn::Zero(d);
     }
+    for (int r0 = 0; r0 < g.rows; r0 += kMulGroup) {
+      const int n = std::min(kMulGroup, g.rows - r0);
+      int lo = p;
+      for (int r = r0; r < r0 + n; ++r) {
+        lo = std::min(lo, std::min(g.shift[r], p));
+        if (!ones) m[r] = hn::Load(d, g.row[r] + w);
+      }
+      if (ones) MulRowsAny<true>(n, aBuf, m + r0, inv + r0, g.shift + r0, lo, p, acc);
+      else MulRowsAny<false>(n, aBuf, m + r0, inv + r0, g.shift + r0, lo, p, acc);
+    }
+    for (int i = 0; i < p; ++i) hn::Store(acc[i], d, g.out[i] + w);
   }
 }
 
