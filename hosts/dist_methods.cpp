@@ -1,0 +1,259 @@
+// hosts/dist_methods.cpp — the distributed and heterogeneous methods as render methods
+// (paper §4, SPEC §1), built on the frame farm of hosts/dist.h.
+//
+//   dist:   children trace whole frames with the sequential tracer (RenderRegion), so the
+//           image is bit-identical to --method seq.
+//   hetero: the parent runs the SIMD primary pass on the emulated array; children shade
+//           frames from their slice of the per-pixel matrix (simd::ShadeRegion), so the image
+//           is bit-identical to --method simd. Frames where no primary ray hit anything are
+//           filled with the background at the parent and cost no message.
+//
+// Both need `mpirun -np K+1`: rank 0 is the parent, which alone writes the outputs; a child
+// serves frames and then ends its process (it has no output of its own).
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+
+#include "fixed/check.h"
+#include "hosts/dist.h"
+#include "hosts/frame_checkpoint.h"
+#include "hosts/nff.h"
+#include "hosts/render.h"
+#include "hosts/report.h"
+#include "hosts/simd.h"
+
+namespace zephyr {
+namespace {
+
+static_assert(sizeof(Vec3) == 3 * sizeof(double), "pixels travel as 3 doubles");
+constexpr std::size_t kPixelBytes = sizeof(Vec3);
+
+// One pixel of the per-pixel matrix as a hetero work message carries it (40 bytes):
+// int32 object (-1: none), uint32 flags, double t, double direction[3].
+constexpr std::size_t kMatrixEntryBytes = 40;
+
+void PutEntry(const PrimaryHit& hit, std::uint32_t flags, std::byte* at) {
+  const std::int32_t object = hit.object;
+  const double v[4] = {hit.t, hit.direction.x, hit.direction.y, hit.direction.z};
+  std::memcpy(at, &object, 4);
+  std::memcpy(at + 4, &flags, 4);
+  std::memcpy(at + 8, v, sizeof v);
+}
+
+PrimaryHit GetEntry(const std::byte* at, int objectCount) {
+  std::int32_t object;
+  double v[4];
+  std::memcpy(&object, at, 4);
+  std::memcpy(v, at + 8, sizeof v);
+  if (object < -1 || object >= objectCount)
+    throw UserError("malformed work message: matrix names object " + std::to_string(object) +
+                    " of a scene with " + std::to_string(objectCount));
+  PrimaryHit hit;
+  hit.object = object;
+  hit.t = v[0];
+  hit.direction = Vec3(v[1], v[2], v[3]);
+  return hit;
+}
+
+// What every child needs, sent once: the scene (as exact NFF) and the tracing options.
+std::string SetupText(const std::string& method, const Scene& scene, const TraceOptions& t) {
+  return nlohmann::json{{"method", method},
+                        {"scene", WriteNff(scene)},
+                        {"depth", t.depth},
+                        {"precision", PrecisionName(t.precision)},
+                        {"sphereTest", SphereTestName(t.sphereTest)}}
+      .dump();
+}
+
+class TracerWork : public FrameWork {
+ public:
+  explicit TracerWork(const std::string& setupText) {
+    try {
+      auto j = nlohmann::json::parse(setupText);
+      method_ = j.at("method").get<std::string>();
+      scene_ = ParseNffOrThrow(j.at("scene").get<std::string>(), "<scene from the parent>");
+      options_.depth = j.at("depth").get<int>();
+      options_.precision = ParsePrecision(j.at("precision").get<std::string>());
+      options_.sphereTest = ParseSphereTest(j.at("sphereTest").get<std::string>());
+    } catch (const nlohmann::json::exception& e) {
+      throw UserError(std::string("malformed set-up message: ") + e.what());
+    }
+    if (method_ != "dist" && method_ != "hetero")
+      throw UserError("malformed set-up message: unknown method '" + method_ + "'");
+    tracer_ = Tracer::Create(scene_, options_);
+  }
+  int ImageWidth() const override { return scene_.camera.width; }
+  int ImageHeight() const override { return scene_.camera.height; }
+  std::size_t BytesPerPixel() const override { return kPixelBytes; }
+  std::size_t SliceBytesPerPixel() const override {
+    return method_ == "hetero" ? kMatrixEntryBytes : 0;
+  }
+  void RenderFrame(const Frame& f, std::span<const std::byte> slice,
+                   std::span<std::byte> pixels) override {
+    if (method_ == "dist") {
+      RenderRegion(*tracer_, f.x0, f.y0, f.width, f.height, block_, stats_);
+    } else {
+      // The frame's own piece of the matrix, at (0, 0): ShadeRegion's pixels depend only on
+      // each pixel's hit, so they equal the full image's.
+      simd::PrimaryMatrix m;
+      m.width = f.width, m.height = f.height;
+      m.hits.resize(f.PixelCount());
+      m.flags.resize(f.PixelCount());
+      for (std::size_t i = 0; i < f.PixelCount(); ++i) {
+        m.hits[i] = GetEntry(&slice[i * kMatrixEntryBytes], int(scene_.objects.size()));
+        std::memcpy(&m.flags[i], &slice[i * kMatrixEntryBytes + 4], 4);
+      }
+      simd::ShadeRegion(*tracer_, m, 0, 0, f.width, f.height, block_, stats_);
+    }
+    ZEPHYR_CHECK_EQ(block_.size() * kPixelBytes, pixels.size());
+    std::memcpy(pixels.data(), block_.data(), pixels.size());
+  }
+
+ private:
+  std::string method_;
+  Scene scene_;
+  TraceOptions options_;
+  std::unique_ptr<Tracer> tracer_;
+  std::vector<Vec3> block_;
+  TraceStats stats_;
+};
+
+double DoubleFlag(const RenderOptions& o, const std::string& name, double fallback) {
+  auto it = o.extra.find(name);
+  if (it == o.extra.end() || it->second.empty()) return fallback;
+  try {
+    std::size_t used = 0;
+    const double v = std::stod(it->second, &used);
+    if (used == it->second.size()) return v;
+  } catch (const std::exception&) {
+  }
+  throw UserError("--" + name + ": expected a number, got '" + it->second + "'");
+}
+
+FramedOptions FarmOptions(const RenderOptions& o) {
+  FramedOptions f;
+  f.checkpointPath = o.out.empty() ? "" : CheckpointPathFor(o.out);
+  f.resume = o.extra.count("resume") && o.extra.at("resume") == "true";
+  f.childTimeoutSeconds = DoubleFlag(o, "child-timeout", 60);
+  f.framesInFlight = int(DoubleFlag(o, "in-flight", 2));
+  if (f.framesInFlight < 1 || double(f.framesInFlight) != DoubleFlag(o, "in-flight", 2))
+    throw UserError("--in-flight: expected a whole number ≥ 1");
+  return f;
+}
+
+int FrameSize(const RenderOptions& o) {
+  const double f = DoubleFlag(o, "frame", 64);
+  if (f != double(int(f)) || f < 1)
+    throw UserError("--frame: the frame size must be a whole number of pixels ≥ 1, got '" +
+                    o.extra.at("frame") + "'");
+  return int(f);
+}
+
+// A child has served its frames and has nothing to write: end the process here (MPI is
+// finalized by the at-exit hook), before the render command would write outputs.
+[[noreturn]] void EndChild() {
+  std::fflush(stdout);
+  std::exit(0);
+}
+
+void CopyImage(std::vector<std::byte>& bytes, Image& image) {
+  ZEPHYR_CHECK_EQ(bytes.size(), image.pixels.size() * kPixelBytes);
+  std::memcpy(image.pixels.data(), bytes.data(), bytes.size());
+}
+
+void RenderDist(const Scene& scene, const RenderOptions& options, RenderOutput& out) {
+  const Camera& c = scene.camera;
+  const int frameSize = FrameSize(options);
+  FrameGrid(c.width, c.height, frameSize);  // a bad frame size is an error before MPI starts
+  auto result = RunFramedMethod(
+      "dist", [](const std::string& setup) { return std::make_unique<TracerWork>(setup); },
+      [&] {
+        FramedJob job;
+        job.method = "dist";
+        job.imageWidth = c.width, job.imageHeight = c.height, job.frameSize = frameSize;
+        job.bytesPerPixel = kPixelBytes;
+        job.setup = SetupText("dist", scene, options.trace);
+        return job;
+      },
+      FarmOptions(options));
+  if (!result) EndChild();
+  out.image = Image(c.width, c.height);
+  CopyImage(result->image, out.image);
+  out.report["distributed"] = result->report;
+}
+
+void RenderHetero(const Scene& scene, const RenderOptions& options, RenderOutput& out) {
+  const Camera& c = scene.camera;
+  const int frameSize = FrameSize(options);
+  FrameGrid(c.width, c.height, frameSize);
+  simd::PrimaryPass pass;
+  std::unique_ptr<Tracer> tracer;
+  auto result = RunFramedMethod(
+      "hetero", [](const std::string& setup) { return std::make_unique<TracerWork>(setup); },
+      [&] {
+        FramedJob job;
+        job.method = "hetero";
+        job.imageWidth = c.width, job.imageHeight = c.height, job.frameSize = frameSize;
+        job.bytesPerPixel = kPixelBytes;
+        job.setup = SetupText("hetero", scene, options.trace);
+        auto start = std::chrono::steady_clock::now();
+        pass = simd::RunPrimaryPass(scene, simd::SimdOptionsFrom(options));
+        job.parentPassSeconds =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        std::fprintf(stderr, "cycle report (SIMD primary pass):\n%s", pass.cycleTable.c_str());
+        tracer = Tracer::Create(scene, options.trace);
+        job.sliceFor = [&](const Frame& f) -> std::optional<std::vector<std::byte>> {
+          std::vector<std::byte> slice(f.PixelCount() * kMatrixEntryBytes);
+          bool anyHit = false;
+          std::size_t i = 0;
+          for (int y = f.y0; y < f.y0 + f.height; ++y)
+            for (int x = f.x0; x < f.x0 + f.width; ++x, ++i) {
+              const std::size_t at = std::size_t(y) * c.width + x;
+              anyHit |= pass.matrix.hits[at].object >= 0;
+              PutEntry(pass.matrix.hits[at], pass.matrix.flags[at], &slice[i * kMatrixEntryBytes]);
+            }
+          if (!anyHit) return std::nullopt;
+          return slice;
+        };
+        // The background exactly as shading a miss gives it (bit-identical to --method simd).
+        job.fillDegenerate = [&](const Frame& f, std::span<std::byte> pixels) {
+          TraceStats unused;
+          std::vector<Vec3> block;
+          simd::ShadeRegion(*tracer, pass.matrix, f.x0, f.y0, f.width, f.height, block, unused);
+          std::memcpy(pixels.data(), block.data(), pixels.size());
+        };
+        return job;
+      },
+      FarmOptions(options));
+  if (!result) EndChild();
+  out.image = Image(c.width, c.height);
+  CopyImage(result->image, out.image);
+  out.report["simd"] = pass.Json();
+  out.report["distributed"] = result->report;
+}
+
+RenderMethodRegistration distReg(
+    "dist",
+    "distributed: under mpirun, children trace whole F×F frames handed out on demand "
+    "(bit-identical to seq)",
+    RenderDist);
+RenderMethodRegistration heteroReg(
+    "hetero",
+    "heterogeneous: the SIMD primary pass at the parent, children shade the frames with a hit "
+    "(under mpirun; bit-identical to simd)",
+    RenderHetero);
+
+RenderFlagRegistration flags([](CLI::App& cmd, RenderOptions& o) {
+  cmd.add_option("--frame", o.extra["frame"], "dist/hetero: frame size F (F×F frames; default 64)");
+  cmd.add_flag("--resume{true}", o.extra["resume"],
+               "dist/hetero: render only the frames missing from OUT.frames (the checkpoint)");
+  cmd.add_option("--child-timeout", o.extra["child-timeout"],
+                 "dist/hetero: seconds a child may hold frames without answering (default 60)");
+  cmd.add_option("--in-flight", o.extra["in-flight"],
+                 "dist/hetero: frames handed to a child before it returns one (default 2)");
+});
+
+}  // namespace
+}  // namespace zephyr
