@@ -90,6 +90,19 @@ int main() {
     const double addCycles = m.Report().OpCycles("add") / reps;
     double tMul = MedianSeconds(reps / 4 + 1, [&] { Multi r = Mul(a16, b16, f32); });
     const double mulCycles = m.Report().OpCycles("mul") / (reps / 4 + 1);
+    // Division and square root in s15.16 on random 32-bit values (half of the radicands
+    // negative; the cycles do not depend on the data).
+    const fixed::Format f16_16 = fixed::Format::Signed(15, 16);
+    Multi x(m, f16_16, "x"), y(m, f16_16, "y");
+    for (auto& v : ra) v = static_cast<int32_t>(rng());
+    for (auto& v : rb) v = static_cast<int32_t>(rng());
+    x.LoadRaw(ra);
+    y.LoadRaw(rb);
+    const int divReps = pes == 8192 ? 101 : 11;
+    double tDiv = MedianSeconds(divReps, [&] { Multi r = Div(x, y, f16_16); });
+    const double divCycles = m.Report().OpCycles("div") / divReps;
+    double tSqrt = MedianSeconds(divReps, [&] { Multi r = Sqrt(x, f16_16); });
+    const double sqrtCycles = m.Report().OpCycles("sqrt") / divReps;
     const double clock = m.Profile().clockHz;
     fmt::print("\n{} virtual PEs ({} layer{}), profile wavetracer at {:g} Hz\n", pes, m.Layers(),
                m.Layers() == 1 ? "" : "s", clock);
@@ -99,6 +112,12 @@ int main() {
     fmt::print("  16x16 multiply  : {:9.0f} ns  {:7.0f} machine cycles  {:6.3g} Gcycles/host s  "
                "real-time factor {:.1f}\n", tMul * 1e9, mulCycles, mulCycles / tMul / 1e9,
                mulCycles / clock / tMul);
+    fmt::print("  s15.16 divide   : {:9.0f} ns  {:7.0f} machine cycles  {:6.3g} Gcycles/host s  "
+               "real-time factor {:.1f}\n", tDiv * 1e9, divCycles, divCycles / tDiv / 1e9,
+               divCycles / clock / tDiv);
+    fmt::print("  s15.16 sqrt     : {:9.0f} ns  {:7.0f} machine cycles  {:6.3g} Gcycles/host s  "
+               "real-time factor {:.1f}\n", tSqrt * 1e9, sqrtCycles, sqrtCycles / tSqrt / 1e9,
+               sqrtCycles / clock / tSqrt);
     if (pes == 8192) {
       NaiveMulti na = NaiveFrom(a, 8192), nb = NaiveFrom(b, 8192), no = na;
       NaiveMulti na16 = NaiveFrom(a16, 8192), nb16 = NaiveFrom(b16, 8192), no32 = na;
