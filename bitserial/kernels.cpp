@@ -237,9 +237,71 @@ void Logic(LogicOp op, const Word* a, const Word* b, Word* out, size_t words) {
   }
 }
 
+// Restoring division and square root: per vector of PEs every step runs on L1 vectors (x:
+// the shifted remainder R', y: the divisor or trial, t: the difference), so only the
+// operands' and results' planes touch memory. The new remainder is written in place from
+// the top down: x[q + shift] = bit ? t[q] : x[q] reads x[q] before it is overwritten.
+void Divide(const DivideArgs& g, size_t words) {
+  const D d;
+  const size_t lanes = hn::Lanes(d);
+  const int n = g.d + 1;
+  // x: R' (n vectors; R is x[1..n)), y: the divisor, t: the difference.
+  V* x = StripBuffer(3 * static_cast<size_t>(n));
+  V* y = x + n;
+  V* t = y + n;
+  for (size_t w = 0; w < words; w += lanes) {
+    for (int q = 0; q < n; ++q) y[q] = hn::Load(d, g.divisor[q] + w);
+    for (int q = 0; q < g.d; ++q)
+      x[q + 1] = q < g.skipped ? hn::Load(d, g.dividend[g.steps + q] + w) : hn::Zero(d);
+    for (int i = g.steps - 1; i >= 0; --i) {
+      x[0] = hn::Load(d, g.dividend[i] + w);
+      // The new remainder R goes to x[1..n) for the next step.
+      V carry = hn::Set(d, ~uint64_t{0});
+      for (int q = 0; q < n; ++q) FullAdd(x[q], hn::Not(y[q]), carry, t[q]);
+      const V bit = hn::Not(t[n - 1]);
+      for (int q = n - 2; q >= 0; --q) x[q + 1] = Mux(bit, t[q], x[q]);
+      hn::Store(bit, d, g.quotient[i] + w);
+    }
+    if (g.remainder)
+      for (int q = 0; q < g.d; ++q) hn::Store(x[q + 1], d, g.remainder[q] + w);
+  }
+}
+
+void Sqrt(const SqrtArgs& g, size_t words) {
+  const D d;
+  const size_t lanes = hn::Lanes(d);
+  const int nr = g.rootBits;
+  const int n = nr + 2;  // the widest step
+  // x: R' (x[2..) is R), y: the trial 4Y + 1, t: the difference, root: the bits so far.
+  V* x = StripBuffer(4 * static_cast<size_t>(n) + 1);
+  V* y = x + n + 1;
+  V* t = y + n;
+  V* root = t + n;
+  for (size_t w = 0; w < words; w += lanes) {
+    x[2] = hn::Zero(d);  // R = 0 (one position)
+    y[0] = hn::Set(d, ~uint64_t{0});
+    y[1] = hn::Zero(d);
+    for (int j = 0; j < nr; ++j) {
+      const int i = nr - 1 - j, m = j + 3;  // m positions: 2 new bits and R's j+1
+      x[0] = hn::Load(d, g.radicand[2 * i] + w);
+      x[1] = hn::Load(d, g.radicand[2 * i + 1] + w);
+      // trial = (1, 0, root[i+1], ..., root[nr-1], 0): y[2 + k] = root[i + 1 + k].
+      for (int k = 0; k < j; ++k) y[2 + k] = root[i + 1 + k];
+      y[m - 1] = hn::Zero(d);
+      V carry = hn::Set(d, ~uint64_t{0});
+      for (int q = 0; q < m; ++q) FullAdd(x[q], hn::Not(y[q]), carry, t[q]);
+      const V bit = hn::Not(t[m - 1]);
+      root[i] = bit;
+      // The new R has m-1 positions and becomes x[2..m+1) of the next step.
+      for (int q = m - 2; q >= 0; --q) x[q + 2] = Mux(bit, t[q], x[q]);
+      hn::Store(bit, d, g.root[i] + w);
+    }
+  }
+}
+
 const PlaneKernels* GetTable() {
   static const PlaneKernels table = {hwy::TargetName(HWY_TARGET), &Add, &RoundFit, &Mul,
-                                     &Select, &Equal, &Logic};
+                                     &Select, &Equal, &Logic, &Divide, &Sqrt};
   return &table;
 }
 

@@ -64,6 +64,30 @@ struct MulArgs {
   Word* const* out;
 };
 
+// Restoring division, strip-mined: per vector of PEs the partial remainder and divisor stay
+// in L1 for every step. rem starts as dividend[steps .. steps+skipped) (zero above); for
+// i = steps-1 .. 0: R' = 2R + dividend[i] over d+1 positions, T = R' - divisor (d+1 planes),
+// quotient[i] = (T >= 0), R = quotient[i] ? T : R' (low d planes). remainder (d planes, or
+// null) gets the final R.
+struct DivideArgs {
+  const Word* const* dividend;  // at least steps + skipped entries
+  const Word* const* divisor;   // d + 1 entries
+  int d;
+  int steps;
+  int skipped;                  // <= d
+  Word* const* quotient;        // steps entries
+  Word* const* remainder;       // d entries, or null
+};
+
+// Restoring square root, strip-mined likewise: for root bit i = rootBits-1 .. 0, R' = 4R +
+// (radicand[2i+1], radicand[2i]), trial = 4Y + 1 with Y the root bits above i, root[i] =
+// (R' >= trial), R = root[i] ? R' - trial : R'.
+struct SqrtArgs {
+  const Word* const* radicand;  // 2 * rootBits entries
+  int rootBits;
+  Word* const* root;            // rootBits entries
+};
+
 enum class LogicOp : int { And, Or, Xor, AndNot /* a & ~b */, Not /* ~a */ };
 
 struct PlaneKernels {
@@ -77,6 +101,8 @@ struct PlaneKernels {
   // *out = 1 where a[i] == b[i] for every i < n.
   void (*equal)(const Word* const* a, const Word* const* b, int n, Word* out, size_t words);
   void (*logic)(LogicOp op, const Word* a, const Word* b, Word* out, size_t words);
+  void (*divide)(const DivideArgs& args, size_t words);
+  void (*sqrt)(const SqrtArgs& args, size_t words);
 };
 
 // The table of the best target allowed by hwy (honours hwy::SetSupportedTargetsForTest).

@@ -474,23 +474,6 @@ void MagnitudeInto(const Multi& x, Word* base) {
   m.Kernels().select(x.Plane(w - 1), pa.data(), pb.data(), po.data(), w, m.WordsPerPlane());
 }
 
-// One step of a restoring divider or square root: T = r - t over n = r.size() positions
-// (t has n entries), bit = (T >= 0) = NOT T's top plane, and T's low n-1 planes replace r
-// where bit is 1. T lives in `buf` (n planes, none of them r's or t's); `next` gets the
-// new remainder (n-1 planes of buf).
-void SubtractRestore(Machine& m, const PlaneList& r, const PlaneList& t, Word* buf, Word* bit,
-                     PlaneList& next) {
-  const size_t words = m.WordsPerPlane();
-  const int n = static_cast<int>(r.size());
-  std::vector<Word*> diff(n);
-  for (int q = 0; q < n; ++q) diff[q] = buf + q * words;
-  AddArgs args{r.data(), t.data(), diff.data(), n, true, true, 0, false, nullptr, nullptr};
-  m.Kernels().add(args, words);
-  m.Kernels().logic(LogicOp::Not, diff[n - 1], nullptr, bit, words);
-  m.Kernels().select(bit, diff.data(), r.data(), diff.data(), n - 1, words);
-  next.assign(diff.begin(), diff.begin() + (n - 1));
-}
-
 }  // namespace
 
 Multi Div(const Multi& a, const Multi& b, Format out, Policy p) {
@@ -514,21 +497,27 @@ Multi Div(const Multi& a, const Multi& b, Format out, Policy p) {
     if (i < lowA) return m.ZeroPlane();
     return fa.isSigned ? magA.Plane(i - lowA) : a.Plane(i - lowA);
   };
-  PlaneList divisor(d + 1, m.ZeroPlane());
-  for (int q = 0; q < wb; ++q)
-    divisor[s.divisorZeros + q] = fb.isSigned ? magB.Plane(q) : b.Plane(q);
 
   // One quotient bit per step, most significant first; the skipped top bits are zero and
-  // leave the dividend's top bits as the first partial remainder.
-  Scratch quo(m, mBits), buf(m, 2 * (d + 1));
+  // leave the dividend's top bits as the first partial remainder. One kernel runs every
+  // step per vector of PEs (the schedule charged above is unchanged).
+  Scratch quo(m, mBits), remPlanes(m, d);
   for (int i = s.steps; i < mBits; ++i) std::memset(quo.Plane(i), 0, sizeof(Word) * words);
-  PlaneList rem(d, m.ZeroPlane()), shifted(d + 1);
-  for (int j = 0; j < s.skipped; ++j) rem[j] = dividend(s.steps + j);
-  for (int i = s.steps - 1, step = 0; i >= 0; --i, ++step) {
-    shifted[0] = dividend(i);  // R' = 2R + dividend bit i
-    for (int q = 0; q < d; ++q) shifted[q + 1] = rem[q];
-    SubtractRestore(m, shifted, divisor, buf.Plane((step & 1) * (d + 1)), quo.Plane(i), rem);
-  }
+  auto& pDividend = m.PointersA();
+  auto& pDivisor = m.PointersB();
+  auto& pOut = m.PointersOut();
+  pDividend.clear(), pDivisor.clear(), pOut.clear();
+  for (int i = 0; i < s.steps + s.skipped; ++i) pDividend.push_back(dividend(i));
+  pDivisor.assign(d + 1, m.ZeroPlane());
+  for (int q = 0; q < wb; ++q)
+    pDivisor[s.divisorZeros + q] = fb.isSigned ? magB.Plane(q) : b.Plane(q);
+  for (int i = 0; i < s.steps; ++i) pOut.push_back(quo.Plane(i));
+  for (int q = 0; q < d; ++q) pOut.push_back(remPlanes.Plane(q));
+  const DivideArgs divide{pDividend.data(), pDivisor.data(), d, s.steps, s.skipped,
+                          pOut.data(), s.canBeNegative ? pOut.data() + s.steps : nullptr};
+  k.divide(divide, words);
+  PlaneList rem(d);
+  for (int q = 0; q < d; ++q) rem[q] = remPlanes.Plane(q);
 
   // b == 0 (no overflow is flagged there), then the floor of the signed quotient.
   Scratch flags(m, 4);
@@ -597,18 +586,14 @@ Multi Sqrt(const Multi& a, Format out, Policy p) {
   if (nr > 0) {
     // Root bit i: R' = 4R + (radicand bits 2i+1, 2i); if R' >= 4Y + 1, subtract it and
     // set the bit. With j bits decided, R <= 2Y < 2^(j+1), so j+3 positions hold the
-    // difference with its sign.
-    Scratch root(m, nr), buf(m, 2 * (nr + 2));
-    PlaneList rem{m.ZeroPlane()}, shifted, trial;
-    for (int j = 0; j < nr; ++j) {
-      const int i = nr - 1 - j;
-      shifted = {radicand(2 * i), radicand(2 * i + 1)};
-      shifted.insert(shifted.end(), rem.begin(), rem.end());
-      trial = {m.OnesPlane(), m.ZeroPlane()};
-      for (int t = i + 1; t < nr; ++t) trial.push_back(root.Plane(t));
-      trial.resize(shifted.size(), m.ZeroPlane());
-      SubtractRestore(m, shifted, trial, buf.Plane((j & 1) * (nr + 2)), root.Plane(i), rem);
-    }
+    // difference with its sign. One kernel runs every step per vector of PEs.
+    Scratch root(m, nr);
+    auto& pRadicand = m.PointersA();
+    auto& pRoot = m.PointersOut();
+    pRadicand.clear(), pRoot.clear();
+    for (int j = 0; j < 2 * nr; ++j) pRadicand.push_back(radicand(j));
+    for (int i = 0; i < nr; ++i) pRoot.push_back(root.Plane(i));
+    k.sqrt(SqrtArgs{pRadicand.data(), nr, pRoot.data()}, words);
     RoundFitInto(m, root.p, nr, false, out.fracBits, r, {fixed::Rounding::Floor, p.overflow},
                  keep.p);
   }
