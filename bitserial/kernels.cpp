@@ -58,35 +58,40 @@ void Add(const AddArgs& g, size_t words) {
   }
 }
 
+// One vector of PEs of roundFit; src(i) gives exact bit lo + i (i < g.k), carry the round bit.
+template <class Src>
+HWY_INLINE void RoundFitStrip(const RoundFitArgs& g, size_t w, V carry, const Src& src) {
+  const D d;
+  V ref = hn::Zero(d), ovf = hn::Zero(d), sum = hn::Zero(d);
+  for (int i = 0; i < g.k; ++i) {
+    const V x = src(i);
+    sum = hn::Xor(x, carry);
+    carry = hn::And(x, carry);
+    if (i < g.wo) hn::Store(sum, d, g.out[i] + w);
+    if (g.outSigned && i == g.wo - 1) ref = sum;
+    if (i >= g.wo) ovf = hn::Or(ovf, hn::Xor(sum, ref));
+  }
+  // `sum` is now the top (sign-extension) bit of the rounded exact value.
+  if (g.saturate) {
+    const V neg = sum;
+    for (int i = 0; i < g.wo; ++i) {
+      const V sat = (g.outSigned && i == g.wo - 1) ? neg : hn::Not(neg);
+      const V o = hn::Load(d, g.out[i] + w);
+      hn::Store(Mux(ovf, sat, o), d, g.out[i] + w);
+    }
+  }
+  if (g.ovf) {
+    const V old = hn::Load(d, g.ovf + w);
+    hn::Store(hn::OrAnd(old, ovf, hn::Load(d, g.act + w)), d, g.ovf + w);
+  }
+}
+
 void RoundFit(const RoundFitArgs& g, size_t words) {
   const D d;
   const size_t lanes = hn::Lanes(d);
-  const V ones = hn::Set(d, ~uint64_t{0});
   for (size_t w = 0; w < words; w += lanes) {
-    V carry = g.roundBit ? hn::Load(d, g.roundBit + w) : hn::Zero(d);
-    V ref = hn::Zero(d), ovf = hn::Zero(d), sum = hn::Zero(d);
-    for (int i = 0; i < g.k; ++i) {
-      const V x = hn::Load(d, g.src[i] + w);
-      sum = hn::Xor(x, carry);
-      carry = hn::And(x, carry);
-      if (i < g.wo) hn::Store(sum, d, g.out[i] + w);
-      if (g.outSigned && i == g.wo - 1) ref = sum;
-      if (i >= g.wo) ovf = hn::Or(ovf, hn::Xor(sum, ref));
-    }
-    // `sum` is now the top (sign-extension) bit of the rounded exact value.
-    if (g.saturate) {
-      const V neg = sum;
-      for (int i = 0; i < g.wo; ++i) {
-        const V sat = (g.outSigned && i == g.wo - 1) ? neg : hn::Not(neg);
-        const V o = hn::Load(d, g.out[i] + w);
-        hn::Store(Mux(ovf, sat, o), d, g.out[i] + w);
-      }
-    }
-    if (g.ovf) {
-      const V old = hn::Load(d, g.ovf + w);
-      hn::Store(hn::OrAnd(old, ovf, hn::Load(d, g.act + w)), d, g.ovf + w);
-    }
-    (void)ones;
+    const V carry = g.roundBit ? hn::Load(d, g.roundBit + w) : hn::Zero(d);
+    RoundFitStrip(g, w, carry, [&](int i) { return hn::Load(d, g.src[i] + w); });
   }
 }
 
@@ -157,7 +162,8 @@ constexpr int kMulGroup = 8;
 
 // Strip-mined: for each vector of PEs, a's planes are copied once into an L1 buffer (so
 // planes a layer-stride apart never fight over cache sets), the product accumulates in an
-// L1 column buffer, kMulGroup rows at a time, and each output plane is stored once.
+// L1 column buffer, kMulGroup rows at a time, and each output plane is stored once (or
+// the product is rounded and fitted from the buffer, never stored).
 void Mul(const MulArgs& g, size_t words) {
   const D d;
   const size_t lanes = hn::Lanes(d);
@@ -193,7 +199,17 @@ void Mul(const MulArgs& g, size_t words) {
       if (ones) MulRowsAny<true>(n, aBuf, m + r0, inv + r0, g.shift + r0, lo, p, acc);
       else MulRowsAny<false>(n, aBuf, m + r0, inv + r0, g.shift + r0, lo, p, acc);
     }
-    for (int i = 0; i < p; ++i) hn::Store(acc[i], d, g.out[i] + w);
+    if (g.fit) {  // round and fit straight from the L1 column buffer
+      auto bit = [&](int j) {
+        if (j < 0) return hn::Zero(d);
+        if (j >= p) return g.productSigned ? acc[p - 1] : hn::Zero(d);
+        return acc[j];
+      };
+      const V carry = g.fitNearest && g.fitLo > 0 ? bit(g.fitLo - 1) : hn::Zero(d);
+      RoundFitStrip(*g.fit, w, carry, [&](int i) { return bit(g.fitLo + i); });
+    } else {
+      for (int i = 0; i < p; ++i) hn::Store(acc[i], d, g.out[i] + w);
+    }
   }
 }
 

@@ -62,6 +62,13 @@ struct MulArgs {
   const unsigned char* sub;
   int rows;
   Word* const* out;
+  // If fit is set, out is not used: the product is rounded and fitted as roundFit would
+  // with src[i] = product bit fitLo + i (zero below bit 0, bit p-1 repeated above it if
+  // productSigned, else zero) and roundBit = bit fitLo - 1 if fitNearest and fitLo > 0.
+  const RoundFitArgs* fit = nullptr;
+  int fitLo = 0;
+  bool productSigned = false;
+  bool fitNearest = false;
 };
 
 // Restoring division, strip-mined: per vector of PEs the partial remainder and divisor stay

@@ -174,23 +174,34 @@ void CheckBool(const Multi& a, const char* what) {
                                 a.Format().Name()));
 }
 
-// Product rows (shift-and-add) then round/fit; rows given by the caller.
+// Product rows (shift-and-add) then round/fit, in one kernel (the exact product stays in
+// the kernel's L1 buffer); rows given by the caller.
 void MulInto(const Multi& a, const std::vector<const Word*>& rows, const std::vector<int>& shifts,
              const std::vector<unsigned char>& subs, const Format& product, Multi& out,
              Policy policy) {
   Machine& m = a.GetMachine();
   const int w = product.Width();
-  Scratch exact(m, w);
+  const int wo = out.Width();
+  const int lo = product.fracBits - out.Format().fracBits;
   auto& pa = m.PointersA();
   pa.clear();
   for (int p = 0; p < w; ++p) pa.push_back(PlaneAt(a, 0, p));
   auto& po = m.PointersOut();
   po.clear();
-  for (int p = 0; p < w; ++p) po.push_back(exact.Plane(p));
+  for (int i = 0; i < wo; ++i) po.push_back(out.Plane(i));
+  const RoundFitArgs fit{nullptr,
+                         std::max(wo + 1, w - lo + 2),
+                         nullptr,
+                         po.data(),
+                         wo,
+                         out.Format().isSigned,
+                         policy.overflow == fixed::OverflowPolicy::Saturate,
+                         m.OverflowPlane(),
+                         m.Activity()};
   MulArgs args{pa.data(), w, rows.data(), shifts.data(), subs.data(),
-               static_cast<int>(rows.size()), po.data()};
+               static_cast<int>(rows.size()), nullptr, &fit, lo, product.isSigned,
+               policy.rounding == fixed::Rounding::Nearest};
   m.Kernels().mul(args, m.WordsPerPlane());
-  RoundFitInto(m, exact.p, w, product.isSigned, product.fracBits, out, policy);
 }
 
 // One row per multiplier bit; the sign row of a signed multiplier is subtracted.
