@@ -32,30 +32,49 @@ HWY_INLINE void FullAdd(V x, V y, V& carry, V& sum) {
 // Bitwise mux: m ? a : b, written with And/AndNot (HIGHWAY.md: no IfVecThenElse on planes).
 HWY_INLINE V Mux(V m, V a, V b) { return hn::Or(hn::And(m, a), hn::AndNot(m, b)); }
 
-void Add(const AddArgs& g, size_t words) {
+// kAddStrip vectors of PEs side by side: each plane is read as one longer run, which the
+// hardware prefetchers follow better when an add streams ~100 planes from L2/L3 (18
+// layers: 32-bit add 48 -> 28 us). Planes of a few layers stay in cache, where one vector
+// at a time is faster (1 layer: 1.25 vs 1.5 us), hence the threshold.
+constexpr size_t kAddStrip = 4;
+constexpr size_t kAddStripMinWords = 1024;  // 8 layers of 8192 PEs
+
+template <size_t U>
+HWY_INLINE void AddStrip(const AddArgs& g, size_t w) {
   const D d;
   const size_t lanes = hn::Lanes(d);
-  const V ones = hn::Set(d, ~uint64_t{0});
-  for (size_t w = 0; w < words; w += lanes) {
-    V carry = g.carryIn ? ones : hn::Zero(d);
-    V ref = hn::Zero(d), ovf = hn::Zero(d);
-    for (int p = 0; p < g.n; ++p) {
-      const V x = hn::Load(d, g.a[p] + w);
-      V y = hn::Load(d, g.b[p] + w);
+  const V init = g.carryIn ? hn::Set(d, ~uint64_t{0}) : hn::Zero(d);
+  V carry[U], ref[U], ovf[U];
+  for (size_t u = 0; u < U; ++u) carry[u] = init, ref[u] = hn::Zero(d), ovf[u] = hn::Zero(d);
+  for (int p = 0; p < g.n; ++p) {
+    for (size_t u = 0; u < U; ++u) {
+      const size_t o = w + u * lanes;
+      const V x = hn::Load(d, g.a[p] + o);
+      V y = hn::Load(d, g.b[p] + o);
       if (g.invertB) y = hn::Not(y);
       V sum;
-      FullAdd(x, y, carry, sum);
-      if (g.out[p]) hn::Store(sum, d, g.out[p] + w);
+      FullAdd(x, y, carry[u], sum);
+      if (g.out[p]) hn::Store(sum, d, g.out[p] + o);
       if (g.ovf && p >= g.ovfFrom) {
-        if (p == g.ovfFrom && g.ovfSigned) ref = sum;
-        ovf = hn::Or(ovf, hn::Xor(sum, ref));
+        if (p == g.ovfFrom && g.ovfSigned) ref[u] = sum;
+        ovf[u] = hn::Or(ovf[u], hn::Xor(sum, ref[u]));
       }
     }
-    if (g.ovf) {
-      const V old = hn::Load(d, g.ovf + w);
-      hn::Store(hn::OrAnd(old, ovf, hn::Load(d, g.act + w)), d, g.ovf + w);
-    }
   }
+  if (g.ovf)
+    for (size_t u = 0; u < U; ++u) {
+      const size_t o = w + u * lanes;
+      const V old = hn::Load(d, g.ovf + o);
+      hn::Store(hn::OrAnd(old, ovf[u], hn::Load(d, g.act + o)), d, g.ovf + o);
+    }
+}
+
+void Add(const AddArgs& g, size_t words) {
+  const size_t lanes = hn::Lanes(D());
+  size_t w = 0;
+  if (words >= kAddStripMinWords)
+    for (; w + kAddStrip * lanes <= words; w += kAddStrip * lanes) AddStrip<kAddStrip>(g, w);
+  for (; w < words; w += lanes) AddStrip<1>(g, w);
 }
 
 // One vector of PEs of roundFit; src(i) gives exact bit lo + i (i < g.k), carry the round bit.
