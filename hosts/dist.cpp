@@ -2,6 +2,7 @@
 
 #include <fmt/core.h>
 #include <signal.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -22,6 +23,13 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double SecondsSince(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+double CpuSeconds() {  // this process, user + system
+  rusage u;
+  ::getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
+         1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
 }
 
 std::span<const std::byte> Bytes(const std::string& s) {
@@ -96,6 +104,7 @@ void ServeFrames(const FrameWorkFactory& factory) {
   const Fault fault = ReadFault();
   auto fail = [&](const std::string& why) {
     mpi.Send(0, {.kind = MessageKind::kFailed}, Bytes(why), sent);
+    mpi.FlushSends(3600);
   };
   auto next = [&]() {
     for (;;)
@@ -183,6 +192,7 @@ void ServeFrames(const FrameWorkFactory& factory) {
                           {"received", received.ToJson()}};
   stats["sent"] = sent.ToJson();  // everything before this stats message
   mpi.Send(0, {.kind = MessageKind::kStats}, Bytes(stats.dump()), sent);
+  mpi.FlushSends(3600);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -253,7 +263,7 @@ class Parent {
   TrafficAccount sent_, received_;
   std::vector<int> skipped_, lost_;
   int resumed_ = 0, ignoredMessages_ = 0;
-  double distributionSeconds_ = 0;
+  double distributionSeconds_ = 0, distributionCpuSeconds_ = 0;
 };
 
 void Parent::OpenCheckpoint() {
@@ -458,6 +468,7 @@ void Parent::CollectStats() {
 FramedResult Parent::Run() {
   OpenCheckpoint();
   auto start = Clock::now();
+  const double cpuStart = CpuSeconds();
   slices_.resize(grid_.Count());
   std::vector<int> pending;
   for (int id = 0; id < grid_.Count(); ++id) {
@@ -502,6 +513,7 @@ FramedResult Parent::Run() {
     backoff.Wait();
   }
   distributionSeconds_ = SecondsSince(start);
+  distributionCpuSeconds_ = CpuSeconds() - cpuStart;
   StopAll();
   CollectStats();
   if (checkpoint_) checkpoint_->Remove();  // the caller writes the image next
@@ -551,6 +563,7 @@ nlohmann::json Parent::Report() const {
       {"time",
        {{"parentPassSeconds", job_.parentPassSeconds},
         {"distributionSeconds", distributionSeconds_},
+        {"parentCpuSeconds", distributionCpuSeconds_},
         {"childrenBusySeconds", busy},
         {"childrenIdleSeconds", idle}}},
   };

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <list>
 #include <thread>
 
 #include "fixed/check.h"
@@ -24,12 +25,21 @@ void CheckMpi(int code, const char* what) {
 
 }  // namespace
 
+struct MpiSession::PendingSends {
+  struct Send {
+    MPI_Request request;
+    std::vector<std::byte> message;
+  };
+  std::list<Send> sends;
+};
+
 void FinalizeMpiAtExit() {
   int finalized = 0;
   MPI_Finalized(&finalized);
   if (finalized) return;
   MpiSession& mpi = MpiSession::Get();
   mpi.ReleaseChildren();
+  if (!mpi.unresponsiveChild_ && !mpi.FlushSends(10)) mpi.unresponsiveChild_ = true;
   if (mpi.unresponsiveChild_) {
     // MPI_Finalize would wait for the stuck child forever, and MPI_Abort has been seen to
     // wedge mpirun 4.1.4; a rank that exits without finalizing makes mpirun end the job.
@@ -54,7 +64,7 @@ MpiSession& MpiSession::Get() {
   return *session;
 }
 
-MpiSession::MpiSession() {
+MpiSession::MpiSession() : pending_(new PendingSends) {
   int initialized = 0;
   MPI_Initialized(&initialized);
   if (!initialized) {
@@ -93,16 +103,40 @@ void MpiSession::Send(int rank, MessageHeader header, std::span<const std::byte>
   ZEPHYR_CHECK(rank >= 0 && rank < size_ && rank != rank_);
   header.payloadBytes = payload.size();
   header.sequence = sentSequence_[rank]++;
-  std::vector<std::byte> message = EncodeMessage(header, payload);
+  auto& send = pending_->sends.emplace_back();
+  send.message = EncodeMessage(header, payload);
   // The tag is the kind, for anyone watching the traffic; the receiver trusts the header.
-  CheckMpi(MPI_Send(message.data(), int(message.size()), MPI_BYTE, rank, int(header.kind),
-                    MPI_COMM_WORLD),
+  CheckMpi(MPI_Isend(send.message.data(), int(send.message.size()), MPI_BYTE, rank,
+                     int(header.kind), MPI_COMM_WORLD, &send.request),
            "send");
+  Progress();
   account.Add(header.kind, payload.size());
   if (header.kind == MessageKind::kStop) released_[rank] = true;
 }
 
+void MpiSession::Progress() {
+  for (auto it = pending_->sends.begin(); it != pending_->sends.end();) {
+    int done = 0;
+    CheckMpi(MPI_Test(&it->request, &done, MPI_STATUS_IGNORE), "send");
+    it = done ? pending_->sends.erase(it) : std::next(it);
+  }
+}
+
+bool MpiSession::FlushSends(double timeoutSeconds) {
+  auto start = std::chrono::steady_clock::now();
+  PollBackoff backoff;
+  for (;;) {
+    Progress();
+    if (pending_->sends.empty()) return true;
+    if (std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() >
+        timeoutSeconds)
+      return false;
+    backoff.Wait();
+  }
+}
+
 std::optional<ReceivedMessage> MpiSession::TryReceive(int source, TrafficAccount& account) {
+  Progress();
   int flag = 0;
   MPI_Status status;
   CheckMpi(

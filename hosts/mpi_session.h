@@ -32,7 +32,9 @@ class MpiSession {
   const std::string& Host() const { return host_; }
 
   // Sends header+payload to `rank` (header.payloadBytes and .sequence are filled in) and
-  // counts it in `account`. Throws UserError if MPI reports an error.
+  // counts it in `account`. Throws UserError if MPI reports an error. The send is
+  // non-blocking (MPI_Isend; the message is kept until it completes): a big frame goes by
+  // rendezvous, and a parent and a child each blocked sending to the other would deadlock.
   void Send(int rank, MessageHeader header, std::span<const std::byte> payload,
             TrafficAccount& account);
   // A message from `source` (or any rank when source < 0) if one is waiting; it is checked by
@@ -42,6 +44,11 @@ class MpiSession {
   // ones that compute (OpenMPI's blocking receive spins); gives up after timeoutSeconds.
   std::optional<ReceivedMessage> Receive(int source, TrafficAccount& account,
                                          double timeoutSeconds);
+
+  // Completes what it can of the sends in progress (every receive poll does this too).
+  void Progress();
+  // Waits for the sends in progress; false if some are still pending after the timeout.
+  bool FlushSends(double timeoutSeconds);
 
   // Rank 0: a lost child is never sent anything again, not even the final stop. A child
   // that is not known to be dead (it stopped answering) may never reach MPI_Finalize, so
@@ -59,6 +66,8 @@ class MpiSession {
   std::vector<std::uint64_t> receivedSequence_;  // per source
   std::vector<bool> released_;                   // per rank: sent a stop, or gone
   bool unresponsiveChild_ = false;
+  struct PendingSends;
+  PendingSends* pending_;  // never freed, like the session
   friend void FinalizeMpiAtExit();
 };
 

@@ -137,6 +137,19 @@ TEST(MpiCheck, HeteroSkipsExactlyTheFramesWithoutAHitAndTheBytesAddUp) {
   EXPECT_EQ(down["stop"]["messages"], 3);
 }
 
+// Frames far over MPI's eager limit in both directions, two in flight to a single child:
+// with blocking sends the parent (sending the 2nd frame) and the child (returning the 1st)
+// would wait for each other forever.
+TEST(MpiCheck, BigFramesBothWaysDoNotDeadlock) {
+  TempDir dir;
+  const std::string big = "--mode hetero --width 256 --height 128 --objects 40 --frame 64";
+  auto local = RunZephyrProcess("mpi-check --local " + big + " --out " + (dir / "l.pfm"));
+  ASSERT_EQ(local.status, 0) << local.output;
+  auto r = RunMpi(2, "mpi-check " + big + " --in-flight 2 --out " + (dir / "b.pfm"));
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_EQ(ReadFile(dir / "b.pfm"), ReadFile(dir / "l.pfm"));
+}
+
 TEST(MpiCheck, NotEnoughRanksAndFrameSizeZeroAreClearErrors) {
   TempDir dir;
   auto one = RunZephyrProcess("mpi-check --out " + (dir / "x.pfm"));
