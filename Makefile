@@ -72,7 +72,7 @@ test: setup ## Build and run every test (GoogleTest; FILTER=... to select)
 
 # Defaults for `make run`: a generated 384×384 random-sphere scene, the default method.
 METHOD  ?= $(DEFAULT_METHOD)
-# simd until the heterogeneous method lands (issue 6), then hetero.
+# hetero (issue 6): the SIMD pass at the parent, WORKERS children shading FRAME×FRAME frames.
 DEFAULT_METHOD := hetero
 WORKERS ?= 2
 FRAME   ?= 64
