@@ -42,9 +42,6 @@ bitserial::MachineProfile MakeProfile(const SimdOptions& o) {
   return p;
 }
 
-// Cones are tested on the host in double for every pixel (docs/simd.md, "What runs where").
-bool OnArray(const Primitive& p) { return p.Kind() != ShapeKind::kCone; }
-
 PassFormats FormatsOf(const PrimaryPlan& plan, const Scene& scene) {
   PassFormats pf;
   pf.fracBits = plan.fracBits;
@@ -74,10 +71,6 @@ PrimaryPlan PlanPrimaryPass(const Scene& scene, const SimdOptions& options) {
   probe.fracBits = probe.dirFracBits = 16;
   for (size_t i = 0; i < scene.objects.size(); ++i) {
     const Primitive& p = scene.objects[i];
-    if (!OnArray(p)) {
-      plan.hostObjects.push_back(int(i));
-      continue;
-    }
     farthest = std::max(farthest, BoundObject(scene, int(i), probe).farthest);
     double feature = 1e300;
     if (const Sphere* s = std::get_if<Sphere>(&p.shape)) {
@@ -96,6 +89,17 @@ PrimaryPlan PlanPrimaryPass(const Scene& scene, const SimdOptions& options) {
         const Vec3 b = p.transform ? p.transform->ApplyPoint(poly->vertices[(k + 1) % poly->vertices.size()])
                                    : poly->vertices[(k + 1) % poly->vertices.size()];
         feature = std::min(feature, Length(a - b) / 2);
+      }
+    } else if (const Cone* cone = std::get_if<Cone>(&p.shape)) {
+      // Half the larger radius, or half the height, in world units (r / ‖T⁻¹‖_F).
+      feature = std::min(std::max(std::abs(cone->baseRadius), std::abs(cone->apexRadius)),
+                         Length(cone->apex - cone->base)) / 2;
+      if (p.transform) {
+        const Affine inv = p.transform->Inverse();
+        double norm = 0;
+        for (int r = 0; r < 3; ++r)
+          for (int c = 0; c < 3; ++c) norm += inv.m[r][c] * inv.m[r][c];
+        feature /= std::sqrt(norm);
       }
     }
     rMin = std::min(rMin, feature);
@@ -134,14 +138,14 @@ PrimaryPlan PlanPrimaryPass(const Scene& scene, const SimdOptions& options) {
   // Error bounds per object, derived from these formats (docs/simd.md, "Error bounds").
   const PassFormats pf = FormatsOf(plan, scene);
   plan.grazingFraction = 1.0 / 8;
-  int ellipsoids = 0, polygons = 0, ellipsoidBits = 0;
+  int ellipsoids = 0, polygons = 0, ellipsoidBits = 0, cones = 0, coneBits = 0;
   for (size_t i = 0; i < scene.objects.size(); ++i) {
-    if (!OnArray(scene.objects[i])) continue;
     const ObjectBounds b = BoundObject(scene, int(i), pf);
     if (!b.alwaysUncertain) plan.tErrorBound = std::max(plan.tErrorBound, b.tError);
     else ++plan.alwaysUncertainObjects;
     if (b.kind == ShapeKind::kPolygon) ++polygons;
     if (b.kind == ShapeKind::kSphere && b.transformed) ++ellipsoids, ellipsoidBits = std::max(ellipsoidBits, b.intBits);
+    if (b.kind == ShapeKind::kCone) ++cones, coneBits = std::max(coneBits, b.intBits);
   }
   if (ellipsoids)
     plan.formats.push_back({"ellipsoid d' = T⁻¹d, f·d', f×d'", Format::Signed(ellipsoidBits, F),
@@ -149,6 +153,12 @@ PrimaryPlan PlanPrimaryPass(const Scene& scene, const SimdOptions& options) {
   if (polygons)
     plan.formats.push_back({"polygon edge/plane ĝ·d, n̂·d", Format::Signed(1, F),
                             fmt::format("{} polygon(s): unit uni normals (T folded in on the host); t = dist/(n̂·d) by division", polygons)});
+  if (cones)
+    plan.formats.push_back({"cone A, disc, √, t, height", Format::Signed(coneBits, F),
+                            fmt::format("{} cone(s)/cylinder(s): linear forms of d (T⁻¹ folded in), squares up to "
+                                        "the widest; t = −sgn(β)·Q/A and −sgn(β)·C/Q by division where |divisor| >= "
+                                        "its threshold, else flagged unless certainly beyond the cone",
+                                        cones)});
   plan.tieThreshold = 2 * plan.tErrorBound;
   // Memory per virtual PE: the matrix (object, t, d, two flag bits) plus the temporaries
   // of one sphere test (tca, 3 cross, 3 clamped, 3 squares, sum, disc, root, t0, t1, t and
@@ -176,7 +186,8 @@ nlohmann::json PrimaryPlan::Json() const {
                       {"tErrorBound", tErrorBound}, {"tieThreshold", tieThreshold},
                       {"grazingFraction", grazingFraction}, {"memoryBitsPerPe", memoryBitsPerPe},
                       {"matrixBitsPerPe", matrixBitsPerPe}, {"internalCapacity", internalCapacity},
-                      {"externalCapacity", externalCapacity}, {"hostObjects", hostObjects.size()}};
+                      {"externalCapacity", externalCapacity},
+                      {"alwaysUncertainObjects", alwaysUncertainObjects}};
   for (const PlannedFormat& f : formats)
     j["formats"].push_back({{"quantity", f.quantity}, {"format", f.format.Name()}, {"reason", f.reason}});
   return j;
@@ -193,9 +204,10 @@ std::string PrimaryPlan::Text() const {
   s += fmt::format("memory per virtual PE: ~{} bits (matrix {} bits, external) of {} internal + {} "
                    "external\n",
                    memoryBitsPerPe, matrixBitsPerPe, internalCapacity, externalCapacity);
-  if (!hostObjects.empty())
-    s += fmt::format("{} cone(s)/cylinder(s) are tested on the host in double\n",
-                     hostObjects.size());
+  if (alwaysUncertainObjects > 0)
+    s += fmt::format("{} object(s) have bounds that do not close at these widths: every pixel that may "
+                     "hit them is uncertain\n",
+                     alwaysUncertainObjects);
   return s;
 }
 
@@ -262,7 +274,6 @@ PrimaryPass RunPrimaryPass(const Scene& scene, const SimdOptions& options) {
   const Multi tieEps = Broadcast(m, Tight(plan.tieThreshold, F));
 
   for (size_t i = 0; i < scene.objects.size(); ++i) {
-    if (!OnArray(scene.objects[i])) continue;
     const ObjectBounds bounds = BoundObject(scene, int(i), pf);
     const Candidate c = TestObject(m, scene, int(i), d, pf, bounds);
     // Near tie with the best so far (|t − tBest|, clamped: only gaps below the threshold
@@ -308,13 +319,12 @@ PrimaryPass RunPrimaryPass(const Scene& scene, const SimdOptions& options) {
                                 pass.modelledSeconds, m.Profile().clockHz / 1e6, pass.hostSeconds,
                                 pass.modelledSeconds / pass.hostSeconds);
 
-  // The host side: decode the matrix, test host objects, handle uncertain pixels.
+  // The host side: decode the matrix, handle uncertain pixels.
   const auto hostStart = std::chrono::steady_clock::now();
   PrimaryMatrix& out = pass.matrix;
   out.width = cam.width, out.height = cam.height;
   out.hits.resize(plan.virtualPes);
   out.flags.assign(plan.virtualPes, 0);
-  const double tieThreshold = plan.tieThreshold, hitherD = std::max(cam.hither, 0.0);
   for (int64_t pe = 0; pe < plan.virtualPes; ++pe) {
     PrimaryHit& h = out.hits[pe];
     h.direction = Normalize(Vec3{std::ldexp(double(dRaw[0][pe]), -plan.dirFracBits),
@@ -326,15 +336,6 @@ PrimaryPass RunPrimaryPass(const Scene& scene, const SimdOptions& options) {
     if (m.Overflow(pe) || m.DivideByZero(pe)) fl |= kOverflow;  // Invalid: √ of a miss
     if (grazeRaw[pe]) fl |= kGrazing;
     if (tieRaw[pe]) fl |= kNearTie;
-    if (!plan.hostObjects.empty()) {
-      const PrimaryRay ray = rays.At(int(pe % cam.width), int(pe / cam.width));
-      for (int obj : plan.hostObjects) {
-        const auto th = IntersectObject(scene, obj, ray.origin, ray.direction, hitherD);
-        if (!th) continue;
-        if (h.object >= 0 && std::abs(*th - h.t) < tieThreshold) fl |= kNearTie;
-        if (h.object < 0 || *th < h.t) h.object = obj, h.t = *th;
-      }
-    }
     if (fl & kOverflow) ++pass.overflowPixels;
     if (fl & kGrazing) ++pass.grazingPixels;
     if (fl & kNearTie) ++pass.tiePixels;

@@ -77,7 +77,6 @@ struct PrimaryPlan {
   int64_t memoryBitsPerPe = 0;  // peak estimate per virtual PE
   int64_t matrixBitsPerPe = 0;  // the per-pixel matrix in external memory
   int64_t internalCapacity = 0, externalCapacity = 0;  // bits per virtual PE
-  std::vector<int> hostObjects;  // objects the array does not test (done on the host)
   int alwaysUncertainObjects = 0;  // objects whose bounds degenerate at these widths (every
                                    // pixel that may hit them is flagged)
   nlohmann::json Json() const;

@@ -32,7 +32,6 @@ struct PassFormats {
 struct ObjectBounds {
   ShapeKind kind = ShapeKind::kSphere;
   bool transformed = false;
-  bool onArray = true;     // false: tested on the host in double (cones until they land)
   double farthest = 0;     // farthest point of the object from the eye
   double tError = 0;       // |t − t_exact| for a hit that is not flagged
   double slack = 0;        // a flagged candidate's true t is >= its computed t − slack
