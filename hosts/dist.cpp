@@ -189,7 +189,8 @@ void ServeFrames(const FrameWorkFactory& factory) {
                           {"setupSeconds", setupSeconds},
                           {"busySeconds", busy},
                           {"idleSeconds", std::max(0.0, loopSeconds - busy)},
-                          {"received", received.ToJson()}};
+                          {"received", received.ToJson()},
+                          {"work", work->Stats()}};
   stats["sent"] = sent.ToJson();  // everything before this stats message
   mpi.Send(0, {.kind = MessageKind::kStats}, Bytes(stats.dump()), sent);
   mpi.FlushSends(3600);
@@ -535,6 +536,7 @@ nlohmann::json Parent::Report() const {
       j["idleSeconds"] = c.stats.value("idleSeconds", 0.0);
       j["sent"] = c.stats["sent"];
       j["received"] = c.stats["received"];
+      j["work"] = c.stats.value("work", nlohmann::json::object());
       busy += c.stats.value("busySeconds", 0.0);
       idle += c.stats.value("idleSeconds", 0.0);
     }

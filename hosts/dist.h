@@ -38,6 +38,9 @@ class FrameWork {
   // frame.PixelCount() × SliceBytesPerPixel() bytes in the same order.
   virtual void RenderFrame(const Frame& frame, std::span<const std::byte> slice,
                            std::span<std::byte> pixels) = 0;
+  // The work's own counters (e.g. rays traced), sent to the parent in the stats message and
+  // reported per child as "work".
+  virtual nlohmann::json Stats() const { return nlohmann::json::object(); }
 };
 
 // Builds a child's FrameWork from the job's set-up text (throws UserError when it cannot).

@@ -110,6 +110,7 @@ class TracerWork : public FrameWork {
     ZEPHYR_CHECK_EQ(block_.size() * kPixelBytes, pixels.size());
     std::memcpy(pixels.data(), block_.data(), pixels.size());
   }
+  nlohmann::json Stats() const override { return stats_.ToJson(); }
 
  private:
   std::string method_;

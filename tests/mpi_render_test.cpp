@@ -86,6 +86,22 @@ TEST(MpiRender, HeteroSkipsExactlyTheFramesWithNoPrimaryHit) {
   auto j = ReadJson(report)["distributed"];
   EXPECT_EQ(j["frames"]["skippedIds"].get<std::set<int>>(), expected);
   EXPECT_EQ(j["frames"]["sent"], columns * rows - int(expected.size()));
+  // Bytes: a work message is a 16-byte rectangle + 40 bytes of matrix per pixel, a result
+  // the rectangle + 24 bytes (3 doubles) per pixel; the children counted the same.
+  std::uint64_t sentPixels = 0;
+  for (int id = 0; id < columns * rows; ++id)
+    if (!expected.count(id)) sentPixels += 8 * (id / columns == rows - 1 ? 6 : 8);
+  const std::uint64_t sent = columns * rows - expected.size();
+  EXPECT_EQ(j["traffic"]["parentToChildren"]["work"]["payloadBytes"], 16 * sent + 40 * sentPixels);
+  EXPECT_EQ(j["traffic"]["childrenToParent"]["result"]["payloadBytes"],
+            16 * sent + 24 * sentPixels);
+  std::uint64_t childResultBytes = 0, childRays = 0;
+  for (auto& c : j["perChild"]) {
+    childResultBytes += c["sent"]["result"]["payloadBytes"].get<std::uint64_t>();
+    childRays += c["work"]["rays"]["primary"].get<std::uint64_t>();
+  }
+  EXPECT_EQ(childResultBytes, 16 * sent + 24 * sentPixels);
+  EXPECT_EQ(childRays, sentPixels);  // one primary ray shaded per pixel of a sent frame
   EXPECT_EQ(j["traffic"]["parentToChildren"]["work"]["messages"],
             columns * rows - int(expected.size()));
 }
