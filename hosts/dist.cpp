@@ -243,7 +243,7 @@ class Parent {
   void Dispatch(ChildState& child);
   void Handle(ReceivedMessage& m);
   void CheckChildren();
-  void Lose(ChildState& child, const std::string& reason, bool knownDead);
+  void Lose(ChildState& child, const std::string& reason);
   void StopAll();
   void CollectStats();
   [[noreturn]] void Abandon(const std::string& why);
@@ -358,8 +358,8 @@ void Parent::Handle(ReceivedMessage& m) {
       return;
     }
     case MessageKind::kFailed:
-      child.alive = false;                            // it has left its loop
-      mpi_.MarkGone(child.rank, /*knownDead=*/true);  // it will finalize
+      child.alive = false;  // it has left its loop
+
       Abandon(sender + " failed: " + Text(m.payload));
     default:
       Abandon(std::string("unexpected ") + MessageKindName(m.header.kind) + " message from " +
@@ -367,9 +367,9 @@ void Parent::Handle(ReceivedMessage& m) {
   }
 }
 
-void Parent::Lose(ChildState& child, const std::string& reason, bool knownDead) {
+void Parent::Lose(ChildState& child, const std::string& reason) {
   child.alive = false;
-  mpi_.MarkGone(child.rank, knownDead);
+  mpi_.MarkGone(child.rank);
   child.lostReason = reason;
   std::vector<int> frames(child.inFlight.begin(), child.inFlight.end());
   for (auto it = child.inFlight.rbegin(); it != child.inFlight.rend(); ++it) queue_.Requeue(*it);
@@ -390,12 +390,11 @@ void Parent::CheckChildren() {
     if (!child.alive) continue;
     if (child.pid > 0 && child.host == mpi_.Host() && ::kill(pid_t(child.pid), 0) != 0 &&
         errno == ESRCH) {
-      Lose(child, "its process has exited", true);
+      Lose(child, "its process has exited");
       continue;
     }
     if (!child.inFlight.empty() && SecondsSince(child.lastProgress) > options_.childTimeoutSeconds)
-      Lose(child, fmt::format("no answer within the {:g} s timeout", options_.childTimeoutSeconds),
-           false);
+      Lose(child, fmt::format("no answer within the {:g} s timeout", options_.childTimeoutSeconds));
   }
 }
 
@@ -408,6 +407,7 @@ void Parent::StopAll() {
       child.alive = false;
     }
     child.stopped = true;
+    if (!child.setUp) mpi_.MarkFinished(child.rank);  // it leaves on the stop, silently
   }
 }
 

@@ -30,7 +30,7 @@ struct MpiSession::PendingSends {
     MPI_Request request;
     std::vector<std::byte> message;
   };
-  std::list<Send> sends;
+  std::list<Send> sends;  // to gone ranks too: they may never complete
 };
 
 void FinalizeMpiAtExit() {
@@ -39,14 +39,14 @@ void FinalizeMpiAtExit() {
   if (finalized) return;
   MpiSession& mpi = MpiSession::Get();
   mpi.ReleaseChildren();
-  if (!mpi.unresponsiveChild_ && !mpi.FlushSends(10)) mpi.unresponsiveChild_ = true;
-  if (mpi.unresponsiveChild_) {
-    // MPI_Finalize would wait for the stuck child forever, and MPI_Abort has been seen to
-    // wedge mpirun 4.1.4; a rank that exits without finalizing makes mpirun end the job.
+  mpi.DrainChildren();
+  if (mpi.lostChild_ || !mpi.FlushSends(10)) {
+    // MPI_Finalize would wait for a lost child (and for sends to it) forever, and MPI_Abort
+    // has been seen to wedge mpirun 4.1.4; a rank that exits without finalizing makes mpirun
+    // end the job.
     std::fprintf(stderr,
-                 "zephyr: a child stopped answering and may never finish; leaving "
-                 "without MPI_Finalize so that mpirun ends the job (the outputs are "
-                 "written)\n");
+                 "zephyr: a child was lost; leaving without MPI_Finalize so that "
+                 "mpirun ends the job (status 3)\n");
     std::fflush(stdout);
     std::fflush(stderr);
     std::_Exit(3);
@@ -54,9 +54,46 @@ void FinalizeMpiAtExit() {
   MPI_Finalize();
 }
 
-void MpiSession::MarkGone(int rank, bool knownDead) {
+// Children that were stopped early (the parent failed) may still be sending results or
+// their stats; a big message goes by rendezvous and the child cannot finish until it is
+// received. Take and drop what arrives until the children are quiet.
+void MpiSession::DrainChildren() {
+  if (rank_ != 0) return;
+  auto unfinished = [&] {
+    for (int r = 1; r < size_; ++r)
+      if (!finished_[r] && !gone_[r]) return true;
+    return false;
+  };
+  const auto start = std::chrono::steady_clock::now();
+  auto lastMessage = start;
+  auto since = [](auto t) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+  };
+  PollBackoff backoff;
+  while (unfinished() && since(start) < 5 && since(lastMessage) < 0.3) {
+    Progress();
+    int flag = 0;
+    MPI_Status status;
+    if (MPI_Iprobe(MPI_ANY_SOURCE, MPI_ANY_TAG, MPI_COMM_WORLD, &flag, &status) != MPI_SUCCESS)
+      return;
+    if (!flag) {
+      backoff.Wait();
+      continue;
+    }
+    int count = 0;
+    MPI_Get_count(&status, MPI_BYTE, &count);
+    std::vector<std::byte> message(std::size_t(count < 0 ? 0 : count));
+    MPI_Recv(message.data(), count, MPI_BYTE, status.MPI_SOURCE, status.MPI_TAG, MPI_COMM_WORLD,
+             MPI_STATUS_IGNORE);
+    lastMessage = std::chrono::steady_clock::now();
+    backoff.Reset();
+  }
+}
+
+void MpiSession::MarkGone(int rank) {
   released_[rank] = true;
-  if (!knownDead) unresponsiveChild_ = true;
+  gone_[rank] = true;
+  lostChild_ = true;
 }
 
 MpiSession& MpiSession::Get() {
@@ -83,6 +120,8 @@ MpiSession::MpiSession() : pending_(new PendingSends) {
   sentSequence_.assign(size_, 0);
   receivedSequence_.assign(size_, 0);
   released_.assign(size_, false);
+  gone_.assign(size_, false);
+  finished_.assign(size_, false);
 }
 
 void MpiSession::ReleaseChildren() {
@@ -128,6 +167,7 @@ bool MpiSession::FlushSends(double timeoutSeconds) {
   for (;;) {
     Progress();
     if (pending_->sends.empty()) return true;
+    if (lostChild_) return false;  // sends to a lost child may never complete
     if (std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() >
         timeoutSeconds)
       return false;
@@ -161,6 +201,8 @@ std::optional<ReceivedMessage> MpiSession::TryReceive(int source, TrafficAccount
                     std::to_string(received.header.sequence) + ", expected " +
                     std::to_string(receivedSequence_[received.source]));
   ++receivedSequence_[received.source];
+  if (received.header.kind == MessageKind::kStats || received.header.kind == MessageKind::kFailed)
+    finished_[received.source] = true;
   received.payload.assign(message.begin() + MessageHeader::kBytes, message.end());
   account.Add(received.header.kind, received.payload.size());
   return received;

@@ -50,13 +50,18 @@ class MpiSession {
   // Waits for the sends in progress; false if some are still pending after the timeout.
   bool FlushSends(double timeoutSeconds);
 
-  // Rank 0: a lost child is never sent anything again, not even the final stop. A child
-  // that is not known to be dead (it stopped answering) may never reach MPI_Finalize, so
-  // rank 0 then exits without MPI_Finalize and mpirun ends the job (see docs/distributed.md).
-  void MarkGone(int rank, bool knownDead);
+  // Rank 0: a lost child (dead, or not answering) is never sent anything again, not even
+  // the final stop. It may never reach MPI_Finalize, so rank 0 then exits without it
+  // (status 3) and mpirun ends the job (see docs/distributed.md).
+  void MarkGone(int rank);
+  // Rank 0: a child that was never set up and only got a stop sends nothing more.
+  void MarkFinished(int rank) { finished_[rank] = true; }
   // Rank 0, at exit (also after an error): sends a stop to every child that has not had one,
   // so no child waits for work forever and MPI_Finalize can complete.
   void ReleaseChildren();
+  // Rank 0, at exit: receives and drops what children still send (for up to 5 s, until
+  // 0.3 s pass without a message), so none stays blocked in a send and all can finalize.
+  void DrainChildren();
 
  private:
   MpiSession();
@@ -65,7 +70,8 @@ class MpiSession {
   std::vector<std::uint64_t> sentSequence_;      // per destination
   std::vector<std::uint64_t> receivedSequence_;  // per source
   std::vector<bool> released_;                   // per rank: sent a stop, or gone
-  bool unresponsiveChild_ = false;
+  std::vector<bool> gone_, finished_;            // per rank: lost; sent its stats or failure
+  bool lostChild_ = false;
   struct PendingSends;
   PendingSends* pending_;  // never freed, like the session
   friend void FinalizeMpiAtExit();
