@@ -150,7 +150,9 @@ TEST(TraceKernels, EdgeCasesOnEveryTarget) {
       EXPECT_EQ(NearestSphere(form, touch, o, d, 0.0, &t),
                 NearestSphereScalar(form, touch, o, d, 0.0, &tScalar));
       EXPECT_EQ(Bits(t), Bits(tScalar));
-      if (form == SphereTest::kHearnBaker) EXPECT_EQ(NearestSphere(form, touch, o, d, 0.0, &t), -1);
+      if (form == SphereTest::kHearnBaker) {
+        EXPECT_EQ(NearestSphere(form, touch, o, d, 0.0, &t), -1);
+      }
 
       SphereArrays<double> s;
       s.Push({0, 0, 0}, 4);    // 0: holds the origin: far root t = 2
@@ -224,7 +226,9 @@ TEST(TraceKernels, TracerFirstHitsIdenticalOnEveryTarget) {
             }
           }
           ASSERT_EQ(perTarget[0][i].object, best) << "pixel " << i;
-          if (best >= 0) ASSERT_EQ(Bits(perTarget[0][i].t), Bits(tBest)) << "pixel " << i;
+          if (best >= 0) {
+            ASSERT_EQ(Bits(perTarget[0][i].t), Bits(tBest)) << "pixel " << i;
+          }
         }
       }
       for (size_t k = 1; k < perTarget.size(); ++k) {

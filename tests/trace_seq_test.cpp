@@ -196,7 +196,9 @@ TEST(TraceRender, CommandWritesPngReportAndPrimaryCsv) {
     TraceStats stats;
     const PrimaryHit hit = tracer->FirstHit(ray, stats);
     EXPECT_EQ(object, hit.object);
-    if (object >= 0) EXPECT_EQ(t, hit.t);
+    if (object >= 0) {
+      EXPECT_EQ(t, hit.t);
+    }
     EXPECT_EQ(flags, 0u);
     ++rows;
   }
