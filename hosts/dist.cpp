@@ -264,6 +264,7 @@ class Parent {
   TrafficAccount sent_, received_;
   std::vector<int> skipped_, lost_;
   int resumed_ = 0, ignoredMessages_ = 0;
+  int checkpointed_ = 0;  // frames in the checkpoint file (degenerate ones never are)
   double distributionSeconds_ = 0, distributionCpuSeconds_ = 0;
 };
 
@@ -288,6 +289,7 @@ void Parent::OpenCheckpoint() {
     done_[id] = true;
     ++doneCount_;
     ++resumed_;
+    ++checkpointed_;
   }
 }
 
@@ -348,7 +350,10 @@ void Parent::Handle(ReceivedMessage& m) {
       if (!done_[id]) {
         auto pixels = std::span(m.payload).subspan(kRectBytes);
         PasteFrame(frame, pixels, image_, job_.imageWidth, job_.bytesPerPixel);
-        if (checkpoint_) checkpoint_->Append(id, pixels);
+        if (checkpoint_) {
+          checkpoint_->Append(id, pixels);
+          ++checkpointed_;
+        }
         done_[id] = true;
         ++doneCount_;
         ++child.frames;
@@ -420,7 +425,7 @@ void Parent::Abandon(const std::string& why) {
                         std::to_string(grid_.Count()) + " frames missing (" + FrameList(missing) +
                         ")";
   if (checkpoint_)
-    message += "; the " + std::to_string(doneCount_) + " finished frames are kept in " +
+    message += "; the " + std::to_string(checkpointed_) + " rendered frames are kept in " +
                checkpoint_->Path() + " — rerun with --resume to render only the missing ones";
   throw UserError(message);
 }
