@@ -235,16 +235,25 @@ void RenderHetero(const Scene& scene, const RenderOptions& options, RenderOutput
   out.report["distributed"] = result->report;
 }
 
+// Before the scene is read: children (ranks >= 1) serve frames from the setup the parent
+// sends (the scene as NFF text) and end there, so only the parent needs the scene file.
+bool ServeAsChild(const RenderOptions& options) {
+  FrameSize(options);  // a bad --frame is reported by every rank before MPI starts
+  if (StartFramedMethod(options.method).Rank() == 0) return false;
+  ServeFrames([](const std::string& setup) { return std::make_unique<TracerWork>(setup); });
+  EndChild();
+}
+
 RenderMethodRegistration distReg(
     "dist",
     "distributed: under mpirun, children trace whole F×F frames handed out on demand "
     "(bit-identical to seq)",
-    RenderDist);
+    RenderDist, ServeAsChild);
 RenderMethodRegistration heteroReg(
     "hetero",
     "heterogeneous: the SIMD primary pass at the parent, children shade the frames with a hit "
     "(under mpirun; bit-identical to simd)",
-    RenderHetero);
+    RenderHetero, ServeAsChild);
 
 RenderFlagRegistration flags([](CLI::App& cmd, RenderOptions& o) {
   cmd.add_option("--frame", o.extra["frame"], "dist/hetero: frame size F (F×F frames; default 64)");

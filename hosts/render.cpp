@@ -17,6 +17,7 @@ namespace {
 struct MethodEntry {
   std::string description;
   RenderMethod run;
+  RenderServeInstead serveInstead;
 };
 std::map<std::string, MethodEntry>& Methods() {
   static std::map<std::string, MethodEntry> methods;
@@ -25,8 +26,10 @@ std::map<std::string, MethodEntry>& Methods() {
 }  // namespace
 
 RenderMethodRegistration::RenderMethodRegistration(std::string name, std::string description,
-                                                   RenderMethod method) {
-  Methods().emplace(std::move(name), MethodEntry{std::move(description), std::move(method)});
+                                                   RenderMethod method,
+                                                   RenderServeInstead serveInstead) {
+  Methods().emplace(std::move(name), MethodEntry{std::move(description), std::move(method),
+                                                 std::move(serveInstead)});
 }
 
 namespace {
@@ -72,6 +75,7 @@ RenderOutput RunRender(const RenderOptions& options) {
     throw UserError("--method: unknown method '" + options.method + "' (known: " + known + ")");
   }
   RenderOutput out;
+  if (it->second.serveInstead && it->second.serveInstead(options)) return out;
   out.report["method"] = options.method;
   Scene scene;
   {

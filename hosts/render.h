@@ -50,8 +50,14 @@ struct RenderOutput {
 using RenderMethod =
     std::function<void(const Scene& scene, const RenderOptions& options, RenderOutput& out)>;
 
+// Runs before the scene is read. A method whose process may be a helper of another (an MPI
+// child of dist/hetero) serves there and returns true: RunRender then reads no scene file —
+// on a cluster the file exists only where the parent runs — and writes no outputs.
+using RenderServeInstead = std::function<bool(const RenderOptions& options)>;
+
 struct RenderMethodRegistration {
-  RenderMethodRegistration(std::string name, std::string description, RenderMethod method);
+  RenderMethodRegistration(std::string name, std::string description, RenderMethod method,
+                           RenderServeInstead serveInstead = nullptr);
 };
 
 // A method's own flags: `add` puts options on the render command, storing their values in

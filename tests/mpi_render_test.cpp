@@ -54,6 +54,27 @@ TEST(MpiRender, DistEqualsSeqAndHeteroEqualsSimdForEveryFrameSize) {
     }
 }
 
+// On a cluster the scene file exists only where the parent runs: the children take the
+// scene the parent sends. mpirun's MPMD form gives the children a path that does not exist.
+TEST(MpiRender, ChildrenNeverReadTheSceneFile) {
+  TempDir dir;
+  const std::string scene = Scene(dir);
+  const std::string seq = ReadFile(Single(dir, scene, "seq"));
+  for (const char* method : {"dist", "hetero"}) {
+    std::string out = dir / (std::string(method) + "-mpmd.png");
+    std::string common = std::string("render --no-progress --method ") + method + " --frame 16 ";
+    auto r = testing::RunCommand(
+        "timeout -k 5 120 mpirun --oversubscribe --allow-run-as-root -np 1 " +
+        testing::ZephyrPath() + " " + common + scene + " --out " + out + " : -np 2 " +
+        testing::ZephyrPath() + " " + common + dir / "absent.nff" + " --out " + out);
+    ASSERT_EQ(r.status, 0) << method << ": " << r.output;
+    EXPECT_EQ(r.output.find("absent.nff"), std::string::npos) << r.output;
+    if (std::string(method) == "dist") {
+      EXPECT_EQ(ReadFile(out), seq);
+    }
+  }
+}
+
 TEST(MpiRender, HeteroSkipsExactlyTheFramesWithNoPrimaryHit) {
   TempDir dir;
   const std::string scene = Scene(dir);
