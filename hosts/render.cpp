@@ -112,6 +112,37 @@ RenderOutput RunRender(const RenderOptions& options) {
   return out;
 }
 
+// One line a user reads after a render: what was made, how long it took, where it went;
+// for the distributed methods also frames and bytes (the JSON report has every figure).
+std::string RenderSummary(const RenderOptions& options, const RenderOutput& out) {
+  char line[512];
+  const nlohmann::json& r = out.report;
+  double seconds = r.contains("phases") && r["phases"].contains("render")
+                       ? r["phases"]["render"].get<double>()
+                       : 0.0;
+  std::snprintf(line, sizeof line, "%s: %dx%d, %zu objects, rendered in %.3f s", options.method.c_str(),
+                out.image.width, out.image.height, r["scene"]["objects"].get<size_t>(), seconds);
+  std::string s = line;
+  if (r.contains("distributed")) {
+    const nlohmann::json& d = r["distributed"];
+    const nlohmann::json& bytes = d["traffic"];
+    auto total = [&](const char* way) {
+      const nlohmann::json& t = bytes[way]["total"];
+      return t["payloadBytes"].get<double>() + t["envelopeBytes"].get<double>();
+    };
+    std::snprintf(line, sizeof line,
+                  "; %d children, %d frames sent, %d skipped, %.0f bytes to children, %.0f back",
+                  d["children"].get<int>(), d["frames"]["sent"].get<int>(),
+                  d["frames"]["skipped"].get<int>(), total("parentToChildren"),
+                  total("childrenToParent"));
+    s += line;
+  }
+  if (!options.out.empty()) s += "\n  image  " + options.out;
+  if (!options.report.empty()) s += "\n  report " + options.report;
+  if (!options.dumpPrimary.empty()) s += "\n  primary hits " + options.dumpPrimary;
+  return s;
+}
+
 namespace {
 
 CommandRegistration reg("render", [](CLI::App& program) {
@@ -147,7 +178,9 @@ CommandRegistration reg("render", [](CLI::App& program) {
     options.trace.precision = ParsePrecision(*precision);
     options.trace.sphereTest = ParseSphereTest(*sphereTest);
     options.progress = !*noProgress && StderrIsTerminal();
-    RunRender(options);
+    RenderOutput out = RunRender(options);
+    if (!out.report.contains("method")) return;  // an MPI child: the parent reports
+    std::printf("%s\n", RenderSummary(options, out).c_str());
   });
 });
 
