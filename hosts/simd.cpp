@@ -199,7 +199,7 @@ std::string PrimaryPlan::Text() const {
   for (const PlannedFormat& f : formats)
     s += fmt::format("  {:<26} {:<8} {}\n", f.quantity, f.format.Name(), f.reason);
   s += fmt::format("error bound on t (certain pixels): {:.3g}; near tie below {:.3g}; grazing when "
-                   "disc < (r/{:g})^2\n",
+                   "disc < max((r/{:g})^2, 2 x its error bound), per object\n",
                    tErrorBound, tieThreshold, 1 / grazingFraction);
   s += fmt::format("memory per virtual PE: ~{} bits (matrix {} bits, external) of {} internal + {} "
                    "external\n",
