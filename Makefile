@@ -142,6 +142,10 @@ $(TESTS): $(LIB_OBJS) $(TEST_OBJS) | $(BIN)
 	$(call say,LINK,$@)
 	$(Q)$(CXX) $(ALL_CXXFLAGS) $^ -o $@ $(LDLIBS_ALL) $(shell pkg-config --libs gtest_main)
 
+# Bench objects are made through a pattern chain; keep them (make would delete them as
+# intermediates and recompile every time).
+.SECONDARY: $(BENCH_SRCS:%.cpp=$(BUILD)/obj/%.o)
+
 # A benchmark may link extra libraries named in a `// LIBS: ...` line at its top.
 $(BIN)/bench_%: $(BUILD)/obj/tools/bench/%.o $(LIB_OBJS) | $(BIN)
 	$(call say,LINK,$@)
