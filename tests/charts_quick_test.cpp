@@ -1,13 +1,15 @@
 // `make charts` end to end in its QUICK mode (tools/charts.sh): the sweeps run with whatever
 // methods the zephyr program has, and every CSV and PNG the docs cite is written and holds
-// data. Keeps the chart tool chain working while the methods change (issue 7).
+// data — now with all four methods and `zephyr accuracy`, every cell measured. Keeps the chart tool chain working while the methods change (issue 7).
 #include <gtest/gtest.h>
 
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <unistd.h>
+#include <vector>
 
 namespace {
 
@@ -75,13 +77,61 @@ TEST(ChartsQuick, EverySweepWritesItsCsvAndChart) {
                           "speed_vs_accuracy_pct_wrong", "speed_vs_accuracy_t_error",
                           "speed_vs_accuracy_psnr", "uncertain_pixels"})
     EXPECT_TRUE(IsPng(out / (std::string(png) + ".png"))) << png;
-  // The sequential method is always there: its Fig 5 times are measured, positive numbers.
-  std::ifstream fig5(out / "fig05_seq_vs_simd.csv");
-  std::string line;
-  std::getline(fig5, line);
-  while (std::getline(fig5, line)) {
-    const std::string seq = line.substr(line.find(',') + 1, line.find(',', line.find(',') + 1) - line.find(',') - 1);
-    EXPECT_GT(std::stod(seq), 0) << line;
+  // Every method has landed: each figure's every cell is a measured number (no NaN), the
+  // times positive; the farm figures count bytes and pixels.
+  for (const char* csv : {"fig05_seq_vs_simd", "fig06_seq_vs_dist", "fig07_hetero_vs_dist_2children",
+                          "fig10_data_flow", "fig11_pixels", "fig12_all_methods"}) {
+    std::ifstream f(out / (std::string(csv) + ".csv"));
+    std::string line;
+    std::getline(f, line);  // header
+    while (std::getline(f, line)) {
+      std::stringstream cells(line);
+      std::string cell;
+      std::getline(cells, cell, ',');  // the x value
+      for (int column = 2; std::getline(cells, cell, ','); ++column) {
+        ASSERT_NE(cell, "NaN") << csv << " column " << column << ": " << line;
+        EXPECT_GT(std::stod(cell), 0) << csv << " column " << column << ": " << line;
+      }
+    }
+  }
+  // Hetero skips degenerate frames: at 16x16 frames of a 64x64 image with 8 spheres it
+  // processes no more pixels than dist, which processes every one of the 4096.
+  {
+    std::ifstream f(out / "fig11_pixels.csv");
+    std::string line;
+    std::getline(f, line);
+    while (std::getline(f, line)) {
+      std::stringstream cells(line);
+      std::string frame, dist, hetero;
+      std::getline(cells, frame, ',');
+      std::getline(cells, dist, ',');
+      std::getline(cells, hetero, ',');
+      EXPECT_EQ(std::stod(dist), 64 * 64) << line;
+      EXPECT_LE(std::stod(hetero), 64 * 64) << line;
+    }
+  }
+  // The accuracy sweep has zephyr accuracy's figures: a PSNR for every fixed width, and the
+  // error falls as the fraction widens.
+  {
+    std::ifstream f(out / "accuracy.csv");
+    std::string line;
+    std::getline(f, line);  // kind,frac_bits,cycles,host_s,pct_wrong,t_err_max,t_err_mean,psnr,planned
+    int fixedRows = 0;
+    double firstTErr = -1, lastTErr = -1;
+    while (std::getline(f, line)) {
+      std::vector<std::string> c;
+      std::stringstream cells(line);
+      for (std::string cell; std::getline(cells, cell, ',');) c.push_back(cell);
+      ASSERT_EQ(c.size(), 9u) << line;
+      if (c[0] != "fixed" || c[8] == "1") continue;
+      ++fixedRows;
+      ASSERT_NE(c[7], "NaN") << line;
+      ASSERT_NE(c[5], "NaN") << line;
+      if (firstTErr < 0) firstTErr = std::stod(c[5]);
+      lastTErr = std::stod(c[5]);
+    }
+    EXPECT_EQ(fixedRows, 3);  // QUICK widths 4, 8, 16
+    EXPECT_LT(lastTErr, firstTErr);
   }
   fs::remove_all(out);
   fs::remove(out.string() + ".log");

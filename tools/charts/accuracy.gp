@@ -5,7 +5,7 @@
 # kind is 'fixed' (the SIMD primary pass at --frac-bits N), 'float32' or 'float64' (the
 # sequential host tracers). Fixed rows: cycles on the left axis, emulator host seconds on
 # the right; the float tracers have no cycles and appear on the host-time axis only.
-set terminal pngcairo size 900,600 font ',10'
+set terminal pngcairo size 900,650 font ',10'
 set output out
 set datafile separator ','
 set datafile missing 'NaN'
@@ -19,10 +19,11 @@ set logscale y
 set logscale y2
 if (logx) set logscale x
 set grid
-set key top right box opaque font ',9'
-set bmargin 8
-if (strlen(note) > 0) set label 1 note at screen 0.02, screen 0.05 left font ',8'
-if (exists('note2') && strlen(note2) > 0) set label 3 note2 at screen 0.02, screen 0.02 left font ',8'
+set key tmargin horizontal maxcols 3 box font ',9'
+set bmargin 9
+if (strlen(note) > 0) set label 1 note at screen 0.02, screen 0.08 left font ',8' noenhanced
+if (exists('note2') && strlen(note2) > 0) set label 3 note2 at screen 0.02, screen 0.05 left font ',8' noenhanced
+if (exists('note3') && strlen(note3) > 0) set label 4 note3 at screen 0.02, screen 0.02 left font ',8' noenhanced
 if (empty) {
   set xrange [0:1]; set yrange [1:2]; set y2range [1:2]
   set label 2 'no data: the SIMD method (--frac-bits, accuracy) is not available yet' at graph 0.5, graph 0.5 center
