@@ -29,9 +29,9 @@ if (empty) {
   set label 2 'no data: the SIMD method (--frac-bits, accuracy) is not available yet' at graph 0.5, graph 0.5 center
   plot 1.5 notitle lc rgb 'white'
 } else {
-  plot in using (strcol(1) eq 'fixed' ? column(xcol) : NaN):3 with linespoints lw 2 pt 7 title 'SIMD cycles (fixed, by fraction bits)', \
+  plot in using (strcol(1) eq 'fixed' && column(9) == 0 ? column(xcol) : NaN):3 with linespoints lw 2 pt 7 title 'SIMD cycles (fixed, by fraction bits)', \
        ''  using (strcol(1) eq 'fixed' ? column(xcol) : NaN):3:(column(2) == column(2) ? sprintf('%d', column(2)) : 'planned') with labels offset 0,1 font ',8' notitle, \
-       ''  using (strcol(1) eq 'fixed' ? column(xcol) : NaN):4 axes x1y2 with linespoints lw 1 dt 2 pt 6 title 'SIMD emulator host time', \
+       ''  using (strcol(1) eq 'fixed' && column(9) == 0 ? column(xcol) : NaN):4 axes x1y2 with linespoints lw 1 dt 2 pt 6 title 'SIMD emulator host time', \
        ''  using (strcol(1) eq 'fixed' && column(9) == 1 ? column(xcol) : NaN):3 with points pt 3 ps 3 lc rgb 'red' title "planner's choice", \
        ''  using (strcol(1) eq 'float32' ? column(xcol) : NaN):4 axes x1y2 with points pt 5 ps 2 title 'seq float32 (host time)', \
        ''  using (strcol(1) eq 'float64' ? column(xcol) : NaN):4 axes x1y2 with points pt 9 ps 2 title 'seq float64 (host time)'
