@@ -5,13 +5,17 @@
 //           image is bit-identical to --method seq.
 //   hetero: the parent runs the SIMD primary pass on the emulated array; children shade
 //           frames from their slice of the per-pixel matrix (simd::ShadeRegion), so the image
-//           is bit-identical to --method simd. Frames where no primary ray hit anything are
+//           is bit-identical to --method simd. The slice carries 13 bytes a pixel (object,
+//           flags, t; hosts/dist_methods.h); the child recomputes each direction. Frames where no primary ray hit anything are
 //           filled with the background at the parent and cost no message.
 //
 // Both need `mpirun -np K+1`: rank 0 is the parent, which alone writes the outputs; a child
 // serves frames and then ends its process (it has no output of its own).
+#include "hosts/dist_methods.h"
+
 #include <CLI/CLI.hpp>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -30,41 +34,68 @@ namespace {
 static_assert(sizeof(Vec3) == 3 * sizeof(double), "pixels travel as 3 doubles");
 constexpr std::size_t kPixelBytes = sizeof(Vec3);
 
-// One pixel of the per-pixel matrix as a hetero work message carries it (40 bytes):
-// int32 object (-1: none), uint32 flags, double t, double direction[3].
-constexpr std::size_t kMatrixEntryBytes = 40;
+}  // namespace
+
+namespace hetero {
 
 void PutEntry(const PrimaryHit& hit, std::uint32_t flags, std::byte* at) {
+  ZEPHYR_CHECK_LE(flags, 0xFFu);
   const std::int32_t object = hit.object;
-  const double v[4] = {hit.t, hit.direction.x, hit.direction.y, hit.direction.z};
+  const std::uint8_t flagByte = std::uint8_t(flags);
   std::memcpy(at, &object, 4);
-  std::memcpy(at + 4, &flags, 4);
-  std::memcpy(at + 8, v, sizeof v);
+  std::memcpy(at + 4, &flagByte, 1);
+  std::memcpy(at + 5, &hit.t, 8);
 }
 
-PrimaryHit GetEntry(const std::byte* at, int objectCount) {
+PrimaryHit GetEntry(const std::byte* at, int objectCount, std::uint32_t& flags) {
+  constexpr std::uint32_t kKnown =
+      simd::kOverflow | simd::kGrazing | simd::kNearTie | simd::kRecomputed;
   std::int32_t object;
-  double v[4];
+  std::uint8_t flagByte;
+  PrimaryHit hit;
   std::memcpy(&object, at, 4);
-  std::memcpy(v, at + 8, sizeof v);
+  std::memcpy(&flagByte, at + 4, 1);
+  std::memcpy(&hit.t, at + 5, 8);
   if (object < -1 || object >= objectCount)
     throw UserError("malformed work message: matrix names object " + std::to_string(object) +
                     " of a scene with " + std::to_string(objectCount));
-  PrimaryHit hit;
+  if (flagByte & ~kKnown)
+    throw UserError("malformed work message: unknown matrix flag bits " +
+                    std::to_string(flagByte & ~kKnown));
+  if (!std::isfinite(hit.t) || (object < 0 && hit.t != 0))
+    throw UserError("malformed work message: matrix t " + std::to_string(hit.t) +
+                    (object < 0 ? " for a miss" : " is not finite"));
   hit.object = object;
-  hit.t = v[0];
-  hit.direction = Vec3(v[1], v[2], v[3]);
+  flags = flagByte;
   return hit;
 }
 
-// What every child needs, sent once: the scene (as exact NFF) and the tracing options.
-std::string SetupText(const std::string& method, const Scene& scene, const TraceOptions& t) {
-  return nlohmann::json{{"method", method},
-                        {"scene", WriteNff(scene)},
-                        {"depth", t.depth},
-                        {"precision", PrecisionName(t.precision)},
-                        {"sphereTest", SphereTestName(t.sphereTest)}}
-      .dump();
+Vec3 MatrixDirection(const PrimaryRays& rays, int x, int y, int dirFracBits, std::uint32_t flags) {
+  const Vec3 exact = rays.At(x, y).direction;
+  if (flags & simd::kRecomputed) return exact;
+  auto quantised = [&](double c) {
+    return std::ldexp(double(std::int64_t(std::llround(std::ldexp(c, dirFracBits)))), -dirFracBits);
+  };
+  return Normalize(Vec3{quantised(exact.x), quantised(exact.y), quantised(exact.z)});
+}
+
+}  // namespace hetero
+
+namespace {
+
+using hetero::kEntryBytes;
+
+// What every child needs, sent once: the scene (as exact NFF) and the tracing options;
+// hetero adds the direction fraction bits of the SIMD pass (to recompute the directions).
+std::string SetupText(const std::string& method, const Scene& scene, const TraceOptions& t,
+                      int dirFracBits = -1) {
+  nlohmann::json j = {{"method", method},
+                      {"scene", WriteNff(scene)},
+                      {"depth", t.depth},
+                      {"precision", PrecisionName(t.precision)},
+                      {"sphereTest", SphereTestName(t.sphereTest)}};
+  if (dirFracBits >= 0) j["dirFracBits"] = dirFracBits;
+  return j.dump();
 }
 
 class TracerWork : public FrameWork {
@@ -77,18 +108,21 @@ class TracerWork : public FrameWork {
       options_.depth = j.at("depth").get<int>();
       options_.precision = ParsePrecision(j.at("precision").get<std::string>());
       options_.sphereTest = ParseSphereTest(j.at("sphereTest").get<std::string>());
+      if (j.at("method") == "hetero") dirFracBits_ = j.at("dirFracBits").get<int>();
     } catch (const nlohmann::json::exception& e) {
       throw UserError(std::string("malformed set-up message: ") + e.what());
     }
     if (method_ != "dist" && method_ != "hetero")
       throw UserError("malformed set-up message: unknown method '" + method_ + "'");
+    if (method_ == "hetero" && (dirFracBits_ < 0 || dirFracBits_ > 60))
+      throw UserError("malformed set-up message: dirFracBits " + std::to_string(dirFracBits_));
     tracer_ = Tracer::Create(scene_, options_);
   }
   int ImageWidth() const override { return scene_.camera.width; }
   int ImageHeight() const override { return scene_.camera.height; }
   std::size_t BytesPerPixel() const override { return kPixelBytes; }
   std::size_t SliceBytesPerPixel() const override {
-    return method_ == "hetero" ? kMatrixEntryBytes : 0;
+    return method_ == "hetero" ? kEntryBytes : 0;
   }
   void RenderFrame(const Frame& f, std::span<const std::byte> slice,
                    std::span<std::byte> pixels) override {
@@ -96,15 +130,18 @@ class TracerWork : public FrameWork {
       RenderRegion(*tracer_, f.x0, f.y0, f.width, f.height, block_, stats_);
     } else {
       // The frame's own piece of the matrix, at (0, 0): ShadeRegion's pixels depend only on
-      // each pixel's hit, so they equal the full image's.
+      // each pixel's hit, so they equal the full image's. Directions are recomputed from the
+      // pixel's place in the image.
       simd::PrimaryMatrix m;
       m.width = f.width, m.height = f.height;
       m.hits.resize(f.PixelCount());
       m.flags.resize(f.PixelCount());
-      for (std::size_t i = 0; i < f.PixelCount(); ++i) {
-        m.hits[i] = GetEntry(&slice[i * kMatrixEntryBytes], int(scene_.objects.size()));
-        std::memcpy(&m.flags[i], &slice[i * kMatrixEntryBytes + 4], 4);
-      }
+      std::size_t i = 0;
+      for (int y = f.y0; y < f.y0 + f.height; ++y)
+        for (int x = f.x0; x < f.x0 + f.width; ++x, ++i) {
+          m.hits[i] = hetero::GetEntry(&slice[i * kEntryBytes], int(scene_.objects.size()), m.flags[i]);
+          m.hits[i].direction = hetero::MatrixDirection(tracer_->Rays(), x, y, dirFracBits_, m.flags[i]);
+        }
       simd::ShadeRegion(*tracer_, m, 0, 0, f.width, f.height, block_, stats_);
     }
     ZEPHYR_CHECK_EQ(block_.size() * kPixelBytes, pixels.size());
@@ -114,6 +151,7 @@ class TracerWork : public FrameWork {
 
  private:
   std::string method_;
+  int dirFracBits_ = -1;
   Scene scene_;
   TraceOptions options_;
   std::unique_ptr<Tracer> tracer_;
@@ -198,22 +236,27 @@ void RenderHetero(const Scene& scene, const RenderOptions& options, RenderOutput
         job.method = "hetero";
         job.imageWidth = c.width, job.imageHeight = c.height, job.frameSize = frameSize;
         job.bytesPerPixel = kPixelBytes;
-        job.setup = SetupText("hetero", scene, options.trace);
         auto start = std::chrono::steady_clock::now();
         pass = simd::RunPrimaryPass(scene, simd::SimdOptionsFrom(options));
         job.parentPassSeconds =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        job.setup = SetupText("hetero", scene, options.trace, pass.plan.dirFracBits);
         std::fprintf(stderr, "cycle report (SIMD primary pass):\n%s", pass.cycleTable.c_str());
         tracer = Tracer::Create(scene, options.trace);
         job.sliceFor = [&](const Frame& f) -> std::optional<std::vector<std::byte>> {
-          std::vector<std::byte> slice(f.PixelCount() * kMatrixEntryBytes);
+          std::vector<std::byte> slice(f.PixelCount() * kEntryBytes);
           bool anyHit = false;
           std::size_t i = 0;
           for (int y = f.y0; y < f.y0 + f.height; ++y)
             for (int x = f.x0; x < f.x0 + f.width; ++x, ++i) {
               const std::size_t at = std::size_t(y) * c.width + x;
-              anyHit |= pass.matrix.hits[at].object >= 0;
-              PutEntry(pass.matrix.hits[at], pass.matrix.flags[at], &slice[i * kMatrixEntryBytes]);
+              const PrimaryHit& hit = pass.matrix.hits[at];
+              anyHit |= hit.object >= 0;
+              // The child recomputes the direction: it must be the matrix's, bit for bit.
+              const Vec3 again = hetero::MatrixDirection(tracer->Rays(), x, y,
+                                                         pass.plan.dirFracBits, pass.matrix.flags[at]);
+              ZEPHYR_CHECK(std::memcmp(&again, &hit.direction, sizeof(Vec3)) == 0);
+              hetero::PutEntry(hit, pass.matrix.flags[at], &slice[i * kEntryBytes]);
             }
           if (!anyHit) return std::nullopt;
           return slice;

@@ -9,6 +9,7 @@
 #include <set>
 #include <sstream>
 
+#include "hosts/dist_methods.h"
 #include "tests/mpi_launch.h"
 
 namespace zephyr {
@@ -107,13 +108,13 @@ TEST(MpiRender, HeteroSkipsExactlyTheFramesWithNoPrimaryHit) {
   auto j = ReadJson(report)["distributed"];
   EXPECT_EQ(j["frames"]["skippedIds"].get<std::set<int>>(), expected);
   EXPECT_EQ(j["frames"]["sent"], columns * rows - int(expected.size()));
-  // Bytes: a work message is a 16-byte rectangle + 40 bytes of matrix per pixel, a result
+  // Bytes: a work message is a 16-byte rectangle + a matrix entry per pixel, a result
   // the rectangle + 24 bytes (3 doubles) per pixel; the children counted the same.
   std::uint64_t sentPixels = 0;
   for (int id = 0; id < columns * rows; ++id)
     if (!expected.count(id)) sentPixels += 8 * (id / columns == rows - 1 ? 6 : 8);
   const std::uint64_t sent = columns * rows - expected.size();
-  EXPECT_EQ(j["traffic"]["parentToChildren"]["work"]["payloadBytes"], 16 * sent + 40 * sentPixels);
+  EXPECT_EQ(j["traffic"]["parentToChildren"]["work"]["payloadBytes"], 16 * sent + hetero::kEntryBytes * sentPixels);
   EXPECT_EQ(j["traffic"]["childrenToParent"]["result"]["payloadBytes"],
             16 * sent + 24 * sentPixels);
   std::uint64_t childResultBytes = 0, childRays = 0;
