@@ -1,7 +1,13 @@
-// hosts/simd_accuracy.cpp — `zephyr accuracy SCENE`: the SIMD primary pass against an exact
+// hosts/simd_accuracy.cpp — `zephyr accuracy SCENE`: a method's primary hits against an exact
 // reference (SPEC §4). For every pixel (or a stated random sample) the first hit is
 // recomputed with 128-bit binary floats (fixed/reference.h RefReal) along the same double
-// eye ray: spheres, ellipsoids and cones (ray through T⁻¹) and polygons. Also the PSNR of the final image against the sequential method in double.
+// eye ray: spheres, ellipsoids and cones (ray through T⁻¹) and polygons. Also the PSNR of the
+// final image against the sequential method in double.
+//
+//   zephyr accuracy SCENE [--frac-bits N …]              the SIMD primary pass (default)
+//   zephyr accuracy SCENE --method seq --precision float  the sequential tracer's first hits
+//                                                         in float32 (or double: its PSNR
+//                                                         against itself is inf)
 #include <CLI/CLI.hpp>
 #include <cmath>
 #include <cstdio>
@@ -112,23 +118,67 @@ std::optional<Real> ExactCone(const Cone& cone, const RVec& o, const RVec& d, do
   return std::nullopt;
 }
 
+// The exact first hit of one eye ray: the object (-1: none) and its t.
+std::pair<int, Real> ExactFirstHit(const Scene& s, const PrimaryRay& ray, double tMin) {
+  int best = -1;
+  Real tBest = 0;
+  for (size_t i = 0; i < s.objects.size(); ++i) {
+    std::optional<Real> t;
+    const Primitive& p = s.objects[i];
+    RVec o = Make(ray.origin), d = Make(ray.direction);
+    ToObject(p, o, d);
+    if (const Sphere* sp = std::get_if<Sphere>(&p.shape)) {
+      t = ExactSphere(Make(sp->center), sp->radius, o, d, tMin);
+    } else if (const Polygon* poly = std::get_if<Polygon>(&p.shape)) {
+      t = ExactPolygon(*poly, o, d, tMin);
+    } else {
+      t = ExactCone(std::get<Cone>(p.shape), o, d, tMin);
+    }
+    if (t && (best < 0 || *t < tBest)) best = int(i), tBest = *t;
+  }
+  return {best, tBest};
+}
+
 CommandRegistration reg("accuracy", [](CLI::App& program) {
-  auto* cmd = program.add_subcommand("accuracy", "Compare the SIMD primary pass with an exact (128-bit) reference");
+  auto* cmd = program.add_subcommand(
+      "accuracy", "Compare the SIMD primary pass (or the sequential tracer) with an exact (128-bit) reference");
   auto scene = std::make_shared<std::string>();
   auto sample = std::make_shared<int64_t>(0);
   auto o = std::make_shared<RenderOptions>();
   auto json = std::make_shared<bool>(false);
+  auto method = std::make_shared<std::string>("simd");
+  auto precision = std::make_shared<std::string>();
   cmd->add_option("scene", *scene, "NFF scene file")->required();
+  cmd->add_option("--method", *method, "simd (default: the SIMD primary pass) or seq (the sequential tracer)");
+  cmd->add_option("--precision", *precision, "--method seq: float or double (default double)");
   cmd->add_option("--sample", *sample, "Random sample of this many pixels (default: every pixel)");
   cmd->add_option("--frac-bits", o->extra["frac-bits"], "Fraction bits of lengths, t and directions");
   cmd->add_option("--dir-frac-bits", o->extra["dir-frac-bits"], "Fraction bits of the directions only");
   cmd->add_option("--int-bits", o->extra["int-bits"], "Integer bits of distances");
   cmd->add_option("--uncertain", o->extra["uncertain"], "recompute (default), keep or fail");
   cmd->add_flag("--json", *json, "Machine-readable output");
-  cmd->callback([scene, sample, o, json] {
+  cmd->callback([scene, sample, o, json, method, precision] {
+    if (*method != "simd" && *method != "seq")
+      throw UserError("--method: expected simd or seq, got '" + *method + "'");
+    const bool simd = *method == "simd";
+    if (simd && !precision->empty())
+      throw UserError("--precision applies to --method seq (the SIMD pass is fixed point)");
+    if (!simd)
+      for (const char* flag : {"frac-bits", "dir-frac-bits", "int-bits", "uncertain"})
+        if (!o->extra[flag].empty())
+          throw UserError(std::string("--") + flag + " applies to --method simd only");
+    TraceOptions seqOptions;
+    seqOptions.precision = ParsePrecision(precision->empty() ? "double" : *precision);
     const Scene s = ReadNffFile(*scene);
-    const PrimaryPass pass = RunPrimaryPass(s, SimdOptionsFrom(*o));
     const Camera& c = s.camera;
+    // The primary hits under test: the SIMD pass's matrix, or the sequential tracer's.
+    PrimaryPass pass;
+    std::unique_ptr<Tracer> seqTracer;
+    if (simd) {
+      pass = RunPrimaryPass(s, SimdOptionsFrom(*o));
+    } else {
+      seqTracer = Tracer::Create(s, seqOptions);
+    }
     const int64_t pixels = int64_t(c.width) * c.height;
     std::vector<int64_t> which;
     if (*sample <= 0 || *sample >= pixels) {
@@ -142,25 +192,11 @@ CommandRegistration reg("accuracy", [](CLI::App& program) {
     const double tMin = std::max(c.hither, 0.0);
     int64_t differ = 0, compared = 0;
     double maxErr = 0, sumErr = 0;
+    TraceStats seqStats;
     for (int64_t pe : which) {
       const PrimaryRay ray = rays.At(int(pe % c.width), int(pe / c.width));
-      int best = -1;
-      Real tBest = 0;
-      for (size_t i = 0; i < s.objects.size(); ++i) {
-        std::optional<Real> t;
-        const Primitive& p = s.objects[i];
-        RVec o = Make(ray.origin), d = Make(ray.direction);
-        ToObject(p, o, d);
-        if (const Sphere* sp = std::get_if<Sphere>(&p.shape)) {
-          t = ExactSphere(Make(sp->center), sp->radius, o, d, tMin);
-        } else if (const Polygon* poly = std::get_if<Polygon>(&p.shape)) {
-          t = ExactPolygon(*poly, o, d, tMin);
-        } else {
-          t = ExactCone(std::get<Cone>(p.shape), o, d, tMin);
-        }
-        if (t && (best < 0 || *t < tBest)) best = int(i), tBest = *t;
-      }
-      const PrimaryHit& h = pass.matrix.hits[pe];
+      const auto [best, tBest] = ExactFirstHit(s, ray, tMin);
+      const PrimaryHit h = simd ? pass.matrix.hits[pe] : seqTracer->FirstHit(ray, seqStats);
       if (h.object != best) {
         ++differ;
         continue;
@@ -171,32 +207,43 @@ CommandRegistration reg("accuracy", [](CLI::App& program) {
       sumErr += err;
       ++compared;
     }
-    // PSNR of the final image (SIMD primary pass + host shading) against the sequential
-    // method in double, over every pixel.
+    // PSNR of the final image (SIMD primary pass + host shading, or the sequential tracer in
+    // its precision) against the sequential method in double, over every pixel.
     const auto tracer = Tracer::Create(s, TraceOptions{});
     TraceStats stats;
-    Image simdImage(c.width, c.height), seqImage(c.width, c.height);
-    ShadeRegion(*tracer, pass.matrix, 0, 0, c.width, c.height, simdImage.pixels, stats);
+    Image image(c.width, c.height), seqImage(c.width, c.height);
+    if (simd)
+      ShadeRegion(*tracer, pass.matrix, 0, 0, c.width, c.height, image.pixels, stats);
+    else
+      RenderRegion(*seqTracer, 0, 0, c.width, c.height, image.pixels, stats);
     RenderRegion(*tracer, 0, 0, c.width, c.height, seqImage.pixels, stats);
-    const double psnr = Psnr(simdImage, seqImage);
-    nlohmann::json j = {{"scene", *scene}, {"pixels", which.size()},
+    const double psnr = Psnr(image, seqImage);
+    const std::string what = simd ? "the SIMD pass" : std::string("seq ") + PrecisionName(seqOptions.precision);
+    nlohmann::json j = {{"scene", *scene}, {"method", *method}, {"pixels", which.size()},
                         {"sampled", which.size() < size_t(pixels)},
                         {"firstObjectDiffers", differ},
                         {"firstObjectDiffersPercent", 100.0 * differ / which.size()},
                         {"tMaxError", maxErr}, {"tMeanError", compared ? sumErr / compared : 0.0},
-                        {"tErrorBound", pass.plan.tErrorBound},
-                        {"psnrDb", std::isfinite(psnr) ? nlohmann::json(psnr) : nlohmann::json("inf")},
-                        {"uncertain", pass.Json()["uncertain"]}};
+                        {"psnrDb", std::isfinite(psnr) ? nlohmann::json(psnr) : nlohmann::json("inf")}};
+    if (simd) {
+      j["tErrorBound"] = pass.plan.tErrorBound;
+      j["uncertain"] = pass.Json()["uncertain"];
+    } else {
+      j["precision"] = PrecisionName(seqOptions.precision);
+    }
     if (*json) {
       std::printf("%s\n", j.dump(2).c_str());
       return;
     }
-    std::printf("%s: %zu pixel(s)%s; reference: 128-bit spheres, ellipsoids, polygons and cones\n",
-                scene->c_str(), which.size(), j["sampled"].get<bool>() ? " (random sample, seed 1)" : " (every pixel)");
+    std::printf("%s: %s, %zu pixel(s)%s; reference: 128-bit spheres, ellipsoids, polygons and cones\n",
+                scene->c_str(), what.c_str(), which.size(),
+                j["sampled"].get<bool>() ? " (random sample, seed 1)" : " (every pixel)");
     std::printf("first object differs: %lld (%.4f %%)\n", (long long)differ, 100.0 * differ / which.size());
-    std::printf("t error where the object agrees: max %.3g, mean %.3g (bound for certain pixels %.3g)\n",
-                maxErr, compared ? sumErr / compared : 0.0, pass.plan.tErrorBound);
-    std::printf("PSNR of the final image against the sequential method (double): %.2f dB\n", psnr);
+    std::printf("t error where the object agrees: max %.3g, mean %.3g", maxErr, compared ? sumErr / compared : 0.0);
+    if (simd) std::printf(" (bound for certain pixels %.3g)", pass.plan.tErrorBound);
+    std::printf("\nPSNR of the final image against the sequential method (double): %.2f dB%s\n", psnr,
+                std::isfinite(psnr) ? "" : " (identical: seq double is the reference itself)");
+    if (!simd) return;
     std::printf("uncertain: %lld overflow, %lld grazing, %lld near tie, %lld recomputed\n",
                 (long long)pass.overflowPixels, (long long)pass.grazingPixels,
                 (long long)pass.tiePixels, (long long)pass.recomputedPixels);

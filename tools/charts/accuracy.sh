@@ -11,9 +11,10 @@
 # Both run with --uncertain keep: the array's own answer, before the host repairs the pixels it
 # flagged (with the default, recompute, every pixel is exact by construction, docs/simd.md).
 # The planner's own choice (no --frac-bits) is one more row, marked planned=1. The sequential
-# tracer in float32 and float64 adds two points (host time); `zephyr accuracy` measures the
-# SIMD pass only, so float32's first objects and t are compared with float64's primary hits
-# (--dump-primary), and float64 is the reference of the PSNR (its own accuracy is not measured).
+# tracer in float32 and float64 adds two points (host time of the render): `zephyr accuracy
+# --method seq --precision float|double` compares their primary hits with the same exact
+# reference over the same sampled pixels, and their image with seq float64 (inf for float64
+# itself, and for float32 when its 8-bit image is identical).
 
 ACC=$OUT/accuracy.csv
 echo "kind,frac_bits,cycles,host_s,pct_wrong,t_err_max,t_err_mean,psnr,planned" >"$ACC"
@@ -27,33 +28,26 @@ JQ_ACC='[.firstObjectDiffersPercent, .tMaxError, .tMeanError,
   | map(if . == null then "NaN" else tostring end) | join(",")'
 
 acc_scene=$(scene "$REF_COUNT")
-ACC_REF=$WORK/acc-reference.primary.csv
 # accuracy_row KIND FRAC PLANNED [flags...] — one render (+ one accuracy run), one row.
 accuracy_row() {
   local kind=$1 bits=$2 planned=$3; shift 3
   local rj=$WORK/acc-render-$kind-$bits.json aj=$WORK/acc-$kind-$bits.json
   local method=simd; [ "$kind" = fixed ] || method=seq
-  local dump=$WORK/acc-$kind-$bits.primary.csv
   local extra=(); [ $method = simd ] && extra=(--uncertain keep)
   if ! "$ZEPHYR" render --method $method --scene "$acc_scene" --report "$rj" --no-progress \
-       --dump-primary "$dump" "${extra[@]}" "$@" >"$WORK/last.log" 2>&1; then
+       "${extra[@]}" "$@" >"$WORK/last.log" 2>&1; then
     say "failed: render --method $method $*"; tail -n 5 "$WORK/last.log" >&2; return 0
   fi
   local cycles host acc="NaN,NaN,NaN,NaN"
   cycles=$(jq -r '.simd.cycles.totalCycles // "NaN"' "$rj")
   host=$(jq -r '.phases.render' "$rj")
-  if [ $method = simd ]; then
-    if has_command accuracy && "$ZEPHYR" accuracy "$acc_scene" --json --sample "$ACC_SAMPLE" \
-         --uncertain keep "$@" >"$aj" 2>"$WORK/last.log"; then
-      acc=$(jq -r "$JQ_ACC" "$aj")
-    else
-      say "no accuracy figures for $kind $bits"; tail -n 5 "$WORK/last.log" >&2
-    fi
-  elif [ "$kind" = float32 ] && [ -f "$ACC_REF" ]; then
-    acc=$(awk -F, 'NR == FNR { if (FNR > 1) { o[FNR] = $6; t[FNR] = $7 } next }
-      FNR > 1 { ++n; if ($6 != o[FNR]) ++wrong
-                else if ($6 >= 0) { e = $7 - t[FNR]; e = e < 0 ? -e : e; s += e; ++m; if (e > mx) mx = e } }
-      END { printf "%.6g,%.6g,%.6g,NaN", 100 * wrong / n, mx, m ? s / m : 0 }' "$ACC_REF" "$dump")
+  local accFlags=(--uncertain keep "$@")  # the same flags as the render
+  [ $method = seq ] && accFlags=(--method seq "$@")
+  if has_command accuracy && "$ZEPHYR" accuracy "$acc_scene" --json --sample "$ACC_SAMPLE" \
+       "${accFlags[@]}" >"$aj" 2>"$WORK/last.log"; then
+    acc=$(jq -r "$JQ_ACC" "$aj")
+  else
+    say "no accuracy figures for $kind $bits"; tail -n 5 "$WORK/last.log" >&2
   fi
   echo "$kind,$bits,$cycles,$host,$acc,$planned" >>"$ACC"
   if [ "$kind" = fixed ]; then
@@ -66,9 +60,7 @@ accuracy_row() {
 
 ACC_NOTE="$REF_COUNT random spheres, ${SIZE}x${SIZE}, seed $SEED; labels = fraction bits; --uncertain keep (the array answer, unrepaired); $CPU, $(date +%Y-%m-%d)"
 ACC_NOTE2="first object, t: $ACC_SAMPLE sampled pixels vs the exact 128-bit reference (zephyr accuracy --sample)"
-ACC_NOTE3="PSNR: every pixel vs seq float64 (identical = inf, not drawn); seq float32: vs float64 primary hits; float64 = the reference"
-"$ZEPHYR" render --method seq --precision double --scene "$acc_scene" --no-progress \
-  --dump-primary "$ACC_REF" >/dev/null 2>&1 || rm -f "$ACC_REF"
+ACC_NOTE3="seq float32/float64 too (zephyr accuracy --method seq). PSNR: every pixel vs seq float64 (identical = inf, not drawn; float64 is that reference)"
 if has_method simd && has_command accuracy; then
   for bits in $FRAC; do accuracy_row fixed "$bits" 0 --frac-bits "$bits"; done
   accuracy_row fixed planned 1
