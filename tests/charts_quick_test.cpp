@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
 #include <unistd.h>
@@ -118,11 +119,18 @@ TEST(ChartsQuick, EverySweepWritesItsCsvAndChart) {
     std::getline(f, line);  // kind,frac_bits,cycles,host_s,pct_wrong,t_err_max,t_err_mean,psnr,planned
     int fixedRows = 0;
     double firstTErr = -1, lastTErr = -1;
+    std::map<std::string, double> floatTErr;  // the sequential tracers, against the same reference
     while (std::getline(f, line)) {
       std::vector<std::string> c;
       std::stringstream cells(line);
       for (std::string cell; std::getline(cells, cell, ',');) c.push_back(cell);
       ASSERT_EQ(c.size(), 9u) << line;
+      if (c[0] == "float32" || c[0] == "float64") {
+        ASSERT_NE(c[5], "NaN") << line;  // measured by zephyr accuracy --method seq
+        ASSERT_NE(c[4], "NaN") << line;
+        floatTErr[c[0]] = std::stod(c[5]);
+        continue;
+      }
       if (c[0] != "fixed" || c[8] == "1") continue;
       ++fixedRows;
       ASSERT_NE(c[7], "NaN") << line;
@@ -132,6 +140,8 @@ TEST(ChartsQuick, EverySweepWritesItsCsvAndChart) {
     }
     EXPECT_EQ(fixedRows, 3);  // QUICK widths 4, 8, 16
     EXPECT_LT(lastTErr, firstTErr);
+    ASSERT_EQ(floatTErr.size(), 2u) << "float32 and float64 points missing from accuracy.csv";
+    EXPECT_LT(floatTErr["float64"], floatTErr["float32"]);
   }
   fs::remove_all(out);
   fs::remove(out.string() + ".log");
