@@ -69,9 +69,9 @@ MicroOpCounts AlignedPass(const std::vector<Placed>& ops, const fixed::Format& e
 
 int Offset(const fixed::Format& exact, const fixed::Format& f) { return exact.fracBits - f.fracBits; }
 
-// Shift-and-add multiply (docs/bitserial.md, "Multiply"). `rows` lists the multiplier bit
-// positions that get an add pass; `readRows` says whether the multiplier bit comes from PE
-// memory (multi) or from the controller (uni).
+// Shift-and-add multiply (docs/bitserial.md, "The schedules", Multiply). `rows` lists the
+// multiplier bit positions that get an add pass; `readRows` says whether the multiplier bit
+// comes from PE memory (multi) or from the controller (uni).
 MicroOpCounts MulPass(Operand a, int multiplierWidth, const std::vector<int>& rows,
                       bool readRows, Space rowSpace, const fixed::Format& exact, Operand out,
                       fixed::Policy policy) {

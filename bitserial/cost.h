@@ -36,7 +36,7 @@ struct Operand {
   Space space = Space::Internal;
 };
 
-// The exact-result formats (docs/bitserial.md, "Exact formats").
+// The exact-result formats (docs/bitserial.md, "How the engine works", exactness).
 fixed::Format SumFormat(const fixed::Format& a, const fixed::Format& b);   // a + b
 fixed::Format DiffFormat(const fixed::Format& a, const fixed::Format& b);  // a - b
 fixed::Format ProductFormat(const fixed::Format& a, const fixed::Format& b);
@@ -57,7 +57,7 @@ MicroOpCounts MinMaxCost(Operand a, Operand b, Operand out, fixed::Policy p);
 MicroOpCounts MulCost(Operand a, Operand b, Operand out, fixed::Policy p);
 // Rows only for the constant's one bits (the controller skips zero bits).
 MicroOpCounts MulUniCost(Operand a, const fixed::Fixed& c, Operand out, fixed::Policy p);
-// Restoring division (docs/bitserial.md, "Divide and square root"): the shape of the
+// Restoring division (docs/bitserial.md, "The schedules", Divide): the shape of the
 // divider, shared by the engine and its schedule. The quotient is floor(|a|·2^shift / |b|)
 // (shift = fb + fo - fa, one more for Nearest), sign-corrected to the floor of the signed
 // quotient, then rounded (Nearest: the extra bit) and fitted like every other result.

@@ -6,8 +6,9 @@
 //   hetero: the parent runs the SIMD primary pass on the emulated array; children shade
 //           frames from their slice of the per-pixel matrix (simd::ShadeRegion), so the image
 //           is bit-identical to --method simd. The slice carries 13 bytes a pixel (object,
-//           flags, t; hosts/dist_methods.h); the child recomputes each direction. Frames where no primary ray hit anything are
-//           filled with the background at the parent and cost no message.
+//           flags, t; hosts/dist_methods.h); the child recomputes each direction. Frames
+//           where no primary ray hit anything are filled with the background at the parent
+//           and cost no message.
 //
 // Both need `mpirun -np K+1`: rank 0 is the parent, which alone writes the outputs; a child
 // serves frames and then ends its process (it has no output of its own).

@@ -32,7 +32,8 @@ struct Disc {
   float cx, cy, r;
 };
 
-// Per-pixel matrix entry, as hetero's slices carry it (20 bytes).
+// The pattern's per-pixel matrix entry (20 bytes, direction included: a stand-in for the
+// real hetero entry, which is 13 bytes without the direction, hosts/dist_methods.h).
 struct PrimaryHit {
   std::int32_t object;  // -1: no hit
   float t;

@@ -2,8 +2,9 @@
 //
 // A method is a function that fills a RenderOutput from a scene and the shared options.
 // Each method registers itself beside its own code with a file-scope RenderMethodRegistration
-// (seq in hosts/render_seq.cpp), so adding `simd`, `dist` or `hetero` is one entry in one new
-// file; the command itself knows no method.
+// (seq in hosts/render_seq.cpp, simd in hosts/render_simd.cpp, dist and hetero in
+// hosts/dist_methods.cpp), so a new method is one entry in one new file; the command itself
+// knows no method.
 #pragma once
 
 #include <functional>

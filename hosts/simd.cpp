@@ -246,7 +246,7 @@ PrimaryPass RunPrimaryPass(const Scene& scene, const SimdOptions& options) {
   const fixed::Policy saturate{fixed::Rounding::Floor, fixed::OverflowPolicy::Saturate};
   const PassFormats pf = FormatsOf(plan, scene);
 
-  // The per-pixel matrix, in external memory in this order (docs/simd.md, "Matrix layout").
+  // The per-pixel matrix, in external memory in this order (docs/simd.md, "The matrix layout").
   Multi object(m, plan.object, "matrix.object", Space::External);
   Multi tBest(m, T, "matrix.t", Space::External);
   Multi d[3] = {Multi(m, plan.direction, "matrix.dx", Space::External),

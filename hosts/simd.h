@@ -70,9 +70,10 @@ struct PrimaryPlan {
   int dirFracBits = 0;      // fraction bits of the direction components
   int objectBits = 0;       // width of the object index (+1, 0 = none)
   fixed::Format direction, length, t, object;
-  double tErrorBound = 0;   // |t_fixed − t_exact| for a certain (unflagged) sphere hit
+  double tErrorBound = 0;   // |t_fixed − t_exact| for a certain (unflagged) hit: the largest
+                            // per-object bound (always-uncertain objects excluded)
   double tieThreshold = 0;  // two t closer than this are a near tie
-  double grazingFraction = 0;  // disc < (r·this)² is grazing
+  double grazingFraction = 0;  // grazing band G = max((r·this)², 2·e_disc), per object
   std::vector<PlannedFormat> formats;
   int64_t memoryBitsPerPe = 0;  // peak estimate per virtual PE
   int64_t matrixBitsPerPe = 0;  // the per-pixel matrix in external memory

@@ -174,7 +174,7 @@ LinearForm MakeLinear(const Vec3& c, const PassFormats& pf) {
 double SquareErr(double m, double e, double u) { return 2 * m * e + e * e + u; }
 
 // One division t = N/D of the cone program, decided per PE against a threshold D* on |D|
-// (docs/simd.md, "Cones"). With |N − N_exact| <= eN and |D − D_exact| <= eD:
+// (docs/simd.md, "Error bounds", cone). With |N − N_exact| <= eN and |D − D_exact| <= eD:
 //  - |D| >= D*: |t − t_exact| <= (eN + |t_exact|·eD)/|D| <= eps + |t_exact|·eta (eta =
 //    eD/D*, eps = eN/D*). A computed |t| >= tCut means |t_exact| >= tFar (no point of the
 //    cone is that far: the root is not a hit); below it |t_exact| <= tRange and the error is
@@ -200,10 +200,10 @@ ConeDivision PlanDivision(double eN, double eD, double tFar, double target, doub
 }
 
 // An open truncated cone (NFF `c`) as the array tests it: everything the host folds into uni
-// constants, and the error analysis (docs/simd.md, "Cones"). In object space (ray o' + t·d',
-// d' = T⁻¹d, so t is the world t) with unit axis a, w = o' − base, w⊥ = w − (w·a)a, the
-// radius rw = r0 + σ(w·a) at the eye's height and σ = (r1 − r0)/h, the roots solve
-// A t² + 2β t + C = 0 with
+// constants, and the error analysis (docs/simd.md: "The program", cones, and "Error bounds").
+// In object space (ray o' + t·d', d' = T⁻¹d, so t is the world t) with unit axis a,
+// w = o' − base, w⊥ = w − (w·a)a, the radius rw = r0 + σ(w·a) at the eye's height and
+// σ = (r1 − r0)/h, the roots solve A t² + 2β t + C = 0 with
 //   A = |d'⊥|² − (σ·d'·a)²,  β = w⊥·d'⊥ − σ·rw·(d'·a),  C = |w⊥|² − rw²,
 //   β² − AC = |rw·d'⊥ − σ(d'·a)·w⊥|² − (d'·(w × a))²     (the stable discriminant)
 // Every quantity inside a square is a linear form in the world direction d (T⁻¹ folded into

@@ -50,7 +50,8 @@ struct Candidate {
   bitserial::Multi tLow;       // in formats.t: where uncertain, the true hit (if any) is >= tLow
 };
 
-// Runs the array program of `index` (which must be on the array) against the directions.
+// Runs the array program of object `index` (every primitive kind runs on the array) against
+// the directions.
 Candidate TestObject(bitserial::Machine& m, const Scene& scene, int index,
                      const bitserial::Multi (&d)[3], const PassFormats& formats,
                      const ObjectBounds& bounds);

@@ -3,7 +3,7 @@
 # (never two at once: they time themselves). Each prints its own figures.
 set -uo pipefail
 if [ $# -eq 0 ]; then
-  echo "make bench: no benchmarks yet (tools/bench/*.cpp land with issues 3-6)."
+  echo "make bench: no benchmark programs given (tools/bench/*.cpp builds one each)."
   exit 0
 fi
 status=0

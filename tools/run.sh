@@ -9,7 +9,7 @@ mkdir -p out
 if [ -z "${SCENE:-}" ]; then
   SCENE=out/spheres-${SPHERES}-seed${SEED}.nff
   if ! $ZEPHYR gen spheres --count "$SPHERES" --seed "$SEED" --out "$SCENE" 2>/dev/null; then
-    echo "make run: not yet — the scene generator (issue 4) has not landed." >&2
+    echo "make run: could not generate $SCENE (run: $ZEPHYR gen spheres --count $SPHERES --seed $SEED)" >&2
     exit 2
   fi
 fi
