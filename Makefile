@@ -54,7 +54,7 @@ TESTS  := $(BIN)/zephyr_tests
 .PHONY: all binaries test run bench charts fuzz fuzz-smoke clean help setup
 
 help: ## List the targets
-	@grep -E '^[a-z][a-zA-Z_-]*:.*## ' $(MAKEFILE_LIST) | sed 's/:.*## /\t/' | \
+	@grep -hE '^[a-z][a-zA-Z_-]*:.*## ' Makefile | sed 's/:.*## /\t/' | \
 	  awk -F'\t' '{printf "  make %-8s %s\n", $$1, $$2}'
 
 setup: ## Install any missing Debian packages (idempotent; quick when all are there)
