@@ -25,7 +25,7 @@ ifeq ($(origin CXX),default)
   CXX := g++
 endif
 OPT     ?= -O2
-# Run-time dispatch (Highway) — never -march=native: the binary must run on any x86-64.
+# Run-time dispatch (Highway), no host-specific -march: the binary must run on any x86-64.
 # PCLMUL/AES are disabled so the static target stays honest without -maes -mpclmul.
 DEPCFLAGS = $(shell pkg-config --cflags libhwy libpng ompi-c fmt 2>/dev/null)
 DEPLIBS   = $(shell pkg-config --libs libhwy libpng ompi-c fmt 2>/dev/null)
