@@ -159,7 +159,6 @@ PrimaryPlan PlanPrimaryPass(const Scene& scene, const SimdOptions& options) {
                                         "the widest; t = −sgn(β)·Q/A and −sgn(β)·C/Q by division where |divisor| >= "
                                         "its threshold, else flagged unless certainly beyond the cone",
                                         cones)});
-  plan.tieThreshold = 2 * plan.tErrorBound;
   // Memory per virtual PE: the matrix (object, t, d, two flag bits) plus the temporaries
   // of one sphere test (tca, 3 cross, 3 clamped, 3 squares, sum, disc, root, t0, t1, t and
   // the 1-bit masks), the near-tie and grazing trackers.
@@ -183,7 +182,7 @@ nlohmann::json PrimaryPlan::Json() const {
   nlohmann::json j = {{"width", width}, {"height", height}, {"virtualPes", virtualPes},
                       {"layers", layers}, {"distIntBits", distIntBits}, {"fracBits", fracBits},
                       {"dirFracBits", dirFracBits}, {"objectBits", objectBits},
-                      {"tErrorBound", tErrorBound}, {"tieThreshold", tieThreshold},
+                      {"tErrorBound", tErrorBound},
                       {"grazingFraction", grazingFraction}, {"memoryBitsPerPe", memoryBitsPerPe},
                       {"matrixBitsPerPe", matrixBitsPerPe}, {"internalCapacity", internalCapacity},
                       {"externalCapacity", externalCapacity},
@@ -198,9 +197,10 @@ std::string PrimaryPlan::Text() const {
                               virtualPes, layers);
   for (const PlannedFormat& f : formats)
     s += fmt::format("  {:<26} {:<8} {}\n", f.quantity, f.format.Name(), f.reason);
-  s += fmt::format("error bound on t (certain pixels): {:.3g}; near tie below {:.3g}; grazing when "
-                   "disc < max((r/{:g})^2, 2 x its error bound), per object\n",
-                   tErrorBound, tieThreshold, 1 / grazingFraction);
+  s += fmt::format("error bound on t (certain pixels): {:.3g} (the largest object's e); near tie per pair: "
+                   "|t_i - t_j| <= e_i + e_j; grazing when disc < max((r/{:g})^2, 2 x its error "
+                   "bound), per object\n",
+                   tErrorBound, 1 / grazingFraction);
   s += fmt::format("memory per virtual PE: ~{} bits (matrix {} bits, external) of {} internal + {} "
                    "external\n",
                    memoryBitsPerPe, matrixBitsPerPe, internalCapacity, externalCapacity);
@@ -242,7 +242,7 @@ PrimaryPass RunPrimaryPass(const Scene& scene, const SimdOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   Machine m(MakeProfile(options), plan.virtualPes);
   const int F = plan.fracBits;
-  const Format T = plan.t, L = plan.length;
+  const Format T = plan.t;
   const fixed::Policy saturate{fixed::Rounding::Floor, fixed::OverflowPolicy::Saturate};
   const PassFormats pf = FormatsOf(plan, scene);
 
@@ -270,30 +270,38 @@ PrimaryPass RunPrimaryPass(const Scene& scene, const SimdOptions& options) {
   }
   const Fixed tMax{T, T.MaxRaw()};
   tBest = Broadcast(m, tMax);
-  Multi tGraze = Broadcast(m, tMax), tTie = Broadcast(m, tMax);
-  const Multi tieEps = Broadcast(m, Tight(plan.tieThreshold, F));
+  // Near ties per pair (docs/simd.md, "Uncertain pixels"): the final best k and another hit j
+  // are tied when t_j − e_j <= t_k + e_k. Each PE keeps lowBest = t − e of its current best
+  // and otherLow, the least t − e of every other hit so far; a displaced best's low joins
+  // otherLow. bestUnsure: the current best was itself uncertain (its e does not hold).
+  Multi tGraze = Broadcast(m, tMax), otherLow = Broadcast(m, tMax), lowBest = Broadcast(m, tMax);
+  Multi bestUnsure = Broadcast(m, Fixed{bitserial::BoolFormat(), 0});
 
   for (size_t i = 0; i < scene.objects.size(); ++i) {
     const ObjectBounds bounds = BoundObject(scene, int(i), pf);
     const Candidate c = TestObject(m, scene, int(i), d, pf, bounds);
-    // Near tie with the best so far (|t − tBest|, clamped: only gaps below the threshold
-    // matter); an uncertain candidate keeps the lowest t its true hit could have.
-    Multi gap;
-    WithExpectedSaturation(m, [&] { gap = Abs(c.t - tBest, Format::Unsigned(L.intBits + 1, F), saturate); });
-    const Multi tie = c.hit && (gap < tieEps);
-    Where(tie, [&] { tTie = Min(c.t, tBest, T); });
+    // t − e_i with e_i rounded up (an always-uncertain object's every hit is flagged, so its
+    // e is never relied on); saturating down only widens the test.
+    const double e = bounds.alwaysUncertain ? 0.0 : bounds.tError + pf.Ulp();
+    Multi low;
+    WithExpectedSaturation(m, [&] { low = Sub(c.t, Broadcast(m, Tight(e, F)), T, saturate); });
     Where(c.uncertain, [&] { tGraze = Min(tGraze, c.tLow, T); });
     const Multi closer = c.hit && (c.t < tBest);
+    Where(c.hit && !closer, [&] { otherLow = Min(otherLow, low, T); });
     Where(closer, [&] {
+      otherLow = Min(otherLow, lowBest, T);
+      lowBest = low;
+      bestUnsure = c.uncertain;
       tBest = c.t;
       object = Broadcast(m, Fixed{plan.object, fixed::BigInt(i + 1)});
     });
   }
-  // A flagged candidate matters only if it is not clearly behind the final nearest hit.
-  // (tMax marks "none"; the limit's exact format cannot overflow.)
-  const Multi limit = tBest + tieEps, none = Broadcast(m, tMax);
-  grazeFlag = (tGraze <= limit) && (tGraze < none);
-  tieFlag = (tTie <= limit) && (tTie < none);
+  // A flagged candidate or another hit matters only if it may lie in front of the final
+  // best's true t <= tBest + e_best (= 2·tBest − lowBest; tMax marks "none"; the limit's
+  // exact format cannot overflow). An uncertain best is grazing itself.
+  const Multi limit = tBest + (tBest - lowBest), none = Broadcast(m, tMax);
+  grazeFlag = bestUnsure || ((tGraze <= limit) && (tGraze < none));
+  tieFlag = (otherLow <= limit) && (otherLow < none);
 
   // Move the matrix to the host (charged to the host link).
   const std::vector<int64_t> objRaw = object.ReadRaw(), tRaw = tBest.ReadRaw(),

@@ -72,7 +72,6 @@ struct PrimaryPlan {
   fixed::Format direction, length, t, object;
   double tErrorBound = 0;   // |t_fixed − t_exact| for a certain (unflagged) hit: the largest
                             // per-object bound (always-uncertain objects excluded)
-  double tieThreshold = 0;  // two t closer than this are a near tie
   double grazingFraction = 0;  // grazing band G = max((r·this)², 2·e_disc), per object
   std::vector<PlannedFormat> formats;
   int64_t memoryBitsPerPe = 0;  // peak estimate per virtual PE
