@@ -75,8 +75,8 @@ RUNS=$OUT/runs.csv
 echo "method,objects,children,frame,rep,host_s,time_s,model_s,simd_host_s,shade_s,bytes_p2c,bytes_c2p,pixels,frames_total,frames_sent,frames_skipped" >"$RUNS"
 
 # The figures, by the keys the reports carry (hosts/render.cpp, render_simd.cpp, dist.cpp):
-#   host_s       .phases.render: wall seconds of the whole render on this host (dist/hetero:
-#                MPI start-up of the ranks and the children's stop included)
+#   host_s       .phases.render: wall seconds of the render phase on this host (dist/hetero:
+#                MPI starts before it, so start-up is not included; the children's stop is)
 #   time_s       the method's time as the paper measures it: seq/simd the render phase;
 #                dist/hetero .distributed.time.parentPassSeconds (hetero's SIMD pass on the
 #                parent) + .distributionSeconds (first setup sent -> last frame back)
