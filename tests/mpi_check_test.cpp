@@ -175,12 +175,7 @@ TEST(MpiCheck, KillAChildThenResumeGivesTheCleanImage) {
   TempDir dir;
   const std::string args = "mpi-check " + kPattern + " --work 50 --frame 4 --out " +
                            (dir / "k.pfm") + " --report " + (dir / "k.json");
-  auto killed = RunMpi(2, args, "-x ZEPHYR_TEST_FAULT=kill:1:5");
-  EXPECT_NE(killed.status, 0) << killed.output;
-  EXPECT_FALSE(std::filesystem::exists(dir / "k.pfm"));
-  ASSERT_TRUE(std::filesystem::exists(dir / "k.pfm.frames")) << killed.output;
-
-  auto resumed = RunMpi(3, args + " --resume");
+  auto resumed = testing::KillThenResume(args, dir / "k.pfm", 5);
   ASSERT_EQ(resumed.status, 0) << resumed.output;
   EXPECT_EQ(ReadFile(dir / "k.pfm"), ReadFile(Local(dir, "dist", "--work 50")));
   auto j = ReadJson(dir / "k.json");

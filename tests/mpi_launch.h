@@ -79,4 +79,17 @@ inline nlohmann::json ReadJson(const std::string& path) {
   return nlohmann::json::parse(ReadFile(path));
 }
 
+// Kills child 1 (SIGKILL, via the test-only fault hook) after `framesBeforeKill` frames of
+// `args` on 1 child, checks the job failed with the checkpoint `out`.frames left and no `out`,
+// then reruns with --resume on 2 children and returns its status (0 expected). Both MPI
+// tests of kill-and-resume (the farm alone, and the real render) share it.
+inline Launch KillThenResume(const std::string& args, const std::string& out,
+                             int framesBeforeKill) {
+  auto killed = RunMpi(2, args, "-x ZEPHYR_TEST_FAULT=kill:1:" + std::to_string(framesBeforeKill));
+  EXPECT_NE(killed.status, 0) << killed.output;
+  EXPECT_FALSE(std::filesystem::exists(out));
+  EXPECT_TRUE(std::filesystem::exists(out + ".frames")) << killed.output;
+  return RunMpi(3, args + " --resume");
+}
+
 }  // namespace zephyr::testing

@@ -133,11 +133,7 @@ TEST(MpiRender, KillAChildThenResumeGivesTheCleanImage) {
   const std::string scene = Scene(dir);
   const std::string args = "render --no-progress --method dist " + scene + " --frame 4 --out " +
                            (dir / "k.png") + " --report " + (dir / "k.json");
-  auto killed = RunMpi(2, args, "-x ZEPHYR_TEST_FAULT=kill:1:6");
-  EXPECT_NE(killed.status, 0) << killed.output;
-  EXPECT_FALSE(std::filesystem::exists(dir / "k.png"));
-  ASSERT_TRUE(std::filesystem::exists(dir / "k.png.frames")) << killed.output;
-  auto resumed = RunMpi(3, args + " --resume");
+  auto resumed = testing::KillThenResume(args, dir / "k.png", 6);
   ASSERT_EQ(resumed.status, 0) << resumed.output;
   EXPECT_EQ(ReadFile(dir / "k.png"), ReadFile(Single(dir, scene, "seq")));
   auto j = ReadJson(dir / "k.json")["distributed"];
