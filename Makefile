@@ -35,11 +35,13 @@ LDLIBS_ALL   = $(DEPLIBS) -lpthread
 
 # Every .cpp in the library rooms is part of the engine; mains live apart.
 # ROOMS / TEST_GLOB narrow a build to part of the tree (e.g. while one room is being
-# rebuilt: `make BUILD=build/x ROOMS="fixed bitserial" TEST_GLOB="tests/fixed_*_test.cpp"`).
-ROOMS     ?= fixed bitserial hosts tools
-TEST_GLOB ?= tests/*_test.cpp
-LIB_SRCS  := $(sort $(wildcard $(addsuffix /*.cpp,$(ROOMS))) hosts/command.cpp)
-LIB_SRCS  := $(filter-out hosts/main.cpp,$(LIB_SRCS))
+# rebuilt: `make BUILD=build/x ROOMS="fixed bitserial" TEST_GLOB="tests/fixed/*_test.cpp"`).
+# Rooms hold folders (hosts/scene, hosts/trace, ...; docs/architecture.md): sources are
+# found at any depth.
+ROOMS     ?= fixed bitserial hosts
+TEST_GLOB ?= tests/*/*_test.cpp
+LIB_SRCS  := $(sort $(shell find $(ROOMS) -name '*.cpp') hosts/cmd/command.cpp)
+LIB_SRCS  := $(filter-out hosts/cmd/main.cpp,$(LIB_SRCS))
 TEST_SRCS := $(sort $(wildcard $(TEST_GLOB)))
 BENCH_SRCS:= $(sort $(wildcard tools/bench/*.cpp))
 
@@ -96,11 +98,11 @@ charts: setup ## Run the experiment sweeps and draw the charts under docs/result
 FUZZ_CXX  ?= clang++-14
 FUZZ_RUNS ?= 1000000
 FUZZ_BIN  := $(BUILD)/fuzz/nff_fuzz
-FUZZ_SRCS := tests/fuzz/nff_fuzz.cpp hosts/nff.cpp hosts/scene.cpp hosts/geometry.cpp hosts/trace.cpp \
-             hosts/sphere_kernels.cpp
+FUZZ_SRCS := tests/fuzz/nff_fuzz.cpp hosts/scene/nff.cpp hosts/scene/scene.cpp \
+             hosts/scene/geometry.cpp hosts/trace/tracer.cpp hosts/trace/sphere_kernels.cpp
 FUZZ_RUN   = mkdir -p $(BUILD)/fuzz/corpus && $(FUZZ_BIN) -max_len=4096 -timeout=10 \
              $(BUILD)/fuzz/corpus tests/fuzz/corpus
-$(FUZZ_BIN): $(FUZZ_SRCS) $(wildcard hosts/*.h fixed/*.h)
+$(FUZZ_BIN): $(FUZZ_SRCS) $(wildcard hosts/*/*.h fixed/*.h)
 	$(call say,FUZZCXX,$@)
 	@mkdir -p $(@D)
 	$(Q)$(FUZZ_CXX) -std=c++20 -O1 -g -I. -fsanitize=fuzzer,address,undefined \
@@ -134,7 +136,7 @@ $(BUILD)/obj/%.o: %.cpp $(FLAGS_FILE)
 	@mkdir -p $(@D)
 	$(Q)$(CXX) $(ALL_CXXFLAGS) -MMD -MP -c $< -o $@
 
-$(ZEPHYR): $(LIB_OBJS) $(BUILD)/obj/hosts/main.o | $(BIN)
+$(ZEPHYR): $(LIB_OBJS) $(BUILD)/obj/hosts/cmd/main.o | $(BIN)
 	$(call say,LINK,$@)
 	$(Q)$(CXX) $(ALL_CXXFLAGS) $^ -o $@ $(LDLIBS_ALL)
 

@@ -7,8 +7,8 @@
 #include <string_view>
 #include <vector>
 
-#include "hosts/nff.h"
-#include "hosts/trace.h"
+#include "hosts/scene/nff.h"
+#include "hosts/trace/tracer.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   std::vector<std::string> errors;

@@ -5,8 +5,8 @@
 #include <cstdio>
 #include <vector>
 
-#include "hosts/simd.h"
-#include "tools/gen.h"
+#include "hosts/simd/pass.h"
+#include "hosts/scene/gen.h"
 
 int main() {
   using namespace zephyr;

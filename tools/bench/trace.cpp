@@ -1,6 +1,6 @@
 // LIBS: -lembree3
 // tools/bench/trace.cpp — ray–sphere tests per second on one core: the plain scalar loop
-// (NearestSphereScalar), the engine's Highway kernel (hosts/sphere_kernels.h: many spheres
+// (NearestSphereScalar), the engine's Highway kernel (hosts/trace/sphere_kernels.h: many spheres
 // per vector, Hearn–Baker form, float and double, bit-identical to the scalar loop), and
 // Embree 3's BVH with its built-in sphere primitive tracing the same primary rays, for 10,
 // 100 and 1000 spheres (issue 4). Prints medians of repeats.
@@ -15,9 +15,9 @@
 #include <limits>
 #include <vector>
 
-#include "hosts/sphere_kernels.h"
-#include "hosts/trace.h"
-#include "tools/gen.h"
+#include "hosts/trace/sphere_kernels.h"
+#include "hosts/trace/tracer.h"
+#include "hosts/scene/gen.h"
 
 namespace zephyr {
 namespace {

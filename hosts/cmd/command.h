@@ -1,0 +1,29 @@
+// hosts/cmd/command.h — the `zephyr` program's subcommands register themselves here.
+//
+// Each command lives beside the code it drives (cycles next to the cycle report, render
+// next to the tracers...) and adds itself with a file-scope CommandRegistration, so no
+// central list has to be edited when a command is added.
+#pragma once
+
+#include <functional>
+#include <string>
+
+namespace CLI { class App; }
+
+namespace zephyr {
+
+// Adds one subcommand (with its options and callback) to the program's CLI11 app.
+using CommandSetup = std::function<void(CLI::App& program)>;
+
+struct CommandRegistration {
+  CommandRegistration(std::string name, CommandSetup setup);
+};
+
+// Calls every registered setup, in name order (used by hosts/cmd/main.cpp and the tests).
+void AddRegisteredCommands(CLI::App& program);
+
+// Runs the program as `zephyr args...` would, returning the exit status; the tests use it
+// to check messages and exit codes without a subprocess.
+int RunZephyr(int argc, const char* const* argv);
+
+}  // namespace zephyr

@@ -1,0 +1,586 @@
+#include "hosts/farm/farm.h"
+
+#include <fmt/core.h>
+#include <signal.h>
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <deque>
+#include <thread>
+
+#include "fixed/check.h"
+#include "hosts/farm/checkpoint.h"
+
+namespace zephyr {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double SecondsSince(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+double CpuSeconds() {  // this process, user + system
+  rusage u;
+  ::getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
+         1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
+
+std::span<const std::byte> Bytes(const std::string& s) {
+  return std::as_bytes(std::span(s.data(), s.size()));
+}
+std::string Text(std::span<const std::byte> b) {
+  return std::string(reinterpret_cast<const char*>(b.data()), b.size());
+}
+
+// Test-only fault injection, read by the children: ZEPHYR_TEST_FAULT="what:rank:n" makes
+// child `rank`, on receiving its (n+1)-th frame, "kill" itself with SIGKILL, "hang" (sleep
+// forever) or send "garbage" instead of a result. The tests use it to kill a child for real.
+struct Fault {
+  std::string what;
+  int rank = -1, afterFrames = 0;
+};
+Fault ReadFault() {
+  Fault fault;
+  const char* spec = std::getenv("ZEPHYR_TEST_FAULT");
+  if (!spec) return fault;
+  char what[16] = {};
+  if (std::sscanf(spec, "%15[a-z]:%d:%d", what, &fault.rank, &fault.afterFrames) != 3)
+    throw UserError(std::string("ZEPHYR_TEST_FAULT: expected what:rank:frames, got ") + spec);
+  fault.what = what;
+  if (fault.what != "kill" && fault.what != "hang" && fault.what != "garbage")
+    throw UserError("ZEPHYR_TEST_FAULT: unknown fault '" + fault.what + "'");
+  return fault;
+}
+
+std::string FrameList(const std::vector<int>& ids) {
+  std::string s;
+  for (std::size_t i = 0; i < ids.size(); ++i) {
+    if (i == 20) return s + ", … (" + std::to_string(ids.size()) + " in all)";
+    s += (i ? ", " : "") + std::to_string(ids[i]);
+  }
+  return s;
+}
+
+}  // namespace
+
+std::optional<FramedResult> RunFramedMethod(const std::string& method,
+                                            const FrameWorkFactory& factory,
+                                            const std::function<FramedJob()>& buildJob,
+                                            const FramedOptions& options) {
+  MpiSession& mpi = StartFramedMethod(method);
+  if (mpi.Rank() != 0) {
+    ServeFrames(factory);
+    return std::nullopt;
+  }
+  FramedJob job = buildJob();  // a UserError here still releases the children at exit
+  return RenderFrames(job, options);
+}
+
+MpiSession& StartFramedMethod(const std::string& method) {
+  MpiSession& mpi = MpiSession::Get();
+  if (mpi.Size() < 2)
+    throw UserError("--method " + method +
+                    " needs at least 2 MPI ranks (a parent and one "
+                    "child) but runs on " +
+                    std::to_string(mpi.Size()) +
+                    "; launch it with `mpirun -np K+1 zephyr render ...` or `make run WORKERS=K`");
+  return mpi;
+}
+
+// ---------------------------------------------------------------------------------------
+// The child.
+
+void ServeFrames(const FrameWorkFactory& factory) {
+  MpiSession& mpi = MpiSession::Get();
+  ZEPHYR_CHECK(mpi.Rank() != 0);
+  TrafficAccount sent, received;
+  const Fault fault = ReadFault();
+  auto fail = [&](const std::string& why) {
+    mpi.Send(0, {.kind = MessageKind::kFailed}, Bytes(why), sent);
+    mpi.FlushSends(3600);
+  };
+  auto next = [&]() {
+    for (;;)
+      if (auto m = mpi.Receive(0, received, 3600)) return *m;
+  };
+
+  ReceivedMessage first = next();
+  if (first.header.kind == MessageKind::kStop) return;  // nothing for this child
+  if (first.header.kind != MessageKind::kSetup)
+    return fail(std::string("expected a setup message first, got ") +
+                MessageKindName(first.header.kind));
+  auto start = Clock::now();
+  std::unique_ptr<FrameWork> work;
+  try {
+    work = factory(Text(first.payload));
+  } catch (const UserError& e) {
+    return fail(std::string("set-up failed: ") + e.what());
+  }
+  const double setupSeconds = SecondsSince(start);
+  nlohmann::json ready = {{"pid", long(::getpid())}, {"host", mpi.Host()}};
+  mpi.Send(0, {.kind = MessageKind::kReady}, Bytes(ready.dump()), sent);
+
+  double busy = 0;
+  std::uint64_t frames = 0, pixels = 0;
+  std::vector<std::byte> out;
+  auto loopStart = Clock::now();
+  for (;;) {
+    ReceivedMessage m = next();
+    if (m.header.kind == MessageKind::kStop) break;
+    if (m.header.kind != MessageKind::kWork)
+      return fail(std::string("unexpected ") + MessageKindName(m.header.kind) + " message");
+    Frame frame;
+    try {
+      frame = ReadRect(m.payload, m.header.frameId);
+    } catch (const UserError& e) {
+      return fail(e.what());
+    }
+    const bool inside = frame.id >= 0 && frame.width >= 1 && frame.height >= 1 && frame.x0 >= 0 &&
+                        frame.y0 >= 0 && frame.x0 <= work->ImageWidth() - frame.width &&
+                        frame.y0 <= work->ImageHeight() - frame.height;
+    if (!inside)
+      return fail("malformed work message: frame " + std::to_string(frame.id) +
+                  " is not inside the image");
+    const std::size_t sliceBytes = frame.PixelCount() * work->SliceBytesPerPixel();
+    if (m.payload.size() != kRectBytes + sliceBytes)
+      return fail("malformed work message: frame " + std::to_string(frame.id) + " carries " +
+                  std::to_string(m.payload.size() - kRectBytes) + " matrix bytes, expected " +
+                  std::to_string(sliceBytes));
+    if (fault.rank == mpi.Rank() && frames == std::uint64_t(fault.afterFrames)) {
+      if (fault.what == "kill") ::raise(SIGKILL);
+      if (fault.what == "hang") std::this_thread::sleep_for(std::chrono::hours(1));
+      if (fault.what == "garbage") {
+        std::byte junk[3] = {};
+        mpi.Send(0, {.kind = MessageKind::kResult, .frameId = frame.id}, junk, sent);
+        continue;
+      }
+    }
+    auto t = Clock::now();
+    out.assign(kRectBytes + frame.PixelCount() * work->BytesPerPixel(), std::byte{0});
+    out.resize(0);
+    AppendRect(frame, out);
+    out.resize(kRectBytes + frame.PixelCount() * work->BytesPerPixel());
+    try {
+      work->RenderFrame(frame, std::span(m.payload).subspan(kRectBytes),
+                        std::span(out).subspan(kRectBytes));
+    } catch (const UserError& e) {
+      return fail("frame " + std::to_string(frame.id) + ": " + e.what());
+    }
+    const double seconds = SecondsSince(t);
+    busy += seconds;
+    ++frames;
+    pixels += frame.PixelCount();
+    mpi.Send(
+        0, {.kind = MessageKind::kResult, .frameId = frame.id, .aux = std::uint64_t(seconds * 1e9)},
+        out, sent);
+  }
+  const double loopSeconds = SecondsSince(loopStart);
+  // The stats message counts itself among the sent bytes: its size is known before sending
+  // only up to the digits of the numbers, so count it first, then measure.
+  nlohmann::json stats = {{"frames", frames},
+                          {"pixels", pixels},
+                          {"setupSeconds", setupSeconds},
+                          {"busySeconds", busy},
+                          {"idleSeconds", std::max(0.0, loopSeconds - busy)},
+                          {"received", received.ToJson()},
+                          {"work", work->Stats()}};
+  stats["sent"] = sent.ToJson();  // everything before this stats message
+  mpi.Send(0, {.kind = MessageKind::kStats}, Bytes(stats.dump()), sent);
+  mpi.FlushSends(3600);
+}
+
+// ---------------------------------------------------------------------------------------
+// The parent.
+
+namespace {
+
+struct ChildState {
+  int rank = 0;
+  bool alive = true;
+  bool ready = false;
+  bool stopped = false;
+  bool setUp = false;  // got the set-up message (a child that did not only gets a stop)
+  long pid = -1;
+  std::string host;
+  std::deque<int> inFlight;
+  Clock::time_point lastProgress;
+  std::uint64_t frames = 0, pixels = 0;
+  double busyFromResults = 0;
+  nlohmann::json stats;
+  std::string lostReason;
+};
+
+class Parent {
+ public:
+  Parent(const FramedJob& job, const FramedOptions& options)
+      : job_(job),
+        options_(options),
+        mpi_(MpiSession::Get()),
+        grid_(job.imageWidth, job.imageHeight, job.frameSize),
+        done_(grid_.Count(), false) {
+    ZEPHYR_CHECK(mpi_.Rank() == 0);
+    ZEPHYR_CHECK(job.bytesPerPixel > 0);
+    if (options.framesInFlight < 1) throw UserError("frames in flight must be at least 1");
+    if (!(options.childTimeoutSeconds > 0)) throw UserError("child timeout must be positive");
+    image_.assign(std::size_t(job.imageWidth) * job.imageHeight * job.bytesPerPixel, std::byte{0});
+    for (int r = 1; r < mpi_.Size(); ++r) {
+      children_.emplace_back();
+      children_.back().rank = r;
+    }
+  }
+
+  FramedResult Run();
+
+ private:
+  void OpenCheckpoint();
+  void Dispatch(ChildState& child);
+  void Handle(ReceivedMessage& m);
+  void CheckChildren();
+  void Lose(ChildState& child, const std::string& reason);
+  void StopAll();
+  void CollectStats();
+  [[noreturn]] void Abandon(const std::string& why);
+  nlohmann::json Report() const;
+  ChildState& Child(int rank) { return children_[rank - 1]; }
+
+  const FramedJob& job_;
+  const FramedOptions& options_;
+  MpiSession& mpi_;
+  FrameGrid grid_;
+  std::vector<bool> done_;
+  int doneCount_ = 0;
+  std::vector<std::byte> image_;
+  std::vector<std::optional<std::vector<std::byte>>> slices_;  // hetero: per frame id
+  std::optional<FrameCheckpoint> checkpoint_;
+  FrameQueue queue_{{}};
+  std::vector<ChildState> children_;
+  TrafficAccount sent_, received_;
+  std::vector<int> skipped_, lost_;
+  int resumed_ = 0, ignoredMessages_ = 0;
+  int checkpointed_ = 0;  // frames in the checkpoint file (degenerate ones never are)
+  double distributionSeconds_ = 0, distributionCpuSeconds_ = 0;
+};
+
+void Parent::OpenCheckpoint() {
+  if (options_.checkpointPath.empty()) {
+    if (options_.resume) throw UserError("--resume needs an output file (its checkpoint)");
+    return;
+  }
+  CheckpointKey key{job_.imageWidth, job_.imageHeight, job_.frameSize,
+                    std::uint32_t(job_.bytesPerPixel), JobHash(job_.method + '\n' + job_.setup)};
+  if (!options_.resume) {
+    checkpoint_.emplace(FrameCheckpoint::Create(options_.checkpointPath, key));
+    return;
+  }
+  checkpoint_.emplace(FrameCheckpoint::Resume(options_.checkpointPath, key));
+  for (const auto& [id, pixels] : checkpoint_->Frames()) {
+    if (id < 0 || id >= grid_.Count() ||
+        pixels.size() != grid_.At(id).PixelCount() * job_.bytesPerPixel)
+      throw UserError(options_.checkpointPath + ": frame " + std::to_string(id) +
+                      " does not fit this job");
+    PasteFrame(grid_.At(id), pixels, image_, job_.imageWidth, job_.bytesPerPixel);
+    done_[id] = true;
+    ++doneCount_;
+    ++resumed_;
+    ++checkpointed_;
+  }
+}
+
+void Parent::Dispatch(ChildState& child) {
+  if (!child.alive) return;
+  if (child.inFlight.empty()) child.lastProgress = Clock::now();
+  while (int(child.inFlight.size()) < options_.framesInFlight && !queue_.Empty()) {
+    int id = queue_.Next();
+    if (done_[id]) continue;  // a re-queued frame that its first child finished after all
+    Frame frame = grid_.At(id);
+    std::vector<std::byte> payload;
+    AppendRect(frame, payload);
+    if (slices_[id]) payload.insert(payload.end(), slices_[id]->begin(), slices_[id]->end());
+    mpi_.Send(child.rank, {.kind = MessageKind::kWork, .frameId = id}, payload, sent_);
+    child.inFlight.push_back(id);
+  }
+}
+
+void Parent::Handle(ReceivedMessage& m) {
+  const std::string sender = "child rank " + std::to_string(m.source);
+  if (m.source < 1 || m.source >= mpi_.Size()) Abandon("message from unknown rank");
+  ChildState& child = Child(m.source);
+  if (!child.alive) {  // declared lost, then answered after all: its frames went elsewhere
+    ++ignoredMessages_;
+    return;
+  }
+  switch (m.header.kind) {
+    case MessageKind::kReady: {
+      if (child.ready) Abandon("unexpected second ready message from " + sender);
+      try {
+        auto j = nlohmann::json::parse(Text(m.payload));
+        child.pid = j.at("pid").get<long>();
+        child.host = j.at("host").get<std::string>();
+      } catch (const nlohmann::json::exception& e) {
+        Abandon("malformed ready message from " + sender + ": " + e.what());
+      }
+      child.ready = true;
+      return;
+    }
+    case MessageKind::kResult: {
+      const int id = m.header.frameId;
+      auto it = std::find(child.inFlight.begin(), child.inFlight.end(), id);
+      if (it == child.inFlight.end())
+        Abandon("unexpected result from " + sender + " for frame " + std::to_string(id) +
+                ", which it was not given");
+      const Frame frame = grid_.At(id);
+      const std::size_t expected = kRectBytes + frame.PixelCount() * job_.bytesPerPixel;
+      if (m.payload.size() != expected)
+        Abandon("malformed result from " + sender + " for frame " + std::to_string(id) + ": " +
+                std::to_string(m.payload.size()) + " payload bytes, expected " +
+                std::to_string(expected));
+      if (ReadRect(m.payload, id) != frame)
+        Abandon("malformed result from " + sender + ": frame " + std::to_string(id) +
+                " comes back with a different rectangle");
+      child.inFlight.erase(it);
+      child.lastProgress = Clock::now();
+      child.busyFromResults += double(m.header.aux) * 1e-9;
+      if (!done_[id]) {
+        auto pixels = std::span(m.payload).subspan(kRectBytes);
+        PasteFrame(frame, pixels, image_, job_.imageWidth, job_.bytesPerPixel);
+        if (checkpoint_) {
+          checkpoint_->Append(id, pixels);
+          ++checkpointed_;
+        }
+        done_[id] = true;
+        ++doneCount_;
+        ++child.frames;
+        child.pixels += frame.PixelCount();
+      }
+      Dispatch(child);
+      return;
+    }
+    case MessageKind::kFailed:
+      child.alive = false;  // it has left its loop
+
+      Abandon(sender + " failed: " + Text(m.payload));
+    default:
+      Abandon(std::string("unexpected ") + MessageKindName(m.header.kind) + " message from " +
+              sender);
+  }
+}
+
+void Parent::Lose(ChildState& child, const std::string& reason) {
+  child.alive = false;
+  mpi_.MarkGone(child.rank);
+  child.lostReason = reason;
+  std::vector<int> frames(child.inFlight.begin(), child.inFlight.end());
+  for (auto it = child.inFlight.rbegin(); it != child.inFlight.rend(); ++it) queue_.Requeue(*it);
+  child.inFlight.clear();
+  lost_.insert(lost_.end(), frames.begin(), frames.end());
+  std::fprintf(stderr,
+               "zephyr: warning: child rank %d (pid %ld on %s) lost: %s; its frames %s go back "
+               "to the queue\n",
+               child.rank, child.pid, child.host.empty() ? "?" : child.host.c_str(), reason.c_str(),
+               frames.empty() ? "(none)" : FrameList(frames).c_str());
+  for (ChildState& other : children_) Dispatch(other);
+}
+
+// A child is lost when it holds frames and has not answered for the timeout, or — on this
+// host, where its pid means something — as soon as its process is gone.
+void Parent::CheckChildren() {
+  for (ChildState& child : children_) {
+    if (!child.alive) continue;
+    if (child.pid > 0 && child.host == mpi_.Host() && ::kill(pid_t(child.pid), 0) != 0 &&
+        errno == ESRCH) {
+      Lose(child, "its process has exited");
+      continue;
+    }
+    if (!child.inFlight.empty() && SecondsSince(child.lastProgress) > options_.childTimeoutSeconds)
+      Lose(child, fmt::format("no answer within the {:g} s timeout", options_.childTimeoutSeconds));
+  }
+}
+
+void Parent::StopAll() {
+  for (ChildState& child : children_) {
+    if (!child.alive || child.stopped) continue;
+    try {
+      mpi_.Send(child.rank, {.kind = MessageKind::kStop}, {}, sent_);
+    } catch (const UserError&) {
+      child.alive = false;
+    }
+    child.stopped = true;
+    if (!child.setUp) mpi_.MarkFinished(child.rank);  // it leaves on the stop, silently
+  }
+}
+
+void Parent::Abandon(const std::string& why) {
+  StopAll();
+  std::vector<int> missing;
+  for (int id = 0; id < grid_.Count(); ++id)
+    if (!done_[id]) missing.push_back(id);
+  std::string message = why + "; " + std::to_string(missing.size()) + " of " +
+                        std::to_string(grid_.Count()) + " frames missing (" + FrameList(missing) +
+                        ")";
+  if (checkpoint_)
+    message += "; the " + std::to_string(checkpointed_) + " rendered frames are kept in " +
+               checkpoint_->Path() + " — rerun with --resume to render only the missing ones";
+  throw UserError(message);
+}
+
+void Parent::CollectStats() {
+  auto start = Clock::now();
+  PollBackoff backoff;
+  auto waiting = [&] {
+    return std::count_if(children_.begin(), children_.end(), [](const ChildState& c) {
+      return c.alive && c.setUp && c.stopped && c.stats.is_null();
+    });
+  };
+  while (waiting() > 0) {
+    if (SecondsSince(start) > options_.childTimeoutSeconds) {
+      for (ChildState& c : children_)
+        if (c.alive && c.setUp && c.stats.is_null()) c.lostReason = "no stats after stop";
+      return;
+    }
+    auto m = mpi_.TryReceive(-1, received_);
+    if (!m) {
+      backoff.Wait();
+      continue;
+    }
+    if (m->source < 1 || m->source >= mpi_.Size()) Abandon("message from unknown rank");
+    ChildState& child = Child(m->source);
+    if (m->header.kind == MessageKind::kReady && !child.ready) {
+      Handle(*m);
+      continue;
+    }
+    if (m->header.kind != MessageKind::kStats || !child.alive) {
+      ++ignoredMessages_;
+      continue;
+    }
+    try {
+      child.stats = nlohmann::json::parse(Text(m->payload));
+      TrafficAccount::FromJson(child.stats.at("sent"));
+      child.stats.at("busySeconds").get<double>();
+      child.stats.at("idleSeconds").get<double>();
+    } catch (const nlohmann::json::exception& e) {
+      throw UserError("malformed stats message from child rank " + std::to_string(child.rank) +
+                      ": " + e.what());
+    }
+  }
+}
+
+FramedResult Parent::Run() {
+  OpenCheckpoint();
+  auto start = Clock::now();
+  const double cpuStart = CpuSeconds();
+  slices_.resize(grid_.Count());
+  std::vector<int> pending;
+  for (int id = 0; id < grid_.Count(); ++id) {
+    if (done_[id]) continue;
+    const Frame frame = grid_.At(id);
+    if (job_.sliceFor) {
+      slices_[id] = job_.sliceFor(frame);
+      if (!slices_[id]) {  // degenerate: no primary hit, background, no message
+        std::vector<std::byte> pixels(frame.PixelCount() * job_.bytesPerPixel);
+        job_.fillDegenerate(frame, pixels);
+        PasteFrame(frame, pixels, image_, job_.imageWidth, job_.bytesPerPixel);
+        done_[id] = true;
+        ++doneCount_;
+        skipped_.push_back(id);
+        continue;
+      }
+    }
+    pending.push_back(id);
+  }
+  queue_ = FrameQueue(pending);
+  for (ChildState& child : children_) {
+    if (queue_.Empty()) break;  // children with nothing to do only get a stop
+    mpi_.Send(child.rank, {.kind = MessageKind::kSetup}, Bytes(job_.setup), sent_);
+    child.setUp = true;
+    Dispatch(child);
+  }
+  PollBackoff backoff;
+  auto lastCheck = Clock::now();
+  while (doneCount_ < grid_.Count()) {
+    if (auto m = mpi_.TryReceive(-1, received_)) {
+      Handle(*m);
+      backoff.Reset();
+      continue;
+    }
+    if (SecondsSince(lastCheck) > 0.05) {
+      CheckChildren();
+      lastCheck = Clock::now();
+      if (std::none_of(children_.begin(), children_.end(),
+                       [](const ChildState& c) { return c.alive; }))
+        Abandon("every child is lost");
+    }
+    backoff.Wait();
+  }
+  distributionSeconds_ = SecondsSince(start);
+  distributionCpuSeconds_ = CpuSeconds() - cpuStart;
+  StopAll();
+  CollectStats();
+  if (checkpoint_) checkpoint_->Remove();  // the caller writes the image next
+  return {std::move(image_), Report()};
+}
+
+nlohmann::json Parent::Report() const {
+  nlohmann::json children = nlohmann::json::array();
+  double busy = 0, idle = 0;
+  for (const ChildState& c : children_) {
+    nlohmann::json j = {{"rank", c.rank},     {"host", c.host},
+                        {"pid", c.pid},       {"framesAccepted", c.frames},
+                        {"pixels", c.pixels}, {"lost", !c.lostReason.empty()}};
+    if (!c.lostReason.empty()) j["lostReason"] = c.lostReason;
+    if (!c.stats.is_null()) {
+      j["framesRendered"] = c.stats.value("frames", 0);
+      j["setupSeconds"] = c.stats.value("setupSeconds", 0.0);
+      j["busySeconds"] = c.stats.value("busySeconds", 0.0);
+      j["idleSeconds"] = c.stats.value("idleSeconds", 0.0);
+      j["sent"] = c.stats["sent"];
+      j["received"] = c.stats["received"];
+      j["work"] = c.stats.value("work", nlohmann::json::object());
+      busy += c.stats.value("busySeconds", 0.0);
+      idle += c.stats.value("idleSeconds", 0.0);
+    }
+    children.push_back(j);
+  }
+  const int sentFrames = int(sent_.Of(MessageKind::kWork).messages);
+  return {
+      {"method", job_.method},
+      {"ranks", mpi_.Size()},
+      {"children", mpi_.Size() - 1},
+      {"frameSize", job_.frameSize},
+      {"framesInFlight", options_.framesInFlight},
+      {"childTimeoutSeconds", options_.childTimeoutSeconds},
+      {"frames",
+       {{"total", grid_.Count()},
+        {"columns", grid_.Columns()},
+        {"rows", grid_.Rows()},
+        {"sent", sentFrames},
+        {"skipped", skipped_.size()},
+        {"skippedIds", skipped_},
+        {"resumed", resumed_},
+        {"lost", lost_}}},
+      {"traffic", {{"parentToChildren", sent_.ToJson()}, {"childrenToParent", received_.ToJson()}}},
+      {"ignoredMessages", ignoredMessages_},
+      {"perChild", children},
+      {"time",
+       {{"parentPassSeconds", job_.parentPassSeconds},
+        {"distributionSeconds", distributionSeconds_},
+        {"parentCpuSeconds", distributionCpuSeconds_},
+        {"childrenBusySeconds", busy},
+        {"childrenIdleSeconds", idle}}},
+  };
+}
+
+}  // namespace
+
+FramedResult RenderFrames(const FramedJob& job, const FramedOptions& options) {
+  Parent parent(job, options);
+  return parent.Run();
+}
+
+}  // namespace zephyr

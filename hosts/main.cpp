@@ -1,5 +1,0 @@
-// The `zephyr` program: subcommands are registered by the modules that own them
-// (see hosts/command.h).
-#include "hosts/command.h"
-
-int main(int argc, char** argv) { return zephyr::RunZephyr(argc, argv); }

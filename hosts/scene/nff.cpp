@@ -1,0 +1,432 @@
+#include "hosts/scene/nff.h"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include "fixed/check.h"
+
+namespace zephyr {
+
+namespace {
+
+struct Token {
+  std::string_view text;
+  int line = 0, column = 0;
+};
+
+// Splits NFF text into whitespace-separated tokens, dropping `#` comments. SPD writes a
+// cone on one line or two, so the grammar works on the token stream, not on lines.
+std::vector<Token> Tokenize(std::string_view text) {
+  std::vector<Token> tokens;
+  int line = 1, column = 1;
+  size_t i = 0;
+  while (i < text.size()) {
+    const char c = text[i];
+    if (c == '\n') {
+      ++line;
+      column = 1;
+      ++i;
+    } else if (c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v') {
+      ++column;
+      ++i;
+    } else if (c == '#') {
+      while (i < text.size() && text[i] != '\n') ++i;
+    } else {
+      const size_t start = i;
+      const int startColumn = column;
+      while (i < text.size() && !std::isspace(static_cast<unsigned char>(text[i])) &&
+             text[i] != '#') {
+        ++i;
+        ++column;
+      }
+      tokens.push_back({text.substr(start, i - start), line, startColumn});
+    }
+  }
+  return tokens;
+}
+
+bool LooksNumeric(std::string_view s) {
+  if (s.empty()) return false;
+  const char c = s[0];
+  return (c >= '0' && c <= '9') || c == '-' || c == '+' || c == '.';
+}
+
+// Thrown inside one statement to abandon it; the parser records the message and resumes at
+// the next keyword.
+struct StatementError {
+  std::string message;
+};
+
+class NffParser {
+ public:
+  NffParser(std::string_view text, std::string fileName, std::vector<std::string>& errors)
+      : tokens_(Tokenize(text)), file_(std::move(fileName)), errors_(errors) {
+    // End-of-file location, for errors about what is missing.
+    int line = 1, column = 1;
+    for (char c : text) {
+      if (c == '\n') { ++line; column = 1; } else { ++column; }
+    }
+    endLine_ = line;
+    endColumn_ = column;
+  }
+
+  std::optional<Scene> Parse() {
+    scene_.source = file_;
+    while (pos_ < tokens_.size()) {
+      const Token keyword = tokens_[pos_++];
+      try {
+        Statement(keyword);
+      } catch (const StatementError& e) {
+        errors_.push_back(e.message);
+        // Resume at the next token that is not a number: the next keyword.
+        while (pos_ < tokens_.size() && LooksNumeric(tokens_[pos_].text)) ++pos_;
+      }
+    }
+    CheckComplete();
+    if (!errors_.empty()) return std::nullopt;
+    return std::move(scene_);
+  }
+
+ private:
+  std::string Where(const Token& t) const {
+    return SourceLocation{file_, t.line, t.column}.ToString();
+  }
+  std::string WhereEnd() const { return SourceLocation{file_, endLine_, endColumn_}.ToString(); }
+  [[noreturn]] void Fail(const Token& at, const std::string& what) {
+    throw StatementError{Where(at) + ": " + what};
+  }
+  void Report(const Token& at, const std::string& what) { errors_.push_back(Where(at) + ": " + what); }
+
+  const Token& Next(const char* what) {
+    if (pos_ >= tokens_.size())
+      throw StatementError{WhereEnd() + ": unexpected end of file, expected " + what};
+    return tokens_[pos_++];
+  }
+
+  double Number(const char* what) {
+    const Token& t = Next(what);
+    std::string_view s = t.text;
+    if (!s.empty() && s[0] == '+') s.remove_prefix(1);
+    double value = 0;
+    const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), value);
+    if (ec == std::errc::result_out_of_range || (ec == std::errc() && end == s.data() + s.size() &&
+                                                 !std::isfinite(value)))
+      Fail(t, std::string("expected a finite number for ") + what + ", got '" +
+                  std::string(t.text) + "'");
+    if (ec != std::errc() || end != s.data() + s.size())
+      Fail(t, std::string("expected a number for ") + what + ", got '" + std::string(t.text) + "'");
+    return value;
+  }
+
+  Vec3 Triple(const char* what) {
+    Vec3 v;
+    v.x = Number(what);
+    v.y = Number(what);
+    v.z = Number(what);
+    return v;
+  }
+
+  long Integer(const char* what, long lo, long hi) {
+    const Token& t = tokens_[pos_ < tokens_.size() ? pos_ : tokens_.size() - 1];
+    const double v = Number(what);
+    if (v != std::floor(v) || v < double(lo) || v > double(hi))
+      Fail(t, std::string("expected an integer from ") + std::to_string(lo) + " to " +
+                  std::to_string(hi) + " for " + what + ", got '" + std::string(t.text) + "'");
+    return long(v);
+  }
+
+  bool NextIsNumber() const { return pos_ < tokens_.size() && LooksNumeric(tokens_[pos_].text); }
+
+  void Once(bool& seen, const Token& keyword) {
+    if (seen) Fail(keyword, "'" + std::string(keyword.text) + "' given twice");
+    seen = true;
+  }
+
+  void Statement(const Token& k) {
+    const std::string_view w = k.text;
+    Camera& cam = scene_.camera;
+    if (w == "v") {
+      Once(seenV_, k);
+    } else if (w == "from") {
+      Once(seenFrom_, k);
+      cam.from = Triple("the eye position 'from x y z'");
+    } else if (w == "at") {
+      Once(seenAt_, k);
+      cam.at = Triple("the look-at point 'at x y z'");
+    } else if (w == "up") {
+      Once(seenUp_, k);
+      cam.up = Triple("the up vector 'up x y z'");
+    } else if (w == "angle") {
+      Once(seenAngle_, k);
+      cam.angleDegrees = Number("the field of view 'angle degrees'");
+      if (!(cam.angleDegrees > 0 && cam.angleDegrees < 180))
+        Fail(k, "expected an angle strictly between 0 and 180 degrees");
+    } else if (w == "hither") {
+      Once(seenHither_, k);
+      cam.hither = Number("the near distance 'hither h'");
+      if (cam.hither < 0) Fail(k, "expected a hither distance >= 0");
+    } else if (w == "resolution") {
+      Once(seenResolution_, k);
+      cam.width = int(Integer("the image width", 1, kMaxResolution));
+      cam.height = int(Integer("the image height", 1, kMaxResolution));
+    } else if (w == "b") {
+      Once(seenBackground_, k);
+      scene_.background = Colour("the background colour 'b r g b'", k);
+    } else if (w == "l") {
+      Light light;
+      light.position = Triple("the light position 'l x y z [r g b]'");
+      if (NextIsNumber()) light.colour = Colour("the light colour", k);
+      scene_.lights.push_back(light);
+    } else if (w == "f") {
+      MaterialStatement(k);
+    } else if (w == "s") {
+      Sphere s;
+      s.center = Triple("the sphere centre 's x y z r'");
+      s.radius = Number("the sphere radius");
+      if (!(s.radius > 0)) Fail(k, "expected a sphere radius > 0");
+      AddObject(k, s);
+    } else if (w == "c") {
+      Cone c;
+      c.base = Triple("the cone base 'c bx by bz br ax ay az ar'");
+      c.baseRadius = Number("the cone base radius");
+      c.apex = Triple("the cone apex");
+      c.apexRadius = Number("the cone apex radius");
+      if (c.baseRadius < 0 || c.apexRadius < 0) Fail(k, "expected cone radii >= 0");
+      if (c.baseRadius == 0 && c.apexRadius == 0) Fail(k, "expected a cone radius > 0");
+      const double h = Length(c.apex - c.base);
+      if (!(h > 1e-12 * std::max({1.0, Length(c.base), c.baseRadius, c.apexRadius})))
+        Fail(k, "expected a cone base and apex at different points");
+      AddObject(k, c);
+    } else if (w == "p" || w == "pp") {
+      PolygonStatement(k, w == "pp");
+    } else if (w == "transform") {
+      TransformStatement(k);
+    } else if (LooksNumeric(w)) {
+      Fail(k, "expected a keyword (v, from, at, up, angle, hither, resolution, b, l, f, s, c, "
+              "p, pp, transform), got the number '" + std::string(w) + "'");
+    } else {
+      Fail(k, "unknown keyword '" + std::string(w) +
+                  "' (expected v, from, at, up, angle, hither, resolution, b, l, f, s, c, p, "
+                  "pp or transform)");
+    }
+  }
+
+  Vec3 Colour(const char* what, const Token& k) {
+    const Vec3 c = Triple(what);
+    if (c.x < 0 || c.y < 0 || c.z < 0) Fail(k, std::string("expected ") + what + " >= 0");
+    return c;
+  }
+
+  void MaterialStatement(const Token& k) {
+    seenMaterial_ = true;  // even if malformed: do not also blame every following object
+    Material m;
+    m.colour = Colour("the material colour 'f r g b Kd Ks Shine T ior'", k);
+    m.kd = Number("Kd");
+    m.ks = Number("Ks");
+    m.shine = Number("Shine");
+    m.t = Number("T");
+    m.ior = Number("ior");
+    if (m.kd < 0 || m.ks < 0 || m.shine < 0 || m.t < 0)
+      Fail(k, "expected Kd, Ks, Shine and T >= 0");
+    // SPD writes ior 0 for opaque materials; a transparent one needs a real index.
+    if (m.ior < 0 || (m.t > 0 && !(m.ior > 0)))
+      Fail(k, "expected an index of refraction > 0 (or 0 for an opaque material)");
+    // Reuse an identical material (SPD files repeat `f` lines).
+    auto it = std::find(scene_.materials.begin(), scene_.materials.end(), m);
+    current_ = int(it - scene_.materials.begin());
+    if (it == scene_.materials.end()) scene_.materials.push_back(m);
+  }
+
+  void PolygonStatement(const Token& k, bool withNormals) {
+    const long n = Integer("the vertex count", 3, kMaxPolygonVertices);
+    Polygon p;
+    p.vertices.reserve(std::min<long>(n, 4096));
+    for (long i = 0; i < n; ++i) {
+      p.vertices.push_back(Triple("a polygon vertex"));
+      if (withNormals) {
+        const Token& at = tokens_[pos_ < tokens_.size() ? pos_ : tokens_.size() - 1];
+        const Vec3 nrm = Triple("a vertex normal");
+        const double len = Length(nrm);
+        if (!(len > 0) || !std::isfinite(len)) Fail(at, "expected a non-zero vertex normal");
+        p.normals.push_back(nrm / len);
+      }
+    }
+    // Newell's normal; its length is twice the area.
+    Vec3 normal;
+    double size = 0;
+    for (size_t i = 0; i < p.vertices.size(); ++i) {
+      const Vec3& a = p.vertices[i];
+      const Vec3& b = p.vertices[(i + 1) % p.vertices.size()];
+      normal += Vec3{(a.y - b.y) * (a.z + b.z), (a.z - b.z) * (a.x + b.x), (a.x - b.x) * (a.y + b.y)};
+      size = std::max(size, Length(b - p.vertices[0]));
+    }
+    const double area2 = Length(normal);
+    if (!std::isfinite(area2)) Fail(k, "polygon too large: its area overflows");
+    if (!(size > 0) || !(area2 > 1e-12 * size * size)) {
+      // SPD's teapot emits four zero-area triangles at the spout seam: they can never be
+      // hit, so they are dropped with a warning rather than rejecting the sample scenes.
+      scene_.warnings.push_back(Where(k) + ": warning: degenerate polygon (zero area) skipped");
+      return;
+    }
+    const Vec3 unit = normal / area2;
+    for (const Vec3& v : p.vertices) {
+      if (std::abs(Dot(unit, v - p.vertices[0])) > 1e-4 * size)
+        Fail(k, "non-planar polygon: vertices are off the plane by more than 1e-4 of its size");
+    }
+    AddObject(k, std::move(p));
+  }
+
+  void TransformStatement(const Token& k) {
+    if (pos_ < tokens_.size() && tokens_[pos_].text == "identity") {
+      ++pos_;
+      transform_.reset();
+      return;
+    }
+    Affine a;
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 4; ++c) a.m[r][c] = Number("a 'transform' matrix entry (12 numbers, row by row)");
+    double scale = 0;
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) scale = std::max(scale, std::abs(a.m[r][c]));
+    const double det = a.Determinant();
+    if (!(scale > 0) || !(std::abs(det) > 1e-12 * scale * scale * scale) || !std::isfinite(det))
+      Fail(k, "singular transform: the 3x3 part has determinant " + std::to_string(det));
+    if (a.IsIdentity()) transform_.reset(); else transform_ = a;
+  }
+
+  void AddObject(const Token& k, Shape shape) {
+    if (!seenMaterial_) Fail(k, "object before any material: expected an 'f' line first");
+    Primitive p;
+    p.shape = std::move(shape);
+    p.material = current_;
+    p.transform = transform_;
+    p.where = SourceLocation{file_, k.line, k.column};
+    scene_.objects.push_back(std::move(p));
+  }
+
+  void CheckComplete() {
+    const std::string end = WhereEnd() + ": ";
+    struct Need { bool seen; const char* what; };
+    const Need needs[] = {{seenV_, "'v' (the view block)"},      {seenFrom_, "'from'"},
+                          {seenAt_, "'at'"},                     {seenUp_, "'up'"},
+                          {seenAngle_, "'angle'"},               {seenHither_, "'hither'"},
+                          {seenResolution_, "'resolution'"},     {seenBackground_, "'b' (background)"}};
+    for (const Need& n : needs)
+      if (!n.seen) errors_.push_back(end + "missing " + std::string(n.what));
+    if (seenFrom_ && seenAt_ && seenUp_) {
+      const Camera& c = scene_.camera;
+      const Vec3 dir = c.at - c.from;
+      const double len = Length(dir);
+      if (!(len > 0)) {
+        errors_.push_back(end + "the view has 'from' equal to 'at'");
+      } else if (!(Length(Cross(dir / len, c.up)) > 1e-9 * Length(c.up))) {
+        errors_.push_back(end + "the view's 'up' is zero or parallel to the view direction");
+      }
+    }
+  }
+
+  std::vector<Token> tokens_;
+  std::string file_;
+  std::vector<std::string>& errors_;
+  size_t pos_ = 0;
+  int endLine_ = 1, endColumn_ = 1;
+  Scene scene_;
+  int current_ = -1;
+  std::optional<Affine> transform_;
+  bool seenV_ = false, seenFrom_ = false, seenAt_ = false, seenUp_ = false, seenAngle_ = false,
+       seenHither_ = false, seenResolution_ = false, seenBackground_ = false, seenMaterial_ = false;
+};
+
+}  // namespace
+
+std::optional<Scene> ParseNff(std::string_view text, const std::string& fileName,
+                              std::vector<std::string>& errors) {
+  errors.clear();
+  return NffParser(text, fileName, errors).Parse();
+}
+
+Scene ParseNffOrThrow(std::string_view text, const std::string& fileName) {
+  std::vector<std::string> errors;
+  std::optional<Scene> scene = ParseNff(text, fileName, errors);
+  if (scene) return std::move(*scene);
+  constexpr size_t kShown = 20;
+  std::string message = std::to_string(errors.size()) + " error" + (errors.size() > 1 ? "s" : "") +
+                        " in scene:";
+  for (size_t i = 0; i < errors.size() && i < kShown; ++i) message += "\n  " + errors[i];
+  if (errors.size() > kShown)
+    message += "\n  ... and " + std::to_string(errors.size() - kShown) + " more";
+  throw UserError(message);
+}
+
+Scene ReadNffFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw UserError(path + ": cannot open the scene file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw UserError(path + ": cannot read the scene file");
+  return ParseNffOrThrow(text.str(), path);
+}
+
+namespace {
+std::string Num(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+std::string Nums(const Vec3& v) { return Num(v.x) + " " + Num(v.y) + " " + Num(v.z); }
+}  // namespace
+
+std::string WriteNff(const Scene& s) {
+  std::string out;
+  const Camera& c = s.camera;
+  out += "b " + Nums(s.background) + "\n";
+  out += "v\nfrom " + Nums(c.from) + "\nat " + Nums(c.at) + "\nup " + Nums(c.up) + "\nangle " +
+         Num(c.angleDegrees) + "\nhither " + Num(c.hither) + "\nresolution " +
+         std::to_string(c.width) + " " + std::to_string(c.height) + "\n";
+  for (const Light& l : s.lights) out += "l " + Nums(l.position) + " " + Nums(l.colour) + "\n";
+  int material = -1;
+  std::optional<Affine> transform;
+  for (const Primitive& o : s.objects) {
+    if (o.material != material) {
+      const Material& m = s.materials.at(o.material);
+      out += "f " + Nums(m.colour) + " " + Num(m.kd) + " " + Num(m.ks) + " " + Num(m.shine) + " " +
+             Num(m.t) + " " + Num(m.ior) + "\n";
+      material = o.material;
+    }
+    const bool same = (o.transform.has_value() == transform.has_value()) &&
+                      (!o.transform || std::equal(&o.transform->m[0][0], &o.transform->m[0][0] + 12,
+                                                  &transform->m[0][0]));
+    if (!same) {
+      if (!o.transform) {
+        out += "transform identity\n";
+      } else {
+        out += "transform";
+        for (int r = 0; r < 3; ++r)
+          for (int k = 0; k < 4; ++k) out += " " + Num(o.transform->m[r][k]);
+        out += "\n";
+      }
+      transform = o.transform;
+    }
+    if (auto* sp = std::get_if<Sphere>(&o.shape)) {
+      out += "s " + Nums(sp->center) + " " + Num(sp->radius) + "\n";
+    } else if (auto* cn = std::get_if<Cone>(&o.shape)) {
+      out += "c\n" + Nums(cn->base) + " " + Num(cn->baseRadius) + "\n" + Nums(cn->apex) + " " +
+             Num(cn->apexRadius) + "\n";
+    } else if (auto* p = std::get_if<Polygon>(&o.shape)) {
+      const bool pp = !p->normals.empty();
+      out += (pp ? "pp " : "p ") + std::to_string(p->vertices.size()) + "\n";
+      for (size_t i = 0; i < p->vertices.size(); ++i) {
+        out += Nums(p->vertices[i]);
+        if (pp) out += " " + Nums(p->normals[i]);
+        out += "\n";
+      }
+    }
+  }
+  return out;
+}
+
+}  // namespace zephyr

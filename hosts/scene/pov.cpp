@@ -1,0 +1,132 @@
+// hosts/scene/pov.cpp — `zephyr export-pov`: our scene as POV-Ray 3.7 SDL.
+#include "hosts/scene/pov.h"
+
+#include <CLI/CLI.hpp>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+
+#include "fixed/check.h"
+#include "hosts/cmd/command.h"
+#include "hosts/scene/nff.h"
+
+namespace zephyr {
+
+namespace {
+
+std::string Num(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
+std::string Vec(const Vec3& v) { return "<" + Num(v.x) + ", " + Num(v.y) + ", " + Num(v.z) + ">"; }
+
+// POV-Ray weights a surface's own lighting (diffuse and highlight) by its opacity
+// 1 − transmit, where ours uses Kd and Ks as given; the exporter divides them back out.
+// Reflection and transmission are not weighted, in either renderer.
+std::string Texture(const Material& m) {
+  const double opacity = 1 - m.t;
+  const double scale = opacity > 1e-6 ? 1 / opacity : 0;
+  std::string s = "  pigment { rgb " + Vec(m.colour);
+  if (m.t > 0) s += " transmit " + Num(m.t);
+  s += " }\n  finish { ambient 0 emission 0 diffuse " + Num(m.kd * scale);
+  if (m.ks > 0) {
+    s += " phong " + Num(m.ks * scale) + " phong_size " + Num(m.shine);
+    s += " reflection { " + Num(m.ks) + " }";
+  }
+  s += " }\n";
+  if (m.t > 0) s += "  interior { ior " + Num(m.ior) + " }\n";
+  return s;
+}
+
+std::string Matrix(const Affine& a) {
+  // POV-Ray's matrix lists the columns of the linear part, then the translation.
+  std::string s = "  matrix <";
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 3; ++r) s += Num(a.m[r][c]) + ((c == 3 && r == 2) ? ">\n" : ", ");
+  return s;
+}
+
+}  // namespace
+
+std::string ExportPov(const Scene& scene, int depth) {
+  const Camera& c = scene.camera;
+  std::string out = "// Exported by `zephyr export-pov` from " + scene.source + "\n";
+  out += "#version 3.7;\nglobal_settings { assumed_gamma 1.0 max_trace_level " + std::to_string(depth) +
+         " adc_bailout 0 ambient_light 0 }\n";
+  out += "background { rgb " + Vec(scene.background) + " }\n";
+  // Our camera (hosts/trace/tracer.cpp PrimaryRays): `angle` spans the centres of the top and
+  // bottom rows. POV-Ray's image plane spans the pixel edges, so up and right are the
+  // pixel pitch times the pixel counts. Explicit vectors keep our right-handed frame.
+  const Vec3 forward = Normalize(c.at - c.from);
+  const Vec3 right = Normalize(Cross(forward, c.up));
+  const Vec3 up = Cross(right, forward);
+  const double pitch = 2 * std::tan(c.angleDegrees * M_PI / 360) / std::max(c.height - 1, 1);
+  out += "camera { perspective location " + Vec(c.from) + " direction " + Vec(forward) + " right " +
+         Vec(right * (pitch * c.width)) + " up " + Vec(up * (pitch * c.height)) + " }\n";
+  for (const Light& l : scene.lights)
+    out += "light_source { " + Vec(l.position) + " color rgb " + Vec(l.colour) + " }\n";
+  for (const Primitive& o : scene.objects) {
+    std::string body;
+    if (auto* s = std::get_if<Sphere>(&o.shape)) {
+      body = "sphere { " + Vec(s->center) + ", " + Num(s->radius) + "\n";
+    } else if (auto* cn = std::get_if<Cone>(&o.shape)) {
+      if (cn->baseRadius == cn->apexRadius)
+        body = "cylinder { " + Vec(cn->base) + ", " + Vec(cn->apex) + ", " + Num(cn->baseRadius) + " open\n";
+      else
+        body = "cone { " + Vec(cn->base) + ", " + Num(cn->baseRadius) + ", " + Vec(cn->apex) + ", " +
+               Num(cn->apexRadius) + " open\n";
+    } else {
+      const auto& p = std::get<Polygon>(o.shape);
+      if (p.normals.empty()) {
+        body = "polygon { " + std::to_string(p.vertices.size() + 1);
+        for (const Vec3& v : p.vertices) body += ", " + Vec(v);
+        body += ", " + Vec(p.vertices[0]) + "\n";
+      } else {
+        body = "mesh {\n";  // a fan of smooth triangles, as our tracer interpolates
+        for (size_t i = 1; i + 1 < p.vertices.size(); ++i)
+          body += "  smooth_triangle { " + Vec(p.vertices[0]) + ", " + Vec(p.normals[0]) + ", " +
+                  Vec(p.vertices[i]) + ", " + Vec(p.normals[i]) + ", " + Vec(p.vertices[i + 1]) + ", " +
+                  Vec(p.normals[i + 1]) + " }\n";
+      }
+    }
+    out += body + Texture(scene.materials.at(o.material));
+    if (o.transform) out += Matrix(*o.transform);
+    out += "}\n";
+  }
+  return out;
+}
+
+std::string PovrayCommand(const std::string& pov, const std::string& png, int width, int height) {
+  return "povray -D +I'" + pov + "' +O'" + png + "' +FN +W" + std::to_string(width) + " +H" +
+         std::to_string(height) + " -A File_Gamma=1.0 Output_Alpha=off";
+}
+
+namespace {
+
+CommandRegistration reg("export-pov", [](CLI::App& program) {
+  auto* cmd = program.add_subcommand("export-pov", "Write a scene as POV-Ray 3.7 SDL (a reference renderer)");
+  auto scene = std::make_shared<std::string>();
+  auto out = std::make_shared<std::string>();
+  auto depth = std::make_shared<int>(5);
+  cmd->add_option("scene", *scene, "NFF scene file")->required();
+  cmd->add_option("--out", *out, "Output .pov file (default: standard output)");
+  cmd->add_option("--depth", *depth, "Trace depth (POV-Ray max_trace_level)")->capture_default_str();
+  cmd->callback([scene, out, depth] {
+    if (*depth < 1 || *depth > 64) throw UserError("--depth: expected 1..64");
+    const Scene s = ReadNffFile(*scene);
+    const std::string text = ExportPov(s, *depth);
+    if (out->empty()) {
+      std::fwrite(text.data(), 1, text.size(), stdout);
+    } else {
+      std::ofstream f(*out);
+      f << text;
+      if (!f.flush()) throw UserError(*out + ": cannot write the POV-Ray file");
+      std::fprintf(stderr, "render it with: %s\n",
+                   PovrayCommand(*out, "out.png", s.camera.width, s.camera.height).c_str());
+    }
+  });
+});
+
+}  // namespace
+}  // namespace zephyr

@@ -1,0 +1,98 @@
+// hosts/scene/scene.h — a scene as every method sees it: camera, lights, materials and the
+// primitives in scene-file order (SPEC §2). Everything is double; a tracer templated on
+// float converts when it prepares its own copy.
+//
+// The object index used everywhere (primary-hit matrices, --dump-primary, accuracy
+// reports) is the position in Scene::objects, i.e. file order across all primitive kinds.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "hosts/scene/geometry.h"
+
+namespace zephyr {
+
+// Where an item came from in its scene file (1-based line and column).
+struct SourceLocation {
+  std::string file;
+  int line = 0;
+  int column = 0;
+  std::string ToString() const;  // "file:line:column"
+};
+
+// NFF `v` block. angle is the full vertical field of view in degrees between the centres of
+// the top and bottom pixel rows (SPEC §2); hither is the near clipping distance along each
+// primary ray.
+struct Camera {
+  Vec3 from, at, up;
+  double angleDegrees = 45;
+  double hither = 0;
+  int width = 0, height = 0;
+};
+
+struct Light {
+  Vec3 position;
+  Vec3 colour{1, 1, 1};
+};
+
+// NFF `f r g b Kd Ks Shine T ior` (docs/shading.md says how each term is used).
+struct Material {
+  Vec3 colour{1, 1, 1};
+  double kd = 1, ks = 0, shine = 0, t = 0, ior = 1;
+  bool operator==(const Material&) const = default;
+};
+
+struct Sphere {
+  Vec3 center;
+  double radius = 1;
+};
+
+// NFF `c`: a truncated cone between base and apex (a cylinder when the radii are equal),
+// open — no caps.
+struct Cone {
+  Vec3 base;
+  double baseRadius = 1;
+  Vec3 apex;
+  double apexRadius = 1;
+};
+
+// NFF `p` (normals empty) or `pp` (one normal per vertex, interpolated across the face).
+// Planar, at least three vertices; the inside is decided by the even-odd rule, so the
+// concave gear outlines of SPD `gears` work too.
+struct Polygon {
+  std::vector<Vec3> vertices;
+  std::vector<Vec3> normals;
+};
+
+using Shape = std::variant<Sphere, Cone, Polygon>;
+enum class ShapeKind { kSphere = 0, kCone = 1, kPolygon = 2 };
+inline constexpr int kShapeKinds = 3;
+const char* ShapeKindName(ShapeKind kind);  // "sphere", "cone", "polygon"
+
+struct Primitive {
+  Shape shape;
+  int material = 0;                  // index into Scene::materials
+  std::optional<Affine> transform;   // object -> world (docs/scene-format.md); none = identity
+  SourceLocation where;
+
+  ShapeKind Kind() const { return static_cast<ShapeKind>(shape.index()); }
+};
+
+struct Scene {
+  Camera camera;
+  Vec3 background{0, 0, 0};
+  std::vector<Light> lights;
+  std::vector<Material> materials;
+  std::vector<Primitive> objects;  // file order: the object index every method reports
+  std::string source;              // file name, for messages and reports
+  std::vector<std::string> warnings;  // "file:line:column: warning: ..." (printed by render)
+
+  // A radius that encloses every primitive and the eye, centred at the origin — used to
+  // scale epsilons.
+  double Extent() const;
+};
+
+}  // namespace zephyr

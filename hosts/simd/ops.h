@@ -1,0 +1,26 @@
+// hosts/simd/ops.h — a helper of the primary pass on top of bitserial/multi.h: clamps whose
+// saturation is expected (it means "no hit", not an error) must not raise the per-PE
+// overflow flag that marks a pixel uncertain.
+#pragma once
+
+#include <algorithm>
+#include <vector>
+
+#include "bitserial/multi.h"
+
+namespace zephyr::simd {
+
+// Runs `body` with overflow flags it raises discarded (charged as two flag operations:
+// save and restore).
+template <typename F>
+void WithExpectedSaturation(bitserial::Machine& m, F&& body) {
+  const size_t words = m.WordsPerPlane();
+  std::vector<bitserial::Word> saved(m.OverflowPlane(), m.OverflowPlane() + words);
+  body();
+  std::copy(saved.begin(), saved.end(), m.OverflowPlane());
+  bitserial::MicroOpCounts c;
+  c.Add(bitserial::MicroOp::FlagOp, 2);
+  m.Charge("saturateClamp", c);
+}
+
+}  // namespace zephyr::simd

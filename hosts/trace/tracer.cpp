@@ -1,0 +1,424 @@
+#include "hosts/trace/tracer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <nlohmann/json.hpp>
+
+#include "fixed/check.h"
+#include "hosts/trace/sphere_kernels.h"
+
+namespace zephyr {
+
+Precision ParsePrecision(const std::string& name) {
+  if (name == "float") return Precision::kFloat;
+  if (name == "double") return Precision::kDouble;
+  throw UserError("--precision: expected 'float' or 'double', got '" + name + "'");
+}
+SphereTest ParseSphereTest(const std::string& name) {
+  if (name == "hb" || name == "hearn-baker") return SphereTest::kHearnBaker;
+  if (name == "naive") return SphereTest::kNaive;
+  throw UserError("--sphere-test: expected 'hb' (Hearn-Baker) or 'naive', got '" + name + "'");
+}
+const char* PrecisionName(Precision p) { return p == Precision::kFloat ? "float" : "double"; }
+const char* SphereTestName(SphereTest s) { return s == SphereTest::kHearnBaker ? "hb" : "naive"; }
+
+PrimaryRays::PrimaryRays(const Camera& c) : eye_(c.from) {
+  forward_ = Normalize(c.at - c.from);
+  right_ = Normalize(Cross(forward_, c.up));
+  up_ = Cross(right_, forward_);
+  const double span = 2 * std::tan(c.angleDegrees * M_PI / 360);
+  pitch_ = span / std::max(c.height - 1, 1);
+  halfWidth_ = 0.5 * (c.width - 1);
+  halfHeight_ = 0.5 * (c.height - 1);
+}
+
+PrimaryRay PrimaryRays::At(int x, int y) const {
+  const double u = (x - halfWidth_) * pitch_;
+  const double v = (halfHeight_ - y) * pitch_;
+  return {eye_, Normalize(forward_ + right_ * u + up_ * v)};
+}
+
+void TraceStats::Add(const TraceStats& o) {
+  for (int i = 0; i < kRayKinds; ++i) rays[i] += o.rays[i];
+  for (int i = 0; i < kShapeKinds; ++i) tests[i] += o.tests[i];
+}
+
+nlohmann::json TraceStats::ToJson() const {
+  nlohmann::json j;
+  const char* rayNames[kRayKinds] = {"primary", "shadow", "reflected", "refracted"};
+  uint64_t total = 0;
+  for (int i = 0; i < kRayKinds; ++i) {
+    j["rays"][rayNames[i]] = rays[i];
+    total += rays[i];
+  }
+  j["rays"]["total"] = total;
+  total = 0;
+  for (int i = 0; i < kShapeKinds; ++i) {
+    j["tests"][ShapeKindName(ShapeKind(i))] = tests[i];
+    total += tests[i];
+  }
+  j["tests"]["total"] = total;
+  return j;
+}
+
+Vec3 Tracer::TracePixel(int x, int y, TraceStats& stats, PrimaryHit* primary) const {
+  const PrimaryHit hit = FirstHit(rays_.At(x, y), stats);
+  if (primary) *primary = hit;
+  return ShadeFromPrimaryHit(hit, stats);
+}
+
+namespace {
+
+// A primitive converted to the tracer's scalar, with what the tests need precomputed.
+template <typename T>
+struct Prepared {
+  using V = Vec3T<T>;
+  ShapeKind kind;
+  int material;
+  bool transformed = false;
+  T inverse[3][4];  // world -> object
+  // Sphere
+  V centre;
+  T radius = 0, radius2 = 0;
+  // Cone
+  V base, axis;
+  T height = 0, r0 = 0, slope = 0;
+  // Polygon
+  V normal, v0;
+  int dropAxis = 0;
+  std::vector<T> uv;               // vertices projected on the two kept axes
+  std::vector<V> vertices, normals;  // normals only for `pp`
+
+  V ToObjectPoint(const V& p) const {
+    return {inverse[0][0] * p.x + inverse[0][1] * p.y + inverse[0][2] * p.z + inverse[0][3],
+            inverse[1][0] * p.x + inverse[1][1] * p.y + inverse[1][2] * p.z + inverse[1][3],
+            inverse[2][0] * p.x + inverse[2][1] * p.y + inverse[2][2] * p.z + inverse[2][3]};
+  }
+  V ToObjectVector(const V& d) const {
+    return {inverse[0][0] * d.x + inverse[0][1] * d.y + inverse[0][2] * d.z,
+            inverse[1][0] * d.x + inverse[1][1] * d.y + inverse[1][2] * d.z,
+            inverse[2][0] * d.x + inverse[2][1] * d.y + inverse[2][2] * d.z};
+  }
+  // Normals map by the inverse transpose.
+  V NormalToWorld(const V& n) const {
+    return {inverse[0][0] * n.x + inverse[1][0] * n.y + inverse[2][0] * n.z,
+            inverse[0][1] * n.x + inverse[1][1] * n.y + inverse[2][1] * n.z,
+            inverse[0][2] * n.x + inverse[1][2] * n.y + inverse[2][2] * n.z};
+  }
+};
+
+template <typename T>
+Prepared<T> Prepare(const Primitive& p) {
+  using V = Vec3T<T>;
+  Prepared<T> r;
+  r.kind = p.Kind();
+  r.material = p.material;
+  if (p.transform) {
+    r.transformed = true;
+    const Affine inv = p.transform->Inverse();
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 4; ++j) r.inverse[i][j] = T(inv.m[i][j]);
+  }
+  if (auto* s = std::get_if<Sphere>(&p.shape)) {
+    r.centre = V(s->center);
+    r.radius = T(s->radius);
+    r.radius2 = T(s->radius * s->radius);
+  } else if (auto* c = std::get_if<Cone>(&p.shape)) {
+    const Vec3 axis = c->apex - c->base;
+    const double h = Length(axis);
+    r.base = V(c->base);
+    r.axis = V(axis / h);
+    r.height = T(h);
+    r.r0 = T(c->baseRadius);
+    r.slope = T((c->apexRadius - c->baseRadius) / h);
+  } else {
+    const auto& poly = std::get<Polygon>(p.shape);
+    Vec3 n;  // Newell's normal, in double
+    for (size_t i = 0; i < poly.vertices.size(); ++i) {
+      const Vec3& a = poly.vertices[i];
+      const Vec3& b = poly.vertices[(i + 1) % poly.vertices.size()];
+      n += Vec3{(a.y - b.y) * (a.z + b.z), (a.z - b.z) * (a.x + b.x), (a.x - b.x) * (a.y + b.y)};
+    }
+    n = Normalize(n);
+    r.normal = V(n);
+    r.v0 = V(poly.vertices[0]);
+    const double ax = std::abs(n.x), ay = std::abs(n.y), az = std::abs(n.z);
+    r.dropAxis = (ax >= ay && ax >= az) ? 0 : (ay >= az ? 1 : 2);
+    for (const Vec3& v : poly.vertices) {
+      r.vertices.push_back(V(v));
+      r.uv.push_back(T(v[(r.dropAxis + 1) % 3]));
+      r.uv.push_back(T(v[(r.dropAxis + 2) % 3]));
+    }
+    for (const Vec3& v : poly.normals) r.normals.push_back(V(v));
+  }
+  return r;
+}
+
+// Roots of one prepared object along o + t d (world space), in (tMin, inf).
+template <typename T>
+int Intersect(const Prepared<T>& obj, SphereTest form, Vec3T<T> o, Vec3T<T> d, T tMin, T* roots) {
+  T scale = T(1);
+  if (obj.transformed) {
+    o = obj.ToObjectPoint(o);
+    d = obj.ToObjectVector(d);
+  }
+  switch (obj.kind) {
+    case ShapeKind::kSphere: {
+      // The sphere forms want a unit direction; under a transform t_object = t·|d|.
+      if (obj.transformed) {
+        const T len = Length(d);
+        scale = len;
+        d = d / len;
+      }
+      const int n = IntersectSphere(form, o, d, obj.centre, obj.radius2, tMin * scale, roots);
+      for (int i = 0; i < n; ++i) roots[i] /= scale;
+      return n;
+    }
+    case ShapeKind::kCone:
+      return IntersectCone(o, d, obj.base, obj.axis, obj.height, obj.r0, obj.slope, tMin, roots);
+    case ShapeKind::kPolygon: {
+      const T nd = Dot(obj.normal, d);
+      if (nd == T(0)) return 0;
+      const T t = Dot(obj.normal, obj.v0 - o) / nd;
+      if (!(t > tMin)) return 0;
+      const Vec3T<T> p = o + d * t;
+      if (!InsidePolygon2D(obj.uv, p[(obj.dropAxis + 1) % 3], p[(obj.dropAxis + 2) % 3])) return 0;
+      roots[0] = t;
+      return 1;
+    }
+  }
+  return 0;
+}
+
+// Barycentric weights of p in triangle (a, b, c); all >= -eps means inside.
+template <typename T>
+void Barycentric(const Vec3T<T>& p, const Vec3T<T>& a, const Vec3T<T>& b, const Vec3T<T>& c,
+                 T& u, T& v, T& w) {
+  const Vec3T<T> v0 = b - a, v1 = c - a, v2 = p - a;
+  const T d00 = Dot(v0, v0), d01 = Dot(v0, v1), d11 = Dot(v1, v1), d20 = Dot(v2, v0), d21 = Dot(v2, v1);
+  const T den = d00 * d11 - d01 * d01;
+  v = (d11 * d20 - d01 * d21) / den;
+  w = (d00 * d21 - d01 * d20) / den;
+  u = T(1) - v - w;
+}
+
+// Unit world-space normal at world point p (not yet faced toward the ray).
+template <typename T>
+Vec3T<T> NormalAt(const Prepared<T>& obj, const Vec3T<T>& worldP) {
+  using V = Vec3T<T>;
+  const V p = obj.transformed ? obj.ToObjectPoint(worldP) : worldP;
+  V n;
+  switch (obj.kind) {
+    case ShapeKind::kSphere:
+      n = (p - obj.centre) / obj.radius;
+      break;
+    case ShapeKind::kCone: {
+      const V w = p - obj.base;
+      const T s = Dot(w, obj.axis);
+      const V q = w - obj.axis * s;
+      const T ql = Length(q);
+      const V radial = ql > T(0) ? q / ql : V{};
+      n = radial - obj.axis * obj.slope;
+      break;
+    }
+    case ShapeKind::kPolygon:
+      n = obj.normal;
+      if (!obj.normals.empty()) {
+        // Fan triangles from vertex 0: interpolate in the one that holds p.
+        for (size_t i = 1; i + 1 < obj.vertices.size(); ++i) {
+          T u, v, w;
+          Barycentric(p, obj.vertices[0], obj.vertices[i], obj.vertices[i + 1], u, v, w);
+          const T eps = T(-1e-4);
+          if (u >= eps && v >= eps && w >= eps) {
+            const V m = obj.normals[0] * u + obj.normals[i] * v + obj.normals[i + 1] * w;
+            if (Length(m) > T(0)) n = m;
+            break;
+          }
+        }
+      }
+      break;
+  }
+  if (obj.transformed) n = obj.NormalToWorld(n);
+  return Normalize(n);
+}
+
+template <typename T>
+class TracerT final : public Tracer {
+  using V = Vec3T<T>;
+
+ public:
+  TracerT(const Scene& scene, const TraceOptions& options) : Tracer(scene, options) {
+    objects_.reserve(scene.objects.size());
+    for (const Primitive& p : scene.objects) {
+      objects_.push_back(Prepare<T>(p));
+      ++kindCount_[int(p.Kind())];
+      // Untransformed spheres go to the vector kernel; the rest stay on the scalar path.
+      const Prepared<T>& obj = objects_.back();
+      const int index = int(objects_.size()) - 1;
+      if (obj.kind == ShapeKind::kSphere && !obj.transformed) {
+        spheres_.Push(obj.centre, obj.radius2);
+        sphereObject_.push_back(index);
+      } else {
+        scalarObjects_.push_back(index);
+      }
+    }
+    // Secondary rays start this far along, so they do not re-hit their own surface.
+    // Float keeps ~7 digits: 1e-4 of the scene's size is well above its rounding.
+    const double relative = std::is_same_v<T, float> ? 1e-4 : 1e-9;
+    epsilon_ = T(relative * scene.Extent());
+    hither_ = T(std::max(scene.camera.hither, 0.0));
+  }
+
+  PrimaryHit FirstHit(const PrimaryRay& ray, TraceStats& stats) const override {
+    ++stats.rays[int(RayKind::kPrimary)];
+    T t;
+    const int object = Nearest(V(ray.origin), V(ray.direction), hither_, stats, t);
+    return {object, object >= 0 ? double(t) : 0.0, ray.direction};
+  }
+
+  Vec3 ShadeFromPrimaryHit(const PrimaryHit& hit, TraceStats& stats) const override {
+    if (hit.object < 0) return scene_.background;
+    ZEPHYR_CHECK_LT(size_t(hit.object), objects_.size());
+    const V colour = Shade(V(scene_.camera.from), V(hit.direction), hit.object, T(hit.t), 1, stats);
+    return Vec3(colour);
+  }
+
+ private:
+  int Nearest(const V& o, const V& d, T tMin, TraceStats& stats, T& tBest) const {
+    for (int k = 0; k < kShapeKinds; ++k) stats.tests[k] += kindCount_[k];
+    // The same answer as one scalar pass over objects_ in order keeping strictly nearer
+    // roots: the kernel (bit-identical to IntersectSphere) gives the nearest untransformed
+    // sphere, lowest index among equal t; the rest join it with ties to the lower index.
+    int best = -1;
+    const int32_t k = NearestSphere(options_.sphereTest, spheres_, o, d, tMin, &tBest);
+    if (k >= 0) best = sphereObject_[k];
+    T roots[2];
+    for (const int i : scalarObjects_) {
+      if (Intersect(objects_[i], options_.sphereTest, o, d, tMin, roots) > 0 &&
+          (roots[0] < tBest || (roots[0] == tBest && i < best))) {
+        tBest = roots[0];
+        best = i;
+      }
+    }
+    return best;
+  }
+
+  // Light let through toward a light `dist` away: every surface crossed multiplies it by
+  // that surface's transparency T (0 for opaque: full shadow).
+  T Transmission(const V& p, const V& toLight, T dist, TraceStats& stats) const {
+    ++stats.rays[int(RayKind::kShadow)];
+    for (int k = 0; k < kShapeKinds; ++k) stats.tests[k] += kindCount_[k];
+    T through = T(1);
+    T roots[2];
+    for (const Prepared<T>& obj : objects_) {
+      const int n = Intersect(obj, options_.sphereTest, p, toLight, epsilon_, roots);
+      for (int i = 0; i < n; ++i) {
+        if (roots[i] >= dist) break;
+        through *= T(scene_.materials[obj.material].t);
+        if (through == T(0)) return through;
+      }
+    }
+    return through;
+  }
+
+  V Trace(const V& o, const V& d, int depth, RayKind kind, TraceStats& stats) const {
+    ++stats.rays[int(kind)];
+    T t;
+    const int object = Nearest(o, d, epsilon_, stats, t);
+    if (object < 0) return V(scene_.background);
+    return Shade(o, d, object, t, depth, stats);
+  }
+
+  V Shade(const V& o, const V& d, int object, T t, int depth, TraceStats& stats) const {
+    const Prepared<T>& obj = objects_[object];
+    const Material& m = scene_.materials[obj.material];
+    const V p = o + d * t;
+    V n = NormalAt(obj, p);
+    const bool inside = Dot(n, d) > T(0);
+    if (inside) n = -n;  // face the viewer
+    const V surface(m.colour);
+    V colour{};
+    for (const Light& light : scene_.lights) {
+      V toLight = V(light.position) - p;
+      const T dist = Length(toLight);
+      toLight = toLight / dist;
+      const T nl = Dot(n, toLight);
+      if (nl <= T(0)) continue;
+      const T through = Transmission(p, toLight, dist, stats);
+      if (through == T(0)) continue;
+      V local = Mul(surface, V(light.colour)) * (T(m.kd) * nl);
+      if (m.ks > 0) {
+        // Phong: the mirror direction of the light against the direction to the eye.
+        const V r = n * (T(2) * nl) - toLight;
+        const T rv = -Dot(r, d);
+        if (rv > T(0)) local += V(light.colour) * (T(m.ks) * std::pow(rv, T(m.shine)));
+      }
+      colour += local * through;
+    }
+    if (depth < options_.depth) {
+      const T dn = Dot(d, n);  // < 0: n faces the incoming ray
+      const V reflected = d - n * (T(2) * dn);
+      if (m.ks > 0) colour += Trace(p, reflected, depth + 1, RayKind::kReflected, stats) * T(m.ks);
+      if (m.t > 0) {
+        // Snell: entering uses 1/ior, leaving uses ior/1.
+        const T eta = inside ? T(m.ior) : T(1) / T(m.ior);
+        const T cosi = -dn;
+        const T k = T(1) - eta * eta * (T(1) - cosi * cosi);
+        V dir;
+        RayKind kind = RayKind::kRefracted;
+        if (k < T(0)) {  // total internal reflection: the transmitted share is reflected
+          dir = reflected;
+          kind = RayKind::kReflected;
+        } else {
+          dir = Normalize(d * eta + n * (eta * cosi - std::sqrt(k)));
+        }
+        colour += Trace(p, dir, depth + 1, kind, stats) * T(m.t);
+      }
+    }
+    return colour;
+  }
+
+  std::vector<Prepared<T>> objects_;
+  SphereArrays<T> spheres_;          // the untransformed spheres, for NearestSphere
+  std::vector<int> sphereObject_;    // spheres_ index -> objects_ index (increasing)
+  std::vector<int> scalarObjects_;   // every other object, in order
+  uint64_t kindCount_[kShapeKinds] = {};
+  T epsilon_, hither_;
+};
+
+}  // namespace
+
+std::unique_ptr<Tracer> Tracer::Create(const Scene& scene, const TraceOptions& options) {
+  if (options.depth < 1 || options.depth > 64)
+    throw UserError("--depth: expected 1..64, got " + std::to_string(options.depth));
+  if (options.precision == Precision::kFloat) return std::make_unique<TracerT<float>>(scene, options);
+  return std::make_unique<TracerT<double>>(scene, options);
+}
+
+std::optional<double> IntersectObject(const Scene& scene, int object, const Vec3& origin,
+                                      const Vec3& direction, double tMin, SphereTest form) {
+  ZEPHYR_CHECK(object >= 0 && size_t(object) < scene.objects.size());
+  const Prepared<double> obj = Prepare<double>(scene.objects[object]);
+  double roots[2];
+  if (Intersect(obj, form, origin, direction, tMin, roots) == 0) return std::nullopt;
+  return roots[0];
+}
+
+void RenderRegion(const Tracer& tracer, int x0, int y0, int w, int h, std::vector<Vec3>& out,
+                  TraceStats& stats, std::vector<PrimaryHit>* primary,
+                  const std::function<void()>& onRow) {
+  const Camera& c = tracer.GetScene().camera;
+  ZEPHYR_CHECK(x0 >= 0 && y0 >= 0 && w >= 0 && h >= 0 && x0 + w <= c.width && y0 + h <= c.height);
+  out.resize(size_t(w) * h);
+  if (primary) primary->resize(size_t(w) * h);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const size_t i = size_t(y) * w + x;
+      out[i] = tracer.TracePixel(x0 + x, y0 + y, stats, primary ? &(*primary)[i] : nullptr);
+    }
+    if (onRow) onRow();
+  }
+}
+
+}  // namespace zephyr

@@ -1,0 +1,116 @@
+// hosts/trace/tracer.h — the exhaustive Whitted tracer every method shares (SPEC §2, paper §2).
+//
+// It comes in three pieces so the other methods can swap the middle one:
+//   (a) PrimaryRays::At(x, y)        — the eye ray through pixel (x, y), in double;
+//   (b) Tracer::FirstHit(ray)        — the first object along it (every object tested);
+//   (c) Tracer::ShadeFromPrimaryHit  — the colour from that hit: shadow rays, reflection,
+//                                      refraction, recursively (docs/shading.md).
+// The sequential method is (a)+(b)+(c); the SIMD method does (b) on the emulated array and
+// hands the host a PrimaryHit per pixel for (c). RenderRegion renders any rectangle with no
+// per-image state, so a frame rendered alone is bit-identical to the same pixels of a full
+// image (the distributed methods rely on it).
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json_fwd.hpp>
+
+#include "hosts/scene/scene.h"
+#include "hosts/trace/intersect.h"
+
+namespace zephyr {
+
+enum class Precision { kFloat, kDouble };
+
+struct TraceOptions {
+  int depth = 5;  // 1 = primary rays only (local light); each bounce adds one level
+  Precision precision = Precision::kDouble;
+  SphereTest sphereTest = SphereTest::kHearnBaker;
+};
+
+// Parses "float"/"double" and "hb"/"naive" (UserError otherwise).
+Precision ParsePrecision(const std::string& name);
+SphereTest ParseSphereTest(const std::string& name);
+const char* PrecisionName(Precision p);
+const char* SphereTestName(SphereTest s);
+
+struct PrimaryRay {
+  Vec3 origin;     // the eye
+  Vec3 direction;  // unit length
+};
+
+// (a) Eye rays. Pixel (0, 0) is the top-left; rows go down. The `angle` spans the centres
+// of the top and bottom rows; pixels are square.
+class PrimaryRays {
+ public:
+  explicit PrimaryRays(const Camera& camera);
+  PrimaryRay At(int x, int y) const;
+
+ private:
+  Vec3 eye_, forward_, right_, up_;
+  double pitch_, halfWidth_, halfHeight_;
+};
+
+// What the primary pass hands to shading: the object index in Scene::objects (-1: none),
+// t = distance from the eye along the unit direction.
+struct PrimaryHit {
+  int object = -1;
+  double t = 0;
+  Vec3 direction;
+};
+
+enum class RayKind { kPrimary = 0, kShadow = 1, kReflected = 2, kRefracted = 3 };
+inline constexpr int kRayKinds = 4;
+
+// Counters for one render (or one frame); add them up across frames and workers.
+struct TraceStats {
+  uint64_t rays[kRayKinds] = {};
+  uint64_t tests[kShapeKinds] = {};  // ray–primitive tests performed, by primitive kind
+  void Add(const TraceStats& other);
+  nlohmann::json ToJson() const;     // {"rays": {...}, "tests": {...}}
+};
+
+class Tracer {
+ public:
+  static std::unique_ptr<Tracer> Create(const Scene& scene, const TraceOptions& options);
+  virtual ~Tracer() = default;
+
+  const Scene& GetScene() const { return scene_; }
+  const TraceOptions& Options() const { return options_; }
+  const PrimaryRays& Rays() const { return rays_; }
+
+  // (b) The nearest hit beyond the camera's hither distance, testing every object.
+  virtual PrimaryHit FirstHit(const PrimaryRay& ray, TraceStats& stats) const = 0;
+  // (c) Linear RGB of the pixel whose primary ray from the eye along hit.direction first
+  // meets hit.object at hit.t (background when hit.object < 0).
+  virtual Vec3 ShadeFromPrimaryHit(const PrimaryHit& hit, TraceStats& stats) const = 0;
+
+  Vec3 TracePixel(int x, int y, TraceStats& stats, PrimaryHit* primary = nullptr) const;
+
+ protected:
+  Tracer(const Scene& scene, const TraceOptions& options)
+      : scene_(scene), options_(options), rays_(scene.camera) {}
+  const Scene& scene_;
+  TraceOptions options_;
+  PrimaryRays rays_;
+};
+
+// One object against one ray, in double, with the chosen sphere form: the nearest t in
+// (tMin, inf), or nullopt. direction need not be unit length (t is in its units). For
+// methods that recompute a pixel on the host.
+std::optional<double> IntersectObject(const Scene& scene, int object, const Vec3& origin,
+                                      const Vec3& direction, double tMin = 0,
+                                      SphereTest form = SphereTest::kHearnBaker);
+
+// Renders the w×h rectangle at (x0, y0): pixels row by row into out (resized to w*h, linear
+// RGB), and, if primary is given, the primary hits likewise. onRow is called after each row.
+void RenderRegion(const Tracer& tracer, int x0, int y0, int w, int h, std::vector<Vec3>& out,
+                  TraceStats& stats, std::vector<PrimaryHit>* primary = nullptr,
+                  const std::function<void()>& onRow = {});
+
+}  // namespace zephyr

@@ -1,0 +1,167 @@
+// The frame farm's pieces, in process: frames, the queue, the message header checks, the
+// traffic account and the checkpoint file (torn records, another job's checkpoint).
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "fixed/check.h"
+#include "hosts/farm/frame.h"
+#include "hosts/farm/checkpoint.h"
+#include "hosts/farm/protocol.h"
+#include "tests/farm/mpi_launch.h"
+
+namespace zephyr {
+namespace {
+
+TEST(FrameGrid, CoversTheImageWithSmallerEdgeFrames) {
+  FrameGrid grid(10, 7, 4);
+  ASSERT_EQ(grid.Columns(), 3);
+  ASSERT_EQ(grid.Rows(), 2);
+  std::vector<int> covered(10 * 7, 0);
+  for (const Frame& f : grid.All())
+    for (int y = f.y0; y < f.y0 + f.height; ++y)
+      for (int x = f.x0; x < f.x0 + f.width; ++x) covered[y * 10 + x]++;
+  for (int c : covered) EXPECT_EQ(c, 1);
+  EXPECT_EQ(grid.At(2), (Frame{2, 8, 0, 2, 4}));  // right edge: 2 wide
+  EXPECT_EQ(grid.At(5), (Frame{5, 8, 4, 2, 3}));  // corner: 2×3
+  EXPECT_EQ(FrameGrid(5, 5, 100).Count(), 1);     // the whole image in one frame
+  EXPECT_EQ(FrameGrid(5, 5, 1).Count(), 25);
+}
+
+TEST(FrameGrid, FrameSizeZeroIsAUserError) {
+  try {
+    FrameGrid(8, 8, 0);
+    FAIL() << "no error";
+  } catch (const UserError& e) {
+    EXPECT_NE(std::string(e.what()).find("frame size must be at least 1"), std::string::npos);
+  }
+}
+
+TEST(FrameGrid, PasteAndCutAreInverse) {
+  const int w = 5, h = 4;
+  std::vector<std::byte> image(w * h * 2);
+  for (std::size_t i = 0; i < image.size(); ++i) image[i] = std::byte(i);
+  FrameGrid grid(w, h, 3);
+  std::vector<std::byte> copy(image.size(), std::byte{0xEE});
+  for (const Frame& f : grid.All()) PasteFrame(f, CutFrame(f, image, w, 2), copy, w, 2);
+  EXPECT_EQ(copy, image);
+}
+
+TEST(FrameQueue, HandsOutInOrderAndRequeuedFramesGoFirst) {
+  FrameQueue q({0, 1, 2, 3});
+  EXPECT_EQ(q.Next(), 0);
+  EXPECT_EQ(q.Next(), 1);
+  q.Requeue(0);
+  EXPECT_EQ(q.Next(), 0);
+  EXPECT_EQ(q.Next(), 2);
+  EXPECT_EQ(q.Size(), 1u);
+}
+
+std::vector<std::byte> Message(MessageKind kind, std::size_t payload) {
+  std::vector<std::byte> p(payload, std::byte{7});
+  return EncodeMessage({.kind = kind, .frameId = 3, .payloadBytes = payload, .aux = 9}, p);
+}
+
+void ExpectRejected(std::vector<std::byte> m, const std::string& why) {
+  try {
+    DecodeHeader(m, "rank 1");
+    FAIL() << "accepted: " << why;
+  } catch (const UserError& e) {
+    EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+  }
+}
+
+TEST(MessageHeader, RoundTripsAndRejectsEveryMalformation) {
+  auto m = Message(MessageKind::kResult, 5);
+  ASSERT_EQ(m.size(), MessageHeader::kBytes + 5);
+  MessageHeader h = DecodeHeader(m, "rank 1");
+  EXPECT_EQ(h.kind, MessageKind::kResult);
+  EXPECT_EQ(h.frameId, 3);
+  EXPECT_EQ(h.payloadBytes, 5u);
+  EXPECT_EQ(h.aux, 9u);
+
+  ExpectRejected(std::vector<std::byte>(m.begin(), m.begin() + 39), "shorter than the 40-byte");
+  auto bad = m;
+  bad[0] = std::byte{0};
+  ExpectRejected(bad, "bad magic");
+  bad = m;
+  bad[4] = std::byte{2};
+  ExpectRejected(bad, "protocol version 2");
+  bad = m;
+  bad[6] = std::byte{0};
+  ExpectRejected(bad, "unknown message kind 0");
+  bad = m;
+  bad[6] = std::byte{8};
+  ExpectRejected(bad, "unknown message kind 8");
+  bad = m;
+  bad.push_back(std::byte{1});  // one byte more than the header announces
+  ExpectRejected(bad, "announces 5 payload bytes but 6 arrived");
+  bad = m;
+  bad[12] = std::byte{1};
+  ExpectRejected(bad, "reserved");
+}
+
+TEST(TrafficAccount, CountsPayloadAndEnvelopeByKindAndRoundTripsJson) {
+  TrafficAccount a;
+  a.Add(MessageKind::kWork, 16);
+  a.Add(MessageKind::kWork, 36);
+  a.Add(MessageKind::kStop, 0);
+  EXPECT_EQ(a.Of(MessageKind::kWork).messages, 2u);
+  EXPECT_EQ(a.Of(MessageKind::kWork).payloadBytes, 52u);
+  EXPECT_EQ(a.Of(MessageKind::kWork).envelopeBytes, 80u);
+  EXPECT_EQ(a.Total().envelopeBytes, 120u);
+  TrafficAccount b = TrafficAccount::FromJson(a.ToJson());
+  EXPECT_EQ(b.ToJson(), a.ToJson());
+  EXPECT_THROW(TrafficAccount::FromJson(nlohmann::json{{"work", {{"messages", "x"}}}}), UserError);
+}
+
+TEST(FrameCheckpoint, KeepsFramesAndDropsATornRecord) {
+  testing::TempDir dir;
+  const std::string path = dir / "out.png.frames";
+  CheckpointKey key{8, 8, 4, 3, JobHash("scene")};
+  std::vector<std::byte> a(4 * 4 * 3, std::byte{1}), b(4 * 4 * 3, std::byte{2});
+  {
+    FrameCheckpoint c = FrameCheckpoint::Create(path, key);
+    c.Append(0, a);
+    c.Append(3, b);
+  }
+  const auto full = std::filesystem::file_size(path);
+  std::filesystem::resize_file(path, full - 5);  // the second record torn by a crash
+  {
+    FrameCheckpoint c = FrameCheckpoint::Resume(path, key);
+    ASSERT_EQ(c.Frames().size(), 1u);
+    EXPECT_EQ(c.Frames().at(0), a);
+    EXPECT_GT(c.DroppedBytes(), 0u);
+    c.Append(3, b);  // appended after the cut, not after the torn bytes
+  }
+  FrameCheckpoint c = FrameCheckpoint::Resume(path, key);
+  ASSERT_EQ(c.Frames().size(), 2u);
+  EXPECT_EQ(c.Frames().at(3), b);
+  EXPECT_EQ(c.DroppedBytes(), 0u);
+  EXPECT_EQ(std::filesystem::file_size(path), full);
+}
+
+TEST(FrameCheckpoint, RefusesAnotherJobsCheckpointAndAMissingOne) {
+  testing::TempDir dir;
+  const std::string path = dir / "out.png.frames";
+  CheckpointKey key{8, 8, 4, 3, JobHash("scene")};
+  FrameCheckpoint::Create(path, key).Append(0, std::vector<std::byte>(48));
+  CheckpointKey other = key;
+  other.jobHash = JobHash("another scene");
+  EXPECT_THROW(FrameCheckpoint::Resume(path, other), UserError);
+  other = key;
+  other.frameSize = 2;
+  EXPECT_THROW(FrameCheckpoint::Resume(path, other), UserError);
+  EXPECT_THROW(FrameCheckpoint::Resume(dir / "missing.frames", key), UserError);
+  // A record whose checksum is wrong is dropped as torn.
+  std::string bytes = testing::ReadFile(path);
+  bytes[bytes.size() - 12] ^= 1;
+  std::ofstream(path, std::ios::binary) << bytes;
+  EXPECT_EQ(FrameCheckpoint::Resume(path, key).Frames().size(), 0u);
+}
+
+}  // namespace
+}  // namespace zephyr

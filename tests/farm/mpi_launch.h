@@ -1,0 +1,95 @@
+// tests/farm/mpi_launch.h — running `build/.../zephyr` under mpirun from the tests.
+//
+// The zephyr program sits next to the test binary (both in $(BUILD)/bin), found through
+// /proc/self/exe so the tests work from any build directory.
+#pragma once
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace zephyr::testing {
+
+inline std::string ZephyrPath() {
+  return (std::filesystem::read_symlink("/proc/self/exe").parent_path() / "zephyr").string();
+}
+
+struct Launch {
+  int status = -1;     // exit status of the command
+  std::string output;  // stdout and stderr together
+};
+
+// Runs a shell command line, capturing its output.
+inline Launch RunCommand(const std::string& command) {
+  Launch result;
+  FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
+  if (!pipe) return result;
+  char buffer[4096];
+  while (std::size_t n = std::fread(buffer, 1, sizeof buffer, pipe))
+    result.output.append(buffer, n);
+  int raw = ::pclose(pipe);
+  result.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : 128 + WTERMSIG(raw);
+  return result;
+}
+
+// `mpirun -np ranks [env...] zephyr args` with the flags a 2-core test machine needs.
+// `timeout` guards against a test hanging on a stuck job.
+inline Launch RunMpi(int ranks, const std::string& args, const std::string& env = "") {
+  std::string command = "timeout -k 5 120 mpirun --oversubscribe --allow-run-as-root -np " +
+                        std::to_string(ranks) + " " + env + " " + ZephyrPath() + " " + args;
+  return RunCommand(command);
+}
+
+inline Launch RunZephyrProcess(const std::string& args) {
+  return RunCommand("timeout -k 5 120 " + ZephyrPath() + " " + args);
+}
+
+// A fresh directory per test under the system temp dir.
+class TempDir {
+ public:
+  TempDir() {
+    std::string pattern = (std::filesystem::temp_directory_path() / "zephyr-mpi-XXXXXX").string();
+    std::vector<char> name(pattern.begin(), pattern.end());
+    name.push_back('\0');
+    path_ = ::mkdtemp(name.data());
+  }
+  ~TempDir() { std::filesystem::remove_all(path_); }
+  std::string operator/(const std::string& file) const { return (path_ / file).string(); }
+
+ private:
+  std::filesystem::path path_;
+};
+
+inline std::string ReadFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+inline nlohmann::json ReadJson(const std::string& path) {
+  return nlohmann::json::parse(ReadFile(path));
+}
+
+// Kills child 1 (SIGKILL, via the test-only fault hook) after `framesBeforeKill` frames of
+// `args` on 1 child, checks the job failed with the checkpoint `out`.frames left and no `out`,
+// then reruns with --resume on 2 children and returns its status (0 expected). Both MPI
+// tests of kill-and-resume (the farm alone, and the real render) share it.
+inline Launch KillThenResume(const std::string& args, const std::string& out,
+                             int framesBeforeKill) {
+  auto killed = RunMpi(2, args, "-x ZEPHYR_TEST_FAULT=kill:1:" + std::to_string(framesBeforeKill));
+  EXPECT_NE(killed.status, 0) << killed.output;
+  EXPECT_FALSE(std::filesystem::exists(out));
+  EXPECT_TRUE(std::filesystem::exists(out + ".frames")) << killed.output;
+  return RunMpi(3, args + " --resume");
+}
+
+}  // namespace zephyr::testing

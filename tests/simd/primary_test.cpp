@@ -1,0 +1,339 @@
+// The SIMD/sequential method's primary pass against the sequential tracer (double).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "fixed/check.h"
+#include "hosts/simd/pass.h"
+#include "hosts/scene/gen.h"
+
+namespace zephyr::simd {
+namespace {
+
+// Every pixel's first object from the sequential tracer in double.
+std::vector<PrimaryHit> SequentialHits(const Scene& scene) {
+  TraceOptions o;
+  o.depth = 1;
+  const auto tracer = Tracer::Create(scene, o);
+  TraceStats stats;
+  std::vector<PrimaryHit> hits;
+  for (int y = 0; y < scene.camera.height; ++y)
+    for (int x = 0; x < scene.camera.width; ++x) hits.push_back(tracer->FirstHit(tracer->Rays().At(x, y), stats));
+  return hits;
+}
+
+int ObjectMismatches(const PrimaryMatrix& m, const std::vector<PrimaryHit>& want) {
+  int bad = 0;
+  for (size_t i = 0; i < want.size(); ++i) bad += m.hits[i].object != want[i].object;
+  return bad;
+}
+
+TEST(SimdPrimary, FirstObjectAgreesOnEveryPixelRandomSpheres) {
+  const Scene scene = GenerateRandomSpheres({.count = 48, .seed = 3, .width = 64, .height = 64});
+  const PrimaryPass pass = RunPrimaryPass(scene, {});
+  EXPECT_EQ(ObjectMismatches(pass.matrix, SequentialHits(scene)), 0);
+  EXPECT_EQ(pass.plan.layers, 1);
+  EXPECT_GT(pass.cycles["totalCycles"].get<double>(), 0);
+}
+
+TEST(SimdPrimary, FirstObjectAgreesOnEveryPixelSphereflake) {
+  const Scene scene = GenerateSphereflake(2, 64, 64);  // 91 spheres and a floor polygon
+  const PrimaryPass pass = RunPrimaryPass(scene, {});
+  const auto want = SequentialHits(scene);
+  EXPECT_EQ(ObjectMismatches(pass.matrix, want), 0);
+  // Where the hit is certain, t is within the stated bound of the double tracer's t.
+  for (size_t i = 0; i < want.size(); ++i)
+    if (pass.matrix.flags[i] == 0 && want[i].object >= 0) {
+      ASSERT_NEAR(pass.matrix.hits[i].t, want[i].t, pass.plan.tErrorBound) << i;
+    }
+}
+
+TEST(SimdPrimary, ColoursAgreeWithSequentialWhereTheHitIsTheSame) {
+  const Scene scene = GenerateRandomSpheres({.count = 24, .seed = 5, .width = 48, .height = 48});
+  const PrimaryPass pass = RunPrimaryPass(scene, {});
+  TraceOptions o;
+  const auto tracer = Tracer::Create(scene, o);
+  std::vector<Vec3> simd;
+  TraceStats stats;
+  ShadeRegion(*tracer, pass.matrix, 0, 0, 48, 48, simd, stats);
+  // Tolerance: a t error ε moves the hit point by ε; shading is smooth except where the
+  // secondary rays cross a silhouette, so ≥ 99 % of pixels within 1e-3 and all within 1/8.
+  int close = 0, same = 0;
+  for (int y = 0; y < 48; ++y)
+    for (int x = 0; x < 48; ++x) {
+      const size_t i = size_t(y) * 48 + x;
+      PrimaryHit seqHit;
+      const Vec3 want = tracer->TracePixel(x, y, stats, &seqHit);
+      if (seqHit.object != pass.matrix.hits[i].object) continue;
+      ++same;
+      const Vec3 d = want - simd[i];
+      const double err = std::max({std::abs(d.x), std::abs(d.y), std::abs(d.z)});
+      close += err <= 1e-3;
+      EXPECT_LE(err, 0.125) << x << "," << y;
+    }
+  EXPECT_EQ(same, 48 * 48);
+  EXPECT_GE(close, same * 99 / 100);
+}
+
+TEST(SimdPrimary, ShadeRegionIsBitIdenticalToTheFullImage) {
+  const Scene scene = GenerateRandomSpheres({.count = 12, .seed = 2, .width = 40, .height = 32});
+  const PrimaryPass pass = RunPrimaryPass(scene, {});
+  const auto tracer = Tracer::Create(scene, TraceOptions{});
+  std::vector<Vec3> full, part;
+  TraceStats stats;
+  ShadeRegion(*tracer, pass.matrix, 0, 0, 40, 32, full, stats);
+  ShadeRegion(*tracer, pass.matrix, 8, 4, 16, 20, part, stats);
+  for (int y = 0; y < 20; ++y)
+    for (int x = 0; x < 16; ++x) ASSERT_EQ(part[size_t(y) * 16 + x], full[size_t(y + 4) * 40 + x + 8]);
+}
+
+TEST(SimdPrimary, SceneThatCannotFitIsAClearError) {
+  Scene scene = GenerateRandomSpheres({.count = 8, .seed = 1, .width = 4096, .height = 4096});
+  try {
+    PlanPrimaryPass(scene, {});
+    FAIL() << "a 4096x4096 image (2048 layers) should not fit";
+  } catch (const UserError& e) {
+    EXPECT_NE(std::string(e.what()).find("does not fit"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("2048 layers"), std::string::npos) << e.what();
+  }
+}
+
+TEST(SimdPrimary, PlannerFollowsTheSceneAndTheOverrides) {
+  Scene scene = GenerateRandomSpheres({.count = 8, .seed = 1, .width = 384, .height = 384});
+  const PrimaryPlan base = PlanPrimaryPass(scene, {});
+  EXPECT_EQ(base.layers, 18);  // 147,456 rays = 18 × 8192 (SPEC §3)
+  EXPECT_EQ(base.dirFracBits, base.fracBits);
+  // Smaller spheres need more fraction bits; a farther scene more integer bits.
+  Scene small = scene, far = scene;
+  for (Primitive& p : small.objects) std::get<Sphere>(p.shape).radius /= 16;
+  for (Primitive& p : far.objects) std::get<Sphere>(p.shape).center = std::get<Sphere>(p.shape).center * 64.0;
+  far.camera.from = far.camera.from * 64.0;
+  EXPECT_EQ(PlanPrimaryPass(small, {}).fracBits, base.fracBits + 4);
+  EXPECT_GE(PlanPrimaryPass(far, {}).distIntBits, base.distIntBits + 5);
+  SimdOptions o;
+  o.formats.fracBits = 12;
+  const PrimaryPlan p = PlanPrimaryPass(scene, o);
+  EXPECT_EQ(p.fracBits, 12);
+  EXPECT_EQ(p.t.fracBits, 12);
+  EXPECT_GT(p.tErrorBound, base.tErrorBound);
+}
+
+TEST(SimdPrimary, UncertainPixelsAreFlaggedAndRecomputed) {
+  // Two coincident spheres: every pixel on them is a near tie.
+  Scene scene = GenerateRandomSpheres({.count = 4, .seed = 7, .width = 32, .height = 32});
+  scene.objects.push_back(scene.objects[0]);
+  SimdOptions keep;
+  keep.uncertain = UncertainPolicy::kKeep;
+  const PrimaryPass kept = RunPrimaryPass(scene, keep);
+  const auto want = SequentialHits(scene);
+  int onFirst = 0;
+  for (size_t i = 0; i < want.size(); ++i) {
+    if (want[i].object != 0) continue;
+    ++onFirst;
+    EXPECT_TRUE(kept.matrix.flags[i] & kNearTie) << i;
+    EXPECT_FALSE(kept.matrix.flags[i] & kRecomputed);
+  }
+  ASSERT_GT(onFirst, 0);
+  EXPECT_GE(kept.tiePixels, onFirst);
+  // Too few integer bits: the distances overflow and are flagged; recompute repairs them.
+  SimdOptions narrow;
+  narrow.formats.intBits = 2;
+  const PrimaryPass repaired = RunPrimaryPass(scene, narrow);
+  EXPECT_GT(repaired.overflowPixels, 0);
+  EXPECT_EQ(repaired.recomputedPixels,
+            std::count_if(repaired.matrix.flags.begin(), repaired.matrix.flags.end(), [](uint32_t f) { return f != 0; }));
+  EXPECT_EQ(ObjectMismatches(repaired.matrix, want), 0);
+  narrow.uncertain = UncertainPolicy::kFail;
+  EXPECT_THROW(RunPrimaryPass(scene, narrow), UserError);
+  // A grazing ray: a sphere whose silhouette passes exactly through a pixel centre.
+  Scene graze = GenerateRandomSpheres({.count = 1, .seed = 1, .width = 33, .height = 33});
+  const auto tracer = Tracer::Create(graze, TraceOptions{});
+  const PrimaryRay centre = tracer->Rays().At(16, 16), side = tracer->Rays().At(16, 10);
+  Sphere& s = std::get<Sphere>(graze.objects[0].shape);
+  s.center = centre.origin + centre.direction * 10.0;
+  // radius = distance from the centre to the ray through pixel (16, 10)
+  const Vec3 f = s.center - side.origin;
+  s.radius = Length(f - side.direction * Dot(f, side.direction));
+  const PrimaryPass g = RunPrimaryPass(graze, keep);
+  EXPECT_TRUE(g.matrix.flags[10 * 33 + 16] & kGrazing);
+  EXPECT_FALSE(g.matrix.flags[16 * 33 + 16] & kGrazing);
+}
+
+}  // namespace
+}  // namespace zephyr::simd
+
+namespace zephyr::simd {
+namespace {
+
+// Soundness of the error bounds: at every fraction width, recompute must repair every pixel
+// whose first object differs from the double tracer, and the flagged pixels are counted.
+TEST(SimdPrimary, RecomputeRepairsEveryPixelAtLowWidths) {
+  const Scene scene = GenerateRandomSpheres({.count = 64, .seed = 1, .width = 64, .height = 64});
+  const auto want = SequentialHits(scene);
+  int64_t previousFlagged = -1;
+  for (int bits : {4, 6, 8, 12}) {
+    SimdOptions o;
+    o.formats.fracBits = bits;
+    const PrimaryPass pass = RunPrimaryPass(scene, o);
+    EXPECT_EQ(ObjectMismatches(pass.matrix, want), 0) << bits << " fraction bits";
+    const int64_t flagged = std::count_if(pass.matrix.flags.begin(), pass.matrix.flags.end(),
+                                          [](uint32_t f) { return f != 0; });
+    EXPECT_EQ(pass.recomputedPixels, flagged);
+    EXPECT_EQ(pass.Json()["uncertain"]["recomputed"].get<int64_t>(), flagged);
+    EXPECT_GT(flagged, 0) << bits;  // at these widths some pixels are always uncertain
+    if (previousFlagged >= 0) {
+      EXPECT_LE(flagged, previousFlagged) << bits;  // wider: fewer
+    }
+    previousFlagged = flagged;
+    // With `keep`, every pixel whose object differs is one the pass flagged.
+    o.uncertain = UncertainPolicy::kKeep;
+    const PrimaryPass kept = RunPrimaryPass(scene, o);
+    int unflaggedWrong = 0, wrong = 0;
+    for (size_t i = 0; i < want.size(); ++i)
+      if (kept.matrix.hits[i].object != want[i].object) ++wrong, unflaggedWrong += kept.matrix.flags[i] == 0;
+    EXPECT_EQ(unflaggedWrong, 0) << bits << " fraction bits, " << wrong << " wrong";
+  }
+}
+
+TEST(SimdPrimary, TransformedPrimitivesRunOnTheArray) {
+  const Scene scene = GenerateTransformedShowcase(64, 64);
+  const PrimaryPass pass = RunPrimaryPass(scene, {});
+  EXPECT_EQ(ObjectMismatches(pass.matrix, SequentialHits(scene)), 0);
+  // Every primitive, cones included, is tested on the array (no host-tested objects): the
+  // divisions run there, and the cone program's multi × multi products (its heights) too.
+  EXPECT_GT(pass.cycles["byOp"]["mul"]["cycles"].get<double>(), 0) << pass.cycles.dump();
+  EXPECT_GT(pass.cycles["byOp"]["div"]["cycles"].get<double>(), 0) << pass.cycles.dump();
+  const auto want = SequentialHits(scene);
+  for (int bits : {6, 10, 16}) {
+    SimdOptions o;
+    o.formats.fracBits = bits;
+    EXPECT_EQ(ObjectMismatches(RunPrimaryPass(scene, o).matrix, want), 0) << bits;
+    // Unflagged pixels are right, and their t within the stated bound.
+    o.uncertain = UncertainPolicy::kKeep;
+    const PrimaryPass kept = RunPrimaryPass(scene, o);
+    for (size_t i = 0; i < want.size(); ++i) {
+      if (kept.matrix.flags[i] != 0) continue;
+      ASSERT_EQ(kept.matrix.hits[i].object, want[i].object) << bits << " bits, pixel " << i;
+      if (want[i].object >= 0) {
+        ASSERT_NEAR(kept.matrix.hits[i].t, want[i].t, kept.plan.tErrorBound) << bits << " bits, pixel " << i;
+      }
+    }
+  }
+}
+
+}  // namespace
+}  // namespace zephyr::simd
+
+// Cones and cylinders (NFF `c`) on the array: first-object agreement with the sequential
+// tracer, sound flags at the planned and a low width, the cone ops in the report.
+namespace zephyr::simd {
+namespace {
+
+Affine Move(double sx, double sy, double sz, Vec3 t) {
+  Affine a;
+  a.m[0][0] = sx, a.m[1][1] = sy, a.m[2][2] = sz;
+  a.m[0][3] = t.x, a.m[1][3] = t.y, a.m[2][3] = t.z;
+  return a;
+}
+
+Affine RotX(double deg) {
+  const double c = std::cos(deg * M_PI / 180), s = std::sin(deg * M_PI / 180);
+  Affine a;
+  a.m[1][1] = c, a.m[1][2] = -s, a.m[2][1] = s, a.m[2][2] = c;
+  return a;
+}
+
+// Cylinders and cones, plain and transformed, in front of each other, on a floor: a
+// vertical cylinder, a cone to a point, a frustum, a tube seen nearly end-on (the ray almost
+// parallel to the axis: A ≈ 0), a sheared cylinder, a cone rotated onto its side and
+// squashed, a cylinder with negative radii (the mirrored nappe: never hit), and a sphere.
+Scene ConeScene(int size) {
+  Scene s;
+  s.source = "cone test";
+  s.camera = Camera{{0, -8, 2.5}, {0, 0, 0.8}, {0, 0, 1}, 40, 0.01, size, size};
+  s.lights = {Light{{-5, -6, 8}, {1, 1, 1}}};
+  s.materials = {Material{}};
+  auto add = [&](Shape shape, std::optional<Affine> t = std::nullopt) {
+    Primitive p;
+    p.shape = std::move(shape);
+    p.transform = t;
+    s.objects.push_back(std::move(p));
+  };
+  add(Polygon{{{5, 5, 0}, {-5, 5, 0}, {-5, -5, 0}, {5, -5, 0}}, {}});
+  add(Cone{{-1.6, 0.5, 0}, 0.5, {-1.6, 0.5, 1.8}, 0.5});          // cylinder
+  add(Cone{{0.1, 0.2, 0}, 0.7, {0.1, 0.2, 1.9}, 0});              // cone to a point
+  add(Cone{{1.7, 0.8, 0}, 0.3, {1.7, 0.8, 1.2}, 0.8});            // frustum, wider on top
+  add(Cone{{0.6, -3.5, 2.1}, 0.35, {0.45, 3, 1.2}, 0.35});        // a tube along the view
+  Affine shear;
+  shear.m[0][2] = 0.4;
+  add(Cone{{0, 0, 0}, 0.3, {0, 0, 1.4}, 0.3}, Move(1, 1, 1, {-0.6, -1.5, 0}) * shear);
+  add(Cone{{0, 0, 0}, 0.5, {0, 0, 1.2}, 0.05}, Move(1, 1, 1, {1.2, -1.8, 0.5}) * RotX(80) * Move(1.3, 0.7, 1, {}));
+  add(Cone{{-2.5, -2, 0}, -0.3, {-2.5, -2, 1}, -0.3});            // never hit
+  add(Sphere{{-0.7, 1.8, 0.6}, 0.6});
+  return s;
+}
+
+// Every cone of the scene is seen by some pixel (else the test would prove little).
+void ExpectEveryConeVisible(const Scene& scene, const std::vector<PrimaryHit>& want, int skip = -1) {
+  for (size_t i = 0; i < scene.objects.size(); ++i) {
+    if (scene.objects[i].Kind() != ShapeKind::kCone || int(i) == skip) continue;
+    EXPECT_TRUE(std::any_of(want.begin(), want.end(), [&](const PrimaryHit& h) { return h.object == int(i); }))
+        << "cone " << i;
+  }
+}
+
+void CheckScene(const Scene& scene, int neverHit) {
+  const auto want = SequentialHits(scene);
+  ExpectEveryConeVisible(scene, want, neverHit);
+  for (int bits : {-1, 8}) {  // planned, and 8 fraction bits
+    SimdOptions o;
+    o.formats.fracBits = bits;
+    const PrimaryPass pass = RunPrimaryPass(scene, o);
+    EXPECT_EQ(ObjectMismatches(pass.matrix, want), 0) << bits << " fraction bits";
+    // The cone program's ops: multi × multi products (the heights) appear only for cones.
+    EXPECT_GT(pass.cycles["byOp"]["mul"]["cycles"].get<double>(), 0) << pass.cycles.dump();
+    EXPECT_GT(pass.cycles["byOp"]["div"]["cycles"].get<double>(), 0);
+    EXPECT_GT(pass.cycles["byOp"]["sqrt"]["cycles"].get<double>(), 0);
+    // With `keep`: every unflagged pixel has the right object and t within the bound.
+    o.uncertain = UncertainPolicy::kKeep;
+    const PrimaryPass kept = RunPrimaryPass(scene, o);
+    int coneCertain = 0, conePixels = 0;
+    for (size_t i = 0; i < want.size(); ++i) {
+      const bool cone = want[i].object >= 0 && scene.objects[want[i].object].Kind() == ShapeKind::kCone;
+      conePixels += cone;
+      if (kept.matrix.flags[i] != 0) continue;
+      ASSERT_EQ(kept.matrix.hits[i].object, want[i].object) << bits << " bits, pixel " << i;
+      if (want[i].object >= 0) {
+        ASSERT_NEAR(kept.matrix.hits[i].t, want[i].t, kept.plan.tErrorBound) << bits << " bits, pixel " << i;
+      }
+      coneCertain += cone;
+    }
+    ASSERT_GT(conePixels, 0);
+    if (bits < 0) {  // at the planned width the array decides a good share of cone pixels
+      EXPECT_GE(coneCertain, conePixels / 4) << conePixels;
+    } else {  // at 8 bits the bounds flag (nearly) everything: recompute does the work
+      EXPECT_GT(kept.grazingPixels, int64_t(want.size()) / 2);
+    }
+  }
+}
+
+TEST(SimdCone, DedicatedSceneAgreesWithSequential) {
+  CheckScene(ConeScene(64), 7);
+}
+
+TEST(SimdCone, ShowcaseAgreesWithSequential) {
+  CheckScene(GenerateTransformedShowcase(64, 64), -1);
+}
+
+TEST(SimdCone, PlanListsTheConeFormats) {
+  const PrimaryPlan plan = PlanPrimaryPass(ConeScene(32), {});
+  bool listed = false;
+  for (const PlannedFormat& f : plan.formats) listed |= f.quantity.find("cone") != std::string::npos;
+  EXPECT_TRUE(listed) << plan.Text();
+  EXPECT_TRUE(std::isfinite(plan.tErrorBound));
+  EXPECT_GT(plan.tErrorBound, 0);
+}
+
+}  // namespace
+}  // namespace zephyr::simd

@@ -1,0 +1,214 @@
+// Tests for the sequential tracer: primary rays, the intersection routines, shading rules,
+// region rendering, the render command and its outputs.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "hosts/cmd/command.h"
+#include "hosts/trace/image.h"
+#include "hosts/scene/nff.h"
+#include "hosts/methods/render.h"
+#include "hosts/trace/tracer.h"
+#include "hosts/scene/gen.h"
+
+namespace zephyr {
+namespace {
+
+Scene TinyScene(const std::string& objects, int w = 9, int h = 7, const std::string& from = "0 0 10") {
+  return ParseNffOrThrow("b 0.1 0.2 0.3\nv\nfrom " + from + "\nat 0 0 0\nup 0 1 0\nangle 40\nhither 0\nresolution " +
+                         std::to_string(w) + " " + std::to_string(h) + "\nl 0 0 100\n" + objects, "tiny.nff");
+}
+
+TEST(TracePrimary, AngleSpansTopAndBottomPixelCentres) {
+  const Scene s = TinyScene("", 9, 7);
+  const PrimaryRays rays(s.camera);
+  const PrimaryRay centre = rays.At(4, 3);
+  EXPECT_NEAR(centre.direction.z, -1, 1e-15);
+  const Vec3 top = rays.At(4, 0).direction, bottom = rays.At(4, 6).direction;
+  EXPECT_NEAR(std::acos(Dot(top, bottom)) * 180 / M_PI, 40, 1e-9);
+  EXPECT_GT(top.y, 0);                         // row 0 is the top
+  EXPECT_GT(rays.At(8, 3).direction.x, 0);     // x grows to the right (from +z looking at -z, up +y)
+  EXPECT_NEAR(Length(rays.At(0, 0).direction), 1, 1e-15);
+}
+
+TEST(TraceIntersect, SphereFormsAgreeNearAndDifferFarInFloat) {
+  float roots[2];
+  const Vec3T<float> o{0, 0, 0}, d{0, 0, -1};
+  ASSERT_EQ(IntersectSphereHearnBaker<float>(o, d, {0, 0, -5}, 1, 0, roots), 2);
+  EXPECT_FLOAT_EQ(roots[0], 4);
+  EXPECT_FLOAT_EQ(roots[1], 6);
+  ASSERT_EQ(IntersectSphereNaive<float>(o, d, {0, 0, -5}, 1, 0, roots), 2);
+  EXPECT_FLOAT_EQ(roots[0], 4);
+  // A unit sphere 1e5 away (Ray Tracing Gems ch. 7: beyond ~4096 r the radius stops
+  // mattering in float). Offset 0.99 from the ray it is hit, offset 1.5 it is missed: the
+  // Hearn–Baker form gets both right; the naive one computes |f|² − r² where r² is below
+  // half an ulp of |f|², so it "hits" the sphere it should miss.
+  EXPECT_EQ(IntersectSphereHearnBaker<float>(o, d, {0.99f, 0, -1e5f}, 1, 0, roots), 2);
+  EXPECT_NEAR(roots[0], 1e5f - std::sqrt(1 - 0.99f * 0.99f), 0.02f);
+  EXPECT_EQ(IntersectSphereHearnBaker<float>(o, d, {1.5f, 0, -1e5f}, 1, 0, roots), 0);
+  EXPECT_EQ(IntersectSphereNaive<float>(o, d, {1.5f, 0, -1e5f}, 1, 0, roots), 2);
+  double droots[2];
+  EXPECT_EQ(IntersectSphereNaive<double>({0, 0, 0}, {0, 0, -1}, {1.5, 0, -1e5}, 1, 0, droots), 0);
+}
+
+TEST(TraceIntersect, TransformedPrimitivesAndConesAndPolygons) {
+  const Scene s = TinyScene(
+      "f 1 1 1 1 0 0 0 1\n"
+      "transform 3 0 0 0  0 1 0 0  0 0 1 -5\ns 0 0 0 1\ntransform identity\n"  // ellipsoid, x radius 3
+      "c 0 -2 0 1 0 2 0 1\n"                                                 // cylinder along y
+      "c 0 0 0 1 0 0 2 0\n"                                                  // cone along z, apex at z=2
+      "p 6\n0 0 0\n4 0 0\n4 4 0\n2 1 0\n0 4 0\n0 2 0\n");                     // concave (notched) hexagon
+  // Ellipsoid: along x from x=10 at y=0,z=-5 the surface is at x=3.
+  EXPECT_NEAR(*IntersectObject(s, 0, {10, 0, -5}, {-1, 0, 0}), 7, 1e-12);
+  // Along y from y=10 the surface is at y=1; a non-unit direction gives t in its units.
+  EXPECT_NEAR(*IntersectObject(s, 0, {0, 10, -5}, {0, -2, 0}), 4.5, 1e-12);
+  EXPECT_FALSE(IntersectObject(s, 0, {0, 1.01, 10}, {0, 0, -1}));
+  // Cylinder radius 1 around the y axis, open ends.
+  EXPECT_NEAR(*IntersectObject(s, 1, {5, 0.5, 0}, {-1, 0, 0}), 4, 1e-12);
+  EXPECT_FALSE(IntersectObject(s, 1, {5, 2.5, 0}, {-1, 0, 0}));      // beyond the end
+  EXPECT_NEAR(*IntersectObject(s, 1, {0, 0, 0}, {0, 0, 1}), 1, 1e-12);  // from inside
+  // Cone: radius 1 - z/2, so at z=1 the radius is 0.5.
+  EXPECT_NEAR(*IntersectObject(s, 2, {5, 0, 1}, {-1, 0, 0}), 4.5, 1e-12);
+  // Concave polygon: the notch (triangle (4,4) (2,1) (0,4)) is outside; (0.3, 3) and
+  // (3.7, 3) beside it are inside.
+  ASSERT_TRUE(IntersectObject(s, 3, {0.3, 3, 5}, {0, 0, -1}));
+  EXPECT_NEAR(*IntersectObject(s, 3, {0.3, 3, 5}, {0, 0, -1}), 5, 1e-12);
+  EXPECT_TRUE(IntersectObject(s, 3, {3.7, 3, 5}, {0, 0, -1}));
+  EXPECT_FALSE(IntersectObject(s, 3, {2, 3, 5}, {0, 0, -1}));
+  EXPECT_FALSE(IntersectObject(s, 3, {1, 3, 5}, {0, 0, -1}));
+  EXPECT_FALSE(IntersectObject(s, 3, {5, 1, 5}, {0, 0, -1}));
+}
+
+// A floor lit from straight above, with a blocker between a floor point and the light.
+double FloorBrightness(const std::string& blockerMaterial) {
+  const Scene s = ParseNffOrThrow(
+      "b 0 0 0\nv\nfrom 0 -10 10\nat 0 0 0\nup 0 0 1\nangle 30\nhither 0\nresolution 3 3\nl 0 0 20\n"
+      "f 1 1 1 0.5 0 0 0 1\np 4\n-5 -5 0\n5 -5 0\n5 5 0\n-5 5 0\n" + blockerMaterial +
+      "s 0 0 5 1\n", "shadow.nff");
+  TraceOptions o;
+  o.depth = 1;
+  const auto tracer = Tracer::Create(s, o);
+  TraceStats stats;
+  PrimaryHit hit{0, Length(Vec3{0, -10, 10}), Normalize(Vec3{0, 10, -10})};
+  return tracer->ShadeFromPrimaryHit(hit, stats).x;
+}
+
+TEST(TraceShade, TransparentBlockersAttenuateShadowsPerSurface) {
+  const double open = FloorBrightness("f 1 1 1 1 0 0 0 1\n transform 1 0 0 100 0 1 0 0 0 0 1 0\n");
+  EXPECT_NEAR(open, 0.5, 1e-12);  // Kd · N·L · colour · light, N·L = 1
+  EXPECT_NEAR(FloorBrightness("f 1 1 1 1 0 0 0 1\n"), 0, 1e-12);                 // opaque
+  EXPECT_NEAR(FloorBrightness("f 1 1 1 0 0 0 0.5 1.5\n"), 0.5 * 0.25, 1e-12);     // two surfaces
+}
+
+TEST(TraceShade, RefractionAndTotalInternalReflection) {
+  // The eye inside a glass sphere (ior 1.5): near-normal rays leave (refraction); a ray
+  // meeting the surface at 64° > asin(1/1.5) = 41.8° is totally reflected.
+  const Scene s = ParseNffOrThrow(
+      "b 0 0 0\nv\nfrom 0 0 0.9\nat 1 0 0.9\nup 0 0 1\nangle 30\nhither 0\nresolution 3 3\nl 0 0 20\n"
+      "f 1 1 1 0 0 0 1 1.5\ns 0 0 0 1\n", "glass.nff");
+  TraceOptions o;
+  o.depth = 2;
+  const auto tracer = Tracer::Create(s, o);
+  TraceStats grazing;
+  const PrimaryHit tir = tracer->FirstHit({{0, 0, 0.9}, {1, 0, 0}}, grazing);
+  ASSERT_EQ(tir.object, 0);
+  tracer->ShadeFromPrimaryHit(tir, grazing);
+  EXPECT_EQ(grazing.rays[int(RayKind::kRefracted)], 0u);
+  EXPECT_EQ(grazing.rays[int(RayKind::kReflected)], 1u);
+  TraceStats steep;
+  const PrimaryHit out = tracer->FirstHit({{0, 0, 0.9}, {0, 0, 1}}, steep);
+  tracer->ShadeFromPrimaryHit(out, steep);
+  EXPECT_EQ(steep.rays[int(RayKind::kRefracted)], 1u);
+  EXPECT_EQ(steep.rays[int(RayKind::kReflected)], 0u);
+}
+
+TEST(TraceRender, RegionsAreBitIdenticalToTheFullImage) {
+  const Scene s = GenerateRandomSpheres({12, 5, 40, 32});
+  const auto tracer = Tracer::Create(s, {});
+  TraceStats full, part;
+  std::vector<Vec3> all, frame;
+  std::vector<PrimaryHit> allHits, frameHits;
+  RenderRegion(*tracer, 0, 0, 40, 32, all, full, &allHits);
+  RenderRegion(*tracer, 13, 9, 16, 8, frame, part, &frameHits);
+  for (int y = 0; y < 8; ++y) {
+    for (int x = 0; x < 16; ++x) {
+      const size_t i = size_t(y + 9) * 40 + (x + 13), j = size_t(y) * 16 + x;
+      EXPECT_EQ(all[i], frame[j]);
+      EXPECT_EQ(allHits[i].object, frameHits[j].object);
+      EXPECT_EQ(allHits[i].t, frameHits[j].t);
+    }
+  }
+  EXPECT_EQ(part.rays[int(RayKind::kPrimary)], 16u * 8);
+  EXPECT_EQ(full.tests[int(ShapeKind::kSphere)] % 12, 0u);  // every ray tests every sphere
+}
+
+TEST(TraceRender, FloatAndDoubleAgreeOnAnImage) {
+  const Scene s = GenerateSphereflake(1, 48, 48);
+  TraceOptions d, f;
+  f.precision = Precision::kFloat;
+  Image a(48, 48), b(48, 48);
+  TraceStats stats;
+  RenderRegion(*Tracer::Create(s, d), 0, 0, 48, 48, a.pixels, stats);
+  RenderRegion(*Tracer::Create(s, f), 0, 0, 48, 48, b.pixels, stats);
+  EXPECT_GT(Psnr(a, b), 35);
+  bool differ = false;  // the float tracer really computes in float
+  for (size_t i = 0; i < a.pixels.size(); ++i) differ |= a.pixels[i] != b.pixels[i];
+  EXPECT_TRUE(differ);
+}
+
+TEST(TraceRender, CommandWritesPngReportAndPrimaryCsv) {
+  const auto dir = std::filesystem::temp_directory_path() / ("zephyr_trace_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string scene = (dir / "s.nff").string(), png = (dir / "s.png").string(),
+                    json = (dir / "s.json").string(), csv = (dir / "s.csv").string();
+  const char* gen[] = {"zephyr", "gen", "spheres", "--count", "6", "--seed", "2", "--size", "20x10", "--out", scene.c_str()};
+  ASSERT_EQ(RunZephyr(11, gen), 0);
+  const char* render[] = {"zephyr", "render", "--method", "seq", "--scene", scene.c_str(), "--out", png.c_str(),
+                          "--report", json.c_str(), "--dump-primary", csv.c_str(), "--depth", "3"};
+  ASSERT_EQ(RunZephyr(14, render), 0);
+  const Image img = ReadPng(png);
+  EXPECT_EQ(img.width, 20);
+  EXPECT_EQ(img.height, 10);
+  std::ifstream jf(json);
+  const auto report = nlohmann::json::parse(jf);
+  EXPECT_EQ(report["rays"]["primary"], 200);
+  EXPECT_EQ(report["options"]["depth"], 3);
+  EXPECT_TRUE(report["phases"]["render"].is_number());
+  std::ifstream cf(csv);
+  std::string line;
+  std::getline(cf, line);
+  EXPECT_EQ(line, "x,y,dx,dy,dz,object,t,flags");
+  const Scene s = ReadNffFile(scene);
+  const auto tracer = Tracer::Create(s, {});
+  int rows = 0;
+  while (std::getline(cf, line)) {
+    int x, y, object;
+    double dx, dy, dz, t;
+    unsigned flags;
+    ASSERT_EQ(std::sscanf(line.c_str(), "%d,%d,%lf,%lf,%lf,%d,%lf,%u", &x, &y, &dx, &dy, &dz, &object, &t, &flags), 8);
+    EXPECT_EQ(x, rows % 20);
+    EXPECT_EQ(y, rows / 20);
+    const PrimaryRay ray = tracer->Rays().At(x, y);
+    EXPECT_EQ(dx, ray.direction.x);  // %.17g round-trips exactly
+    TraceStats stats;
+    const PrimaryHit hit = tracer->FirstHit(ray, stats);
+    EXPECT_EQ(object, hit.object);
+    if (object >= 0) {
+      EXPECT_EQ(t, hit.t);
+    }
+    EXPECT_EQ(flags, 0u);
+    ++rows;
+  }
+  EXPECT_EQ(rows, 200);
+  const char* bad[] = {"zephyr", "render", "--scene", "/nonexistent.nff"};
+  EXPECT_NE(RunZephyr(4, bad), 0);
+  const char* badMethod[] = {"zephyr", "render", "--method", "nope", "--scene", scene.c_str()};
+  EXPECT_NE(RunZephyr(6, badMethod), 0);
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace zephyr
