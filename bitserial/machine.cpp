@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cstring>
 
 #include "fixed/check.h"
@@ -48,6 +49,13 @@ Machine::Machine(MachineProfile profile, int64_t virtualPes, int shapeIndex)
 }
 
 Machine::~Machine() = default;
+
+std::vector<Word> Machine::SaveOverflow() const { return std::vector<Word>(overflow_, overflow_ + words_); }
+
+void Machine::RestoreOverflow(const std::vector<Word>& saved) {
+  ZEPHYR_CHECK(saved.size() == words_);
+  std::copy(saved.begin(), saved.end(), overflow_);
+}
 
 void Machine::ClearFlags() {
   for (Word* f : {overflow_, divideByZero_, invalid_}) std::memset(f, 0, words_ * sizeof(Word));

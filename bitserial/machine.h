@@ -53,15 +53,20 @@ class Machine {
   void PushActivity(const Word* mask, bool complement);
   void PopActivity();
 
-  // Sticky per-PE flags, set only where active (fixed::Status per virtual PE).
-  Word* OverflowPlane() { return overflow_; }
+  // Sticky per-PE flags, set only where active (fixed::Status per virtual PE): overflow,
+  // divideByZero (Div) and invalid (Sqrt of a negative value). Only the Multi operations
+  // (bitserial/multi.cpp) write them; a program reads them per PE here.
   bool Overflow(int64_t pe) const { return (overflow_[pe >> 6] >> (pe & 63)) & 1; }
-  // fixed::Status::divideByZero (Div) and ::invalid (Sqrt of a negative value), likewise.
-  Word* DivideByZeroPlane() { return divideByZero_; }
   bool DivideByZero(int64_t pe) const { return (divideByZero_[pe >> 6] >> (pe & 63)) & 1; }
-  Word* InvalidPlane() { return invalid_; }
   bool Invalid(int64_t pe) const { return (invalid_[pe >> 6] >> (pe & 63)) & 1; }
   void ClearFlags();  // all three
+
+  // The overflow flags of every virtual PE (WordsPerPlane() words, bit v = PE v), and their
+  // restoration: a program part whose saturation is expected (a clamp meaning "no hit")
+  // saves them before and restores them after, so it marks no PE. Host-side bookkeeping:
+  // the caller charges the flag operations it models.
+  std::vector<Word> SaveOverflow() const;
+  void RestoreOverflow(const std::vector<Word>& saved);
 
   const Word* ZeroPlane() const { return zero_; }
   const Word* OnesPlane() const { return ones_; }
@@ -70,16 +75,15 @@ class Machine {
   Word* AcquirePlanes(int planes);
   void ReleasePlanes(Word* p, int planes);
 
-  // Reusable pointer arrays for building kernel arguments (no allocation per op).
-  std::vector<const Word*>& PointersA() { return ptrA_; }
-  std::vector<const Word*>& PointersB() { return ptrB_; }
-  std::vector<Word*>& PointersOut() { return ptrOut_; }
-
   // The plane whose bit is 1 where coordinate `axis` minus `distance` is inside the mesh
   // (the PEs that receive a value in a mesh shift); cached.
   const Word* MeshEdgeMask(int axis, int distance);
 
  private:
+  // bitserial/multi.cpp: the writable flag planes and the reusable pointer arrays that
+  // build kernel arguments (no allocation per op).
+  friend struct MachineInternals;
+
   MachineProfile profile_;
   MeshShape shape_;
   int64_t virtualPes_;

@@ -10,6 +10,17 @@
 
 namespace zephyr::bitserial {
 
+// The machine's writable flag planes and kernel-argument arrays (private to Machine; the
+// operations below are their only writers).
+struct MachineInternals {
+  static Word* Overflow(Machine& m) { return m.overflow_; }
+  static Word* DivideByZero(Machine& m) { return m.divideByZero_; }
+  static Word* Invalid(Machine& m) { return m.invalid_; }
+  static std::vector<const Word*>& PointersA(Machine& m) { return m.ptrA_; }
+  static std::vector<const Word*>& PointersB(Machine& m) { return m.ptrB_; }
+  static std::vector<Word*>& PointersOut(Machine& m) { return m.ptrOut_; }
+};
+
 using fixed::Format;
 using fixed::Policy;
 
@@ -49,10 +60,10 @@ void RoundFitInto(Machine& m, const Word* base, int w, bool isSigned, int frac, 
   const int wo = out.Width();
   const int lo = frac - out.Format().fracBits;
   const int k = std::max(wo + 1, w - lo + 2);
-  auto& src = m.PointersA();
+  auto& src = MachineInternals::PointersA(m);
   src.clear();
   for (int i = 0; i < k; ++i) src.push_back(RawAt(m, base, w, isSigned, lo + i));
-  auto& dst = m.PointersOut();
+  auto& dst = MachineInternals::PointersOut(m);
   dst.clear();
   for (int i = 0; i < wo; ++i) dst.push_back(out.Plane(i));
   RoundFitArgs args{src.data(),
@@ -64,7 +75,7 @@ void RoundFitInto(Machine& m, const Word* base, int w, bool isSigned, int frac, 
                     wo,
                     out.Format().isSigned,
                     policy.overflow == fixed::OverflowPolicy::Saturate,
-                    m.OverflowPlane(),
+                    MachineInternals::Overflow(m),
                     act};
   m.Kernels().roundFit(args, m.WordsPerPlane());
 }
@@ -83,9 +94,9 @@ void AddInto(const Multi& a, const Multi& b, bool subtract, Multi& out, Policy p
   const int wo = out.Width();
   const int lo = e.fracBits - out.Format().fracBits;
   const int offA = e.fracBits - a.Format().fracBits, offB = e.fracBits - b.Format().fracBits;
-  auto& pa = m.PointersA();
-  auto& pb = m.PointersB();
-  auto& po = m.PointersOut();
+  auto& pa = MachineInternals::PointersA(m);
+  auto& pb = MachineInternals::PointersB(m);
+  auto& po = MachineInternals::PointersOut(m);
   if (lo == 0 && policy.overflow == fixed::OverflowPolicy::Wrap) {
     // Fast path: the output bits are the exact sum's low bits; the adder runs on past
     // them only to latch the overflow.
@@ -98,7 +109,7 @@ void AddInto(const Multi& a, const Multi& b, bool subtract, Multi& out, Policy p
     }
     const bool outSigned = out.Format().isSigned;
     AddArgs args{pa.data(), pb.data(), po.data(), n, subtract, subtract,
-                 outSigned ? wo - 1 : wo, outSigned, m.OverflowPlane(), m.Activity()};
+                 outSigned ? wo - 1 : wo, outSigned, MachineInternals::Overflow(m), m.Activity()};
     m.Kernels().add(args, m.WordsPerPlane());
     return;
   }
@@ -117,9 +128,9 @@ void AddInto(const Multi& a, const Multi& b, bool subtract, Multi& out, Policy p
 // The exact -a into `w` scratch planes (w = NegFormat(a).Width()).
 void NegExact(const Multi& a, Word* base, int w) {
   Machine& m = a.GetMachine();
-  auto& pa = m.PointersA();
-  auto& pb = m.PointersB();
-  auto& po = m.PointersOut();
+  auto& pa = MachineInternals::PointersA(m);
+  auto& pb = MachineInternals::PointersB(m);
+  auto& po = MachineInternals::PointersOut(m);
   pa.clear(), pb.clear(), po.clear();
   for (int p = 0; p < w; ++p) {
     pa.push_back(m.ZeroPlane());
@@ -133,9 +144,9 @@ void NegExact(const Multi& a, Word* base, int w) {
 // mask ? a : b in the union format, into scratch planes.
 void SelectExact(const Word* mask, const Multi& a, const Multi& b, const Format& u, Word* base) {
   Machine& m = a.GetMachine();
-  auto& pa = m.PointersA();
-  auto& pb = m.PointersB();
-  auto& po = m.PointersOut();
+  auto& pa = MachineInternals::PointersA(m);
+  auto& pb = MachineInternals::PointersB(m);
+  auto& po = MachineInternals::PointersOut(m);
   pa.clear(), pb.clear(), po.clear();
   for (int p = 0; p < u.Width(); ++p) {
     pa.push_back(PlaneAt(a, u.fracBits - a.Format().fracBits, p));
@@ -150,9 +161,9 @@ void LessPlane(const Multi& a, const Multi& b, Word* out) {
   Machine& m = a.GetMachine();
   const Format e = DiffFormat(a.Format(), b.Format());
   const int w = e.Width();
-  auto& pa = m.PointersA();
-  auto& pb = m.PointersB();
-  auto& po = m.PointersOut();
+  auto& pa = MachineInternals::PointersA(m);
+  auto& pb = MachineInternals::PointersB(m);
+  auto& po = MachineInternals::PointersOut(m);
   pa.clear(), pb.clear(), po.clear();
   for (int p = 0; p < w; ++p) {
     pa.push_back(PlaneAt(a, e.fracBits - a.Format().fracBits, p));
@@ -183,10 +194,10 @@ void MulInto(const Multi& a, const std::vector<const Word*>& rows, const std::ve
   const int w = product.Width();
   const int wo = out.Width();
   const int lo = product.fracBits - out.Format().fracBits;
-  auto& pa = m.PointersA();
+  auto& pa = MachineInternals::PointersA(m);
   pa.clear();
   for (int p = 0; p < w; ++p) pa.push_back(PlaneAt(a, 0, p));
-  auto& po = m.PointersOut();
+  auto& po = MachineInternals::PointersOut(m);
   po.clear();
   for (int i = 0; i < wo; ++i) po.push_back(out.Plane(i));
   const RoundFitArgs fit{nullptr,
@@ -196,7 +207,7 @@ void MulInto(const Multi& a, const std::vector<const Word*>& rows, const std::ve
                          wo,
                          out.Format().isSigned,
                          policy.overflow == fixed::OverflowPolicy::Saturate,
-                         m.OverflowPlane(),
+                         MachineInternals::Overflow(m),
                          m.Activity()};
   MulArgs args{pa.data(), w, rows.data(), shifts.data(), subs.data(),
                static_cast<int>(rows.size()), nullptr, &fit, lo, product.isSigned,
@@ -251,9 +262,9 @@ Multi& Multi::operator=(const Multi& o) {
   if (o.format_ != format_) return *this = Convert(o, format_);
   Machine& m = *machine_;
   m.Charge("assign", CopyCost(o.AsOperand(), AsOperand()));
-  auto& pa = m.PointersA();
-  auto& pb = m.PointersB();
-  auto& po = m.PointersOut();
+  auto& pa = MachineInternals::PointersA(m);
+  auto& pb = MachineInternals::PointersB(m);
+  auto& po = MachineInternals::PointersOut(m);
   pa.clear(), pb.clear(), po.clear();
   for (int i = 0; i < Width(); ++i) {
     pa.push_back(o.Plane(i));
@@ -395,9 +406,9 @@ Multi Abs(const Multi& a, Format out, Policy p) {
   const int w = e.Width();  // == NegFormat(a).Width()
   Scratch neg(m, w), exact(m, w);
   NegExact(a, neg.p, w);
-  auto& pa = m.PointersA();
-  auto& pb = m.PointersB();
-  auto& po = m.PointersOut();
+  auto& pa = MachineInternals::PointersA(m);
+  auto& pb = MachineInternals::PointersB(m);
+  auto& po = MachineInternals::PointersOut(m);
   pa.clear(), pb.clear(), po.clear();
   for (int q = 0; q < w; ++q) {
     pa.push_back(neg.Plane(q));
@@ -473,9 +484,9 @@ void MagnitudeInto(const Multi& x, Word* base) {
   Machine& m = x.GetMachine();
   const int w = x.Width();
   NegExact(x, base, w);
-  auto& pa = m.PointersA();
-  auto& pb = m.PointersB();
-  auto& po = m.PointersOut();
+  auto& pa = MachineInternals::PointersA(m);
+  auto& pb = MachineInternals::PointersB(m);
+  auto& po = MachineInternals::PointersOut(m);
   pa.clear(), pb.clear(), po.clear();
   for (int q = 0; q < w; ++q) {
     pa.push_back(base + q * m.WordsPerPlane());
@@ -514,9 +525,9 @@ Multi Div(const Multi& a, const Multi& b, Format out, Policy p) {
   // step per vector of PEs (the schedule charged above is unchanged).
   Scratch quo(m, mBits), remPlanes(m, d);
   for (int i = s.steps; i < mBits; ++i) std::memset(quo.Plane(i), 0, sizeof(Word) * words);
-  auto& pDividend = m.PointersA();
-  auto& pDivisor = m.PointersB();
-  auto& pOut = m.PointersOut();
+  auto& pDividend = MachineInternals::PointersA(m);
+  auto& pDivisor = MachineInternals::PointersB(m);
+  auto& pOut = MachineInternals::PointersOut(m);
   pDividend.clear(), pDivisor.clear(), pOut.clear();
   for (int i = 0; i < s.steps + s.skipped; ++i) pDividend.push_back(dividend(i));
   pDivisor.assign(d + 1, m.ZeroPlane());
@@ -573,7 +584,7 @@ Multi Div(const Multi& a, const Multi& b, Format out, Policy p) {
   for (int i = 0; i < wo; ++i) ro[i] = r.Plane(i);
   k.select(zeroDivisor, ends.data(), ro.data(), ro.data(), wo, words);
   k.logic(LogicOp::And, zeroDivisor, m.Activity(), keep, words);
-  k.logic(LogicOp::Or, m.DivideByZeroPlane(), keep, m.DivideByZeroPlane(), words);
+  k.logic(LogicOp::Or, MachineInternals::DivideByZero(m), keep, MachineInternals::DivideByZero(m), words);
   return r;
 }
 
@@ -599,8 +610,8 @@ Multi Sqrt(const Multi& a, Format out, Policy p) {
     // set the bit. With j bits decided, R <= 2Y < 2^(j+1), so j+3 positions hold the
     // difference with its sign. One kernel runs every step per vector of PEs.
     Scratch root(m, nr);
-    auto& pRadicand = m.PointersA();
-    auto& pRoot = m.PointersOut();
+    auto& pRadicand = MachineInternals::PointersA(m);
+    auto& pRoot = MachineInternals::PointersOut(m);
     pRadicand.clear(), pRoot.clear();
     for (int j = 0; j < 2 * nr; ++j) pRadicand.push_back(radicand(j));
     for (int i = 0; i < nr; ++i) pRoot.push_back(root.Plane(i));
@@ -611,7 +622,7 @@ Multi Sqrt(const Multi& a, Format out, Policy p) {
   if (fa.isSigned) {  // a < 0: 0 and the invalid flag
     for (int i = 0; i < r.Width(); ++i) k.logic(LogicOp::AndNot, r.Plane(i), neg, r.Plane(i), words);
     k.logic(LogicOp::And, neg, m.Activity(), keep.p, words);
-    k.logic(LogicOp::Or, m.InvalidPlane(), keep.p, m.InvalidPlane(), words);
+    k.logic(LogicOp::Or, MachineInternals::Invalid(m), keep.p, MachineInternals::Invalid(m), words);
   }
   return r;
 }
@@ -677,8 +688,8 @@ Multi Equal(const Multi& a, const Multi& b) {
   Multi r(m, BoolFormat(), "equal");
   m.Charge("compare", CompareCost(a.AsOperand(), b.AsOperand(), r.GetSpace()));
   const Format u = UnionFormat(a.Format(), b.Format());
-  auto& pa = m.PointersA();
-  auto& pb = m.PointersB();
+  auto& pa = MachineInternals::PointersA(m);
+  auto& pb = MachineInternals::PointersB(m);
   pa.clear(), pb.clear();
   for (int q = 0; q < u.Width(); ++q) {
     pa.push_back(PlaneAt(a, u.fracBits - a.Format().fracBits, q));

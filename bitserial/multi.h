@@ -8,7 +8,7 @@
 //   if (ReduceOr(hit)) ...;  fixed::Fixed nearest = ReduceMin(t);
 //
 // Every operation is bit-exact with the fixed/ function of the same name (same result
-// bits, overflow flag per PE in Machine::OverflowPlane(); Div and Sqrt also set the
+// bits, per-PE overflow flag in the machine (Machine::Overflow); Div and Sqrt also set the
 // DivideByZero / Invalid planes) and charges its schedule's
 // cycles (bitserial/cost.h) to the machine's report. A new result is computed in every PE;
 // assigning into an existing multi (operator=) writes only the active PEs, as MultiC does.

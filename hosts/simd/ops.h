@@ -14,10 +14,9 @@ namespace zephyr::simd {
 // save and restore).
 template <typename F>
 void WithExpectedSaturation(bitserial::Machine& m, F&& body) {
-  const size_t words = m.WordsPerPlane();
-  std::vector<bitserial::Word> saved(m.OverflowPlane(), m.OverflowPlane() + words);
+  const std::vector<bitserial::Word> saved = m.SaveOverflow();
   body();
-  std::copy(saved.begin(), saved.end(), m.OverflowPlane());
+  m.RestoreOverflow(saved);
   bitserial::MicroOpCounts c;
   c.Add(bitserial::MicroOp::FlagOp, 2);
   m.Charge("saturateClamp", c);
