@@ -1,7 +1,7 @@
 // hosts/cmd/accuracy.cpp — `zephyr accuracy SCENE`: a method's primary hits against an exact
 // reference (SPEC §4). For every pixel (or a stated random sample) the first hit is
-// recomputed with 128-bit binary floats (fixed/reference.h RefReal) along the same double
-// eye ray: spheres, ellipsoids and cones (ray through T⁻¹) and polygons. Also the PSNR of the
+// recomputed by the exact reference (hosts/trace/exact.h, 128-bit floats) along the same
+// double eye ray: spheres, ellipsoids and cones (ray through T⁻¹) and polygons. Also the PSNR of the
 // final image against the sequential method in double.
 //
 //   zephyr accuracy SCENE [--frac-bits N …]              the SIMD primary pass (default)
@@ -14,8 +14,8 @@
 #include <random>
 
 #include "fixed/check.h"
-#include "fixed/reference.h"
 #include "hosts/cmd/command.h"
+#include "hosts/trace/exact.h"
 #include "hosts/trace/image.h"
 #include "hosts/scene/nff.h"
 #include "hosts/methods/render.h"
@@ -24,120 +24,7 @@
 namespace zephyr::simd {
 namespace {
 
-using Real = fixed::reference::RefReal;
-
-struct RVec {
-  Real x, y, z;
-  Real operator[](int i) const { return i == 0 ? x : i == 1 ? y : z; }
-};
-RVec Make(const Vec3& v) { return {Real(v.x), Real(v.y), Real(v.z)}; }
-RVec Minus(const RVec& a, const RVec& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
-Real Dot(const RVec& a, const RVec& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-
-// The nearest sphere root beyond tMin along o + t·d (d not necessarily unit), exactly.
-std::optional<Real> ExactSphere(const RVec& c, double radius, const RVec& o, const RVec& d, double tMin) {
-  const RVec f = Minus(c, o);
-  const Real dd = Dot(d, d);
-  const Real tca = Dot(f, d) / dd;
-  const RVec v = {f.x - tca * d.x, f.y - tca * d.y, f.z - tca * d.z};
-  const Real disc = (Real(radius) * radius - Dot(v, v)) / dd;
-  if (disc < 0) return std::nullopt;
-  const Real root = sqrt(disc);
-  if (tca - root > tMin) return tca - root;
-  if (tca + root > tMin) return tca + root;
-  return std::nullopt;
-}
-
-// The ray mapped by T⁻¹ (the inverse as the scene computes it, in double; then exact).
-void ToObject(const Primitive& p, RVec& o, RVec& d) {
-  if (!p.transform) return;
-  const Affine inv = p.transform->Inverse();
-  auto row = [&](int r, const RVec& v, bool point) {
-    return Real(inv.m[r][0]) * v.x + Real(inv.m[r][1]) * v.y + Real(inv.m[r][2]) * v.z +
-           (point ? Real(inv.m[r][3]) : Real(0));
-  };
-  o = {row(0, o, true), row(1, o, true), row(2, o, true)};
-  d = {row(0, d, false), row(1, d, false), row(2, d, false)};
-}
-
-// A polygon exactly: its plane (Newell's normal) and the even-odd test in the projection
-// that drops the normal's largest axis, all in 128-bit arithmetic.
-std::optional<Real> ExactPolygon(const Polygon& poly, const RVec& o, const RVec& d, double tMin) {
-  const size_t n = poly.vertices.size();
-  std::vector<RVec> v;
-  for (const Vec3& p : poly.vertices) v.push_back(Make(p));
-  RVec nn{0, 0, 0};
-  for (size_t i = 0; i < n; ++i) {
-    const RVec &a = v[i], &b = v[(i + 1) % n];
-    nn = {nn.x + (a.y - b.y) * (a.z + b.z), nn.y + (a.z - b.z) * (a.x + b.x), nn.z + (a.x - b.x) * (a.y + b.y)};
-  }
-  const Real nd = Dot(nn, d);
-  if (nd == 0) return std::nullopt;
-  const Real t = Dot(nn, Minus(v[0], o)) / nd;
-  if (!(t > tMin)) return std::nullopt;
-  const RVec hit = {o.x + t * d.x, o.y + t * d.y, o.z + t * d.z};
-  const Real ax = abs(nn.x), ay = abs(nn.y), az = abs(nn.z);
-  const int drop = (ax >= ay && ax >= az) ? 0 : (ay >= az ? 1 : 2);
-  std::vector<Real> uv;
-  for (const RVec& p : v) uv.push_back(p[(drop + 1) % 3]), uv.push_back(p[(drop + 2) % 3]);
-  if (!InsidePolygon2D(uv, hit[(drop + 1) % 3], hit[(drop + 2) % 3])) return std::nullopt;
-  return t;
-}
-
-// An open truncated cone (NFF `c`, as hosts/trace/intersect.h IntersectCone) exactly: the
-// nearest root beyond tMin whose height lies in [0, h] on the nappe of non-negative radius.
-std::optional<Real> ExactCone(const Cone& cone, const RVec& o, const RVec& d, double tMin) {
-  const RVec base = Make(cone.base), axisFull = Minus(Make(cone.apex), base);
-  const Real h = sqrt(Dot(axisFull, axisFull));
-  const RVec a = {axisFull.x / h, axisFull.y / h, axisFull.z / h};
-  const Real r0 = Real(cone.baseRadius), slope = (Real(cone.apexRadius) - r0) / h;
-  const RVec w = Minus(o, base);
-  const Real da = Dot(d, a), wa = Dot(w, a), rw = r0 + slope * wa;
-  const Real qa = Dot(d, d) - da * da - slope * slope * da * da;
-  const Real qb = Dot(w, d) - wa * da - slope * rw * da;  // half of b
-  const Real qc = Dot(w, w) - wa * wa - rw * rw;
-  Real t0, t1;
-  if (qa == 0) {
-    if (qb == 0) return std::nullopt;
-    t0 = t1 = -qc / (2 * qb);
-  } else {
-    const Real disc = qb * qb - qa * qc;
-    if (disc < 0) return std::nullopt;
-    const Real root = sqrt(disc);
-    const Real q = qb < 0 ? Real(root - qb) : Real(-(qb + root));
-    t0 = q / qa;
-    t1 = q != 0 ? qc / q : t0;
-  }
-  if (t1 < t0) std::swap(t0, t1);
-  for (const Real& t : {t0, t1}) {
-    if (!(t > tMin)) continue;
-    const Real s = wa + t * da;
-    if (s < 0 || s > h || r0 + slope * s < 0) continue;
-    return t;
-  }
-  return std::nullopt;
-}
-
-// The exact first hit of one eye ray: the object (-1: none) and its t.
-std::pair<int, Real> ExactFirstHit(const Scene& s, const PrimaryRay& ray, double tMin) {
-  int best = -1;
-  Real tBest = 0;
-  for (size_t i = 0; i < s.objects.size(); ++i) {
-    std::optional<Real> t;
-    const Primitive& p = s.objects[i];
-    RVec o = Make(ray.origin), d = Make(ray.direction);
-    ToObject(p, o, d);
-    if (const Sphere* sp = std::get_if<Sphere>(&p.shape)) {
-      t = ExactSphere(Make(sp->center), sp->radius, o, d, tMin);
-    } else if (const Polygon* poly = std::get_if<Polygon>(&p.shape)) {
-      t = ExactPolygon(*poly, o, d, tMin);
-    } else {
-      t = ExactCone(std::get<Cone>(p.shape), o, d, tMin);
-    }
-    if (t && (best < 0 || *t < tBest)) best = int(i), tBest = *t;
-  }
-  return {best, tBest};
-}
+using Real = exact::Real;
 
 CommandRegistration reg("accuracy", [](CLI::App& program) {
   auto* cmd = program.add_subcommand(
@@ -195,7 +82,7 @@ CommandRegistration reg("accuracy", [](CLI::App& program) {
     TraceStats seqStats;
     for (int64_t pe : which) {
       const PrimaryRay ray = rays.At(int(pe % c.width), int(pe / c.width));
-      const auto [best, tBest] = ExactFirstHit(s, ray, tMin);
+      const auto [best, tBest] = exact::FirstHit(s, ray, tMin);
       const PrimaryHit h = simd ? pass.matrix.hits[pe] : seqTracer->FirstHit(ray, seqStats);
       if (h.object != best) {
         ++differ;

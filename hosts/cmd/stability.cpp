@@ -7,8 +7,8 @@
 // The Ray Tracing Gems ch. 7 case: a sphere of radius 1 at distance D straight ahead of the
 // eye, hit by a fan of rays whose closest approach to the centre runs from 0 to 1.25 radii
 // (so the fan holds hits, misses and grazing rays). Each number format sees the inputs
-// rounded to that format; the exact reference solves the same (rounded) ray with 128-bit
-// floats and the general quadratic, so what is measured is the formula's loss, not the
+// rounded to that format; the exact reference (hosts/trace/exact.h) solves the same
+// (rounded) ray with 128-bit floats, so what is measured is the formula's loss, not the
 // rounding of the inputs. Float formats use the tracer's own routines (hosts/trace/intersect.h);
 // fixed formats compute the same two forms with fixed/'s datapath arithmetic, which the
 // bit-serial array reproduces bit for bit (tests/bitserial/arith_test.cpp):
@@ -30,6 +30,7 @@
 #include "fixed/reference.h"
 #include "hosts/cmd/command.h"
 #include "hosts/scene/geometry.h"
+#include "hosts/trace/exact.h"
 #include "hosts/trace/intersect.h"
 
 namespace zephyr {
@@ -79,22 +80,10 @@ struct Outcome {
   bool flagged = false;
 };
 
-// The exact nearest root of |o + t d − c|² = r² for the given (already rounded) inputs.
+// The exact nearest root t > 0 for the given (already rounded) inputs: the exact
+// reference's sphere (hosts/trace/exact.h).
 Outcome ExactHit(const RefReal o[3], const RefReal d[3], const RefReal c[3], const RefReal& r) {
-  RefReal f[3], a = 0, b = 0, cc = -r * r;
-  for (int i = 0; i < 3; ++i) {
-    f[i] = o[i] - c[i];
-    a += d[i] * d[i];
-    b -= f[i] * d[i];
-    cc += f[i] * f[i];
-  }
-  const RefReal disc = b * b - a * cc;
-  if (disc < 0) return {};
-  const RefReal s = sqrt(disc);
-  RefReal t = (b - s) / a;
-  if (t <= 0) t = (b + s) / a;
-  if (t <= 0) return {};
-  return {t, false};
+  return {exact::SphereHit({c[0], c[1], c[2]}, r, {o[0], o[1], o[2]}, {d[0], d[1], d[2]}, RefReal(0)), false};
 }
 
 template <typename T>

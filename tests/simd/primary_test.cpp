@@ -1,4 +1,4 @@
-// The SIMD/sequential method's primary pass against the sequential tracer (double).
+// The SIMD/sequential method's primary pass against the exact (128-bit) first-hit reference.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -6,20 +6,25 @@
 
 #include "fixed/check.h"
 #include "hosts/simd/pass.h"
+#include "hosts/trace/exact.h"
 #include "hosts/scene/gen.h"
 
 namespace zephyr::simd {
 namespace {
 
-// Every pixel's first object from the sequential tracer in double.
-std::vector<PrimaryHit> SequentialHits(const Scene& scene) {
-  TraceOptions o;
-  o.depth = 1;
-  const auto tracer = Tracer::Create(scene, o);
-  TraceStats stats;
+// Every pixel's first object and t from the exact (128-bit) reference (hosts/trace/exact.h).
+std::vector<PrimaryHit> ExactHits(const Scene& scene) {
+  const PrimaryRays rays(scene.camera);
+  const double tMin = std::max(scene.camera.hither, 0.0);
   std::vector<PrimaryHit> hits;
   for (int y = 0; y < scene.camera.height; ++y)
-    for (int x = 0; x < scene.camera.width; ++x) hits.push_back(tracer->FirstHit(tracer->Rays().At(x, y), stats));
+    for (int x = 0; x < scene.camera.width; ++x) {
+      const exact::Hit h = exact::FirstHit(scene, rays.At(x, y), tMin);
+      PrimaryHit hit;
+      hit.object = h.object;
+      hit.t = h.object >= 0 ? double(h.t) : 0.0;
+      hits.push_back(hit);
+    }
   return hits;
 }
 
@@ -32,7 +37,7 @@ int ObjectMismatches(const PrimaryMatrix& m, const std::vector<PrimaryHit>& want
 TEST(SimdPrimary, FirstObjectAgreesOnEveryPixelRandomSpheres) {
   const Scene scene = GenerateRandomSpheres({.count = 48, .seed = 3, .width = 64, .height = 64});
   const PrimaryPass pass = RunPrimaryPass(scene, {});
-  EXPECT_EQ(ObjectMismatches(pass.matrix, SequentialHits(scene)), 0);
+  EXPECT_EQ(ObjectMismatches(pass.matrix, ExactHits(scene)), 0);
   EXPECT_EQ(pass.plan.layers, 1);
   EXPECT_GT(pass.cycles["totalCycles"].get<double>(), 0);
 }
@@ -40,7 +45,7 @@ TEST(SimdPrimary, FirstObjectAgreesOnEveryPixelRandomSpheres) {
 TEST(SimdPrimary, FirstObjectAgreesOnEveryPixelSphereflake) {
   const Scene scene = GenerateSphereflake(2, 64, 64);  // 91 spheres and a floor polygon
   const PrimaryPass pass = RunPrimaryPass(scene, {});
-  const auto want = SequentialHits(scene);
+  const auto want = ExactHits(scene);
   EXPECT_EQ(ObjectMismatches(pass.matrix, want), 0);
   // Where the hit is certain, t is within the stated bound of the double tracer's t.
   for (size_t i = 0; i < want.size(); ++i)
@@ -126,7 +131,7 @@ TEST(SimdPrimary, UncertainPixelsAreFlaggedAndRecomputed) {
   SimdOptions keep;
   keep.uncertain = UncertainPolicy::kKeep;
   const PrimaryPass kept = RunPrimaryPass(scene, keep);
-  const auto want = SequentialHits(scene);
+  const auto want = ExactHits(scene);
   int onFirst = 0;
   for (size_t i = 0; i < want.size(); ++i) {
     if (want[i].object != 0) continue;
@@ -170,7 +175,7 @@ namespace {
 // whose first object differs from the double tracer, and the flagged pixels are counted.
 TEST(SimdPrimary, RecomputeRepairsEveryPixelAtLowWidths) {
   const Scene scene = GenerateRandomSpheres({.count = 64, .seed = 1, .width = 64, .height = 64});
-  const auto want = SequentialHits(scene);
+  const auto want = ExactHits(scene);
   int64_t previousFlagged = -1;
   for (int bits : {4, 6, 8, 12}) {
     SimdOptions o;
@@ -199,12 +204,12 @@ TEST(SimdPrimary, RecomputeRepairsEveryPixelAtLowWidths) {
 TEST(SimdPrimary, TransformedPrimitivesRunOnTheArray) {
   const Scene scene = GenerateTransformedShowcase(64, 64);
   const PrimaryPass pass = RunPrimaryPass(scene, {});
-  EXPECT_EQ(ObjectMismatches(pass.matrix, SequentialHits(scene)), 0);
+  EXPECT_EQ(ObjectMismatches(pass.matrix, ExactHits(scene)), 0);
   // Every primitive, cones included, is tested on the array (no host-tested objects): the
   // divisions run there, and the cone program's multi × multi products (its heights) too.
   EXPECT_GT(pass.cycles["byOp"]["mul"]["cycles"].get<double>(), 0) << pass.cycles.dump();
   EXPECT_GT(pass.cycles["byOp"]["div"]["cycles"].get<double>(), 0) << pass.cycles.dump();
-  const auto want = SequentialHits(scene);
+  const auto want = ExactHits(scene);
   for (int bits : {6, 10, 16}) {
     SimdOptions o;
     o.formats.fracBits = bits;
@@ -225,8 +230,8 @@ TEST(SimdPrimary, TransformedPrimitivesRunOnTheArray) {
 }  // namespace
 }  // namespace zephyr::simd
 
-// Cones and cylinders (NFF `c`) on the array: first-object agreement with the sequential
-// tracer, sound flags at the planned and a low width, the cone ops in the report.
+// Cones and cylinders (NFF `c`) on the array: first-object agreement with the exact
+// reference, sound flags at the planned and a low width, the cone ops in the report.
 namespace zephyr::simd {
 namespace {
 
@@ -284,7 +289,7 @@ void ExpectEveryConeVisible(const Scene& scene, const std::vector<PrimaryHit>& w
 }
 
 void CheckScene(const Scene& scene, int neverHit) {
-  const auto want = SequentialHits(scene);
+  const auto want = ExactHits(scene);
   ExpectEveryConeVisible(scene, want, neverHit);
   for (int bits : {-1, 8}) {  // planned, and 8 fraction bits
     SimdOptions o;
@@ -318,11 +323,11 @@ void CheckScene(const Scene& scene, int neverHit) {
   }
 }
 
-TEST(SimdCone, DedicatedSceneAgreesWithSequential) {
+TEST(SimdCone, DedicatedSceneAgreesWithTheExactReference) {
   CheckScene(ConeScene(64), 7);
 }
 
-TEST(SimdCone, ShowcaseAgreesWithSequential) {
+TEST(SimdCone, ShowcaseAgreesWithTheExactReference) {
   CheckScene(GenerateTransformedShowcase(64, 64), -1);
 }
 

@@ -1,0 +1,123 @@
+// hosts/trace/exact.cpp — the exact (128-bit) first-hit reference (hosts/trace/exact.h).
+#include "hosts/trace/exact.h"
+
+#include <utility>
+#include <vector>
+
+#include "hosts/trace/intersect.h"
+
+namespace zephyr::exact {
+
+namespace {
+
+RealVec Minus(const RealVec& a, const RealVec& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+Real Dot(const RealVec& a, const RealVec& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+
+// The ray mapped by T⁻¹ (the inverse as the scene computes it, in double; then exact).
+void ToObject(const Primitive& p, RealVec& o, RealVec& d) {
+  if (!p.transform) return;
+  const Affine inv = p.transform->Inverse();
+  auto row = [&](int r, const RealVec& v, bool point) {
+    return Real(inv.m[r][0]) * v.x + Real(inv.m[r][1]) * v.y + Real(inv.m[r][2]) * v.z +
+           (point ? Real(inv.m[r][3]) : Real(0));
+  };
+  o = {row(0, o, true), row(1, o, true), row(2, o, true)};
+  d = {row(0, d, false), row(1, d, false), row(2, d, false)};
+}
+
+}  // namespace
+
+RealVec Make(const Vec3& v) { return {Real(v.x), Real(v.y), Real(v.z)}; }
+
+// Hearn–Baker: the closest approach v = f − tca·d, disc = (r² − |v|²)/|d|².
+std::optional<Real> SphereHit(const RealVec& centre, const Real& radius, const RealVec& o,
+                              const RealVec& d, const Real& tMin) {
+  const RealVec f = Minus(centre, o);
+  const Real dd = Dot(d, d);
+  const Real tca = Dot(f, d) / dd;
+  const RealVec v = {f.x - tca * d.x, f.y - tca * d.y, f.z - tca * d.z};
+  const Real disc = (radius * radius - Dot(v, v)) / dd;
+  if (disc < 0) return std::nullopt;
+  const Real root = sqrt(disc);
+  if (tca - root > tMin) return Real(tca - root);
+  if (tca + root > tMin) return Real(tca + root);
+  return std::nullopt;
+}
+
+// The plane (Newell's normal) and the even-odd test in the projection that drops the
+// normal's largest axis.
+std::optional<Real> PolygonHit(const Polygon& poly, const RealVec& o, const RealVec& d, const Real& tMin) {
+  const size_t n = poly.vertices.size();
+  std::vector<RealVec> v;
+  for (const Vec3& p : poly.vertices) v.push_back(Make(p));
+  RealVec nn{0, 0, 0};
+  for (size_t i = 0; i < n; ++i) {
+    const RealVec &a = v[i], &b = v[(i + 1) % n];
+    nn = {nn.x + (a.y - b.y) * (a.z + b.z), nn.y + (a.z - b.z) * (a.x + b.x), nn.z + (a.x - b.x) * (a.y + b.y)};
+  }
+  const Real nd = Dot(nn, d);
+  if (nd == 0) return std::nullopt;
+  const Real t = Dot(nn, Minus(v[0], o)) / nd;
+  if (!(t > tMin)) return std::nullopt;
+  const RealVec hit = {o.x + t * d.x, o.y + t * d.y, o.z + t * d.z};
+  const Real ax = abs(nn.x), ay = abs(nn.y), az = abs(nn.z);
+  const int drop = (ax >= ay && ax >= az) ? 0 : (ay >= az ? 1 : 2);
+  std::vector<Real> uv;
+  for (const RealVec& p : v) uv.push_back(p[(drop + 1) % 3]), uv.push_back(p[(drop + 2) % 3]);
+  if (!InsidePolygon2D(uv, hit[(drop + 1) % 3], hit[(drop + 2) % 3])) return std::nullopt;
+  return t;
+}
+
+// As hosts/trace/intersect.h IntersectCone: A t² + 2β t + C = 0 in the stable form.
+std::optional<Real> ConeHit(const Cone& cone, const RealVec& o, const RealVec& d, const Real& tMin) {
+  const RealVec base = Make(cone.base), axisFull = Minus(Make(cone.apex), base);
+  const Real h = sqrt(Dot(axisFull, axisFull));
+  const RealVec a = {axisFull.x / h, axisFull.y / h, axisFull.z / h};
+  const Real r0 = Real(cone.baseRadius), slope = (Real(cone.apexRadius) - r0) / h;
+  const RealVec w = Minus(o, base);
+  const Real da = Dot(d, a), wa = Dot(w, a), rw = r0 + slope * wa;
+  const Real qa = Dot(d, d) - da * da - slope * slope * da * da;
+  const Real qb = Dot(w, d) - wa * da - slope * rw * da;  // half of b
+  const Real qc = Dot(w, w) - wa * wa - rw * rw;
+  Real t0, t1;
+  if (qa == 0) {
+    if (qb == 0) return std::nullopt;
+    t0 = t1 = -qc / (2 * qb);
+  } else {
+    const Real disc = qb * qb - qa * qc;
+    if (disc < 0) return std::nullopt;
+    const Real root = sqrt(disc);
+    const Real q = qb < 0 ? Real(root - qb) : Real(-(qb + root));
+    t0 = q / qa;
+    t1 = q != 0 ? qc / q : t0;
+  }
+  if (t1 < t0) std::swap(t0, t1);
+  for (const Real& t : {t0, t1}) {
+    if (!(t > tMin)) continue;
+    const Real s = wa + t * da;
+    if (s < 0 || s > h || r0 + slope * s < 0) continue;
+    return t;
+  }
+  return std::nullopt;
+}
+
+std::optional<Real> ObjectHit(const Scene& scene, int index, const Vec3& origin, const Vec3& direction,
+                              double tMin) {
+  const Primitive& p = scene.objects[index];
+  RealVec o = Make(origin), d = Make(direction);
+  ToObject(p, o, d);
+  if (const Sphere* sp = std::get_if<Sphere>(&p.shape)) return SphereHit(Make(sp->center), Real(sp->radius), o, d, Real(tMin));
+  if (const Polygon* poly = std::get_if<Polygon>(&p.shape)) return PolygonHit(*poly, o, d, Real(tMin));
+  return ConeHit(std::get<Cone>(p.shape), o, d, Real(tMin));
+}
+
+Hit FirstHit(const Scene& scene, const PrimaryRay& ray, double tMin) {
+  Hit best;
+  for (size_t i = 0; i < scene.objects.size(); ++i) {
+    const std::optional<Real> t = ObjectHit(scene, int(i), ray.origin, ray.direction, tMin);
+    if (t && (best.object < 0 || *t < best.t)) best = {int(i), *t};
+  }
+  return best;
+}
+
+}  // namespace zephyr::exact
