@@ -33,7 +33,7 @@ fi
 normalise() {
   jq -S 'walk(if type == "object" then with_entries(select(.key
            | test("[Ss]econds|^perChild$|^phases$|^pid$|^host$|[Rr]ealTime") | not)) else . end)
-         # each child's ready message carries its process id and its stats message its
+         # each child ready message carries its process id and its stats message its
          # timings, as text: their sizes vary
          | del(.distributed.traffic.childrenToParent.stats?,
                .distributed.traffic.childrenToParent.ready.payloadBytes?,

@@ -111,6 +111,7 @@ CommandRegistration planCommand("plan", [](CLI::App& program) {
     const double clock = probe.cycles["clockHz"].get<double>();
     if (*json) {
       nlohmann::json j = plan.Json();
+      j["objects"] = plan.ObjectsJson();
       j["cycleEstimate"] = cycles;
       j["modelledSecondsEstimate"] = cycles / clock;
       std::printf("%s\n", j.dump(2).c_str());

@@ -1,0 +1,64 @@
+// hosts/simd/bounds.h — the error-bound arithmetic of the SIMD primary pass (docs/simd.md,
+// "Error bounds"): the pass-wide formats, the narrowest format of a value, and sound bounds
+// on the error of a floor-rounded product, a square, a linear form of the direction and a
+// discriminant's grazing band. Host-only (doubles); each primitive kind's file
+// (hosts/simd/{sphere,ellipsoid,polygon,cone}.cpp) builds its bounds from these.
+#pragma once
+
+#include <limits>
+#include <utility>
+
+#include "fixed/format.h"
+#include "hosts/scene/geometry.h"
+
+namespace zephyr::simd {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// The pass-wide formats every primitive's program shares.
+struct PassFormats {
+  int fracBits = 0;     // F: fraction bits of every length, product and t
+  int dirFracBits = 0;  // Fd: fraction bits of the direction components
+  fixed::Format t;      // t (and the distances it is built from)
+  double hither = 0;    // max(camera hither, 0)
+  double Ulp() const;        // 2^-F: a floor-rounded result's error
+  double DirError() const;   // 2^-Fd / 2: a direction component's rounding error
+};
+
+// ceil(log2 x), 0 for x <= 1.
+int CeilLog2(double x);
+// Integer bits for values of magnitude up to `bound` (at least 1).
+int IntBitsFor(double bound);
+
+// A uni constant rounded to nearest in the narrowest format with `frac` fraction bits that
+// holds it (a multiply by a uni costs one row per one bit).
+fixed::Fixed Tight(double x, int frac);
+
+// The error of a floor-rounded product x·y when |x| <= mx with error ex and |y| <= my with
+// error ey (u: the result's ulp).
+double MulErr(double mx, double ex, double my, double ey, double u);
+
+// The error of a floor-rounded square x² when |x| <= m exactly and x has error e.
+double SquareErr(double m, double e, double u);
+
+// The grazing band G of a discriminant r2 − Σ_k c_k² (three clamped cross components, each
+// with error eCross; r2's own error eR2) and the discriminant's error bound in the region
+// that matters: {G, eDisc}. A pixel whose computed disc is <= −G is a certain miss, one >= G
+// a certain hit whose root is within eDisc/√G; in between it is grazing. In that region
+// Σ c² <= r2 + G, so |c| <= √(r2 + G) + eCross (below the clamp's range `clampRange`, or
+// saturation only moves c towards the boundary), which bounds the squares' error.
+// G >= 2·eDisc, and at least `floorBand`; found by iterating G (it only grows).
+std::pair<double, double> GrazingBand(double r2, double floorBand, double eCross, double eR2,
+                                      double clampRange, double u);
+
+// One linear form c·d of the direction with uni coefficients c (rounded to nearest): the
+// computed value is within `err` of the exact c·d̂ along the exact unit direction, and
+// |value| <= max; `format` holds it.
+struct LinearForm {
+  Vec3 c;
+  double max = 0, err = 0;
+  fixed::Format format;
+};
+LinearForm MakeLinear(const Vec3& c, const PassFormats& pf);
+
+}  // namespace zephyr::simd

@@ -1,0 +1,402 @@
+// hosts/simd/cone.cpp — an open truncated cone or cylinder (NFF `c`) on the array, plain or
+// transformed: linear forms of the direction, the stable quadratic, two divisions decided
+// per PE, the height test, and beside them the error bound of every quantity (docs/simd.md,
+// "The program", cones, and "Error bounds").
+#include <algorithm>
+#include <cmath>
+
+#include "hosts/simd/object.h"
+#include "hosts/simd/ops.h"
+
+namespace zephyr::simd {
+
+using bitserial::Machine;
+using bitserial::Multi;
+using bitserial::Uni;
+using fixed::Fixed;
+using fixed::Format;
+
+namespace {
+
+// One division t = N/D of the cone program, decided per PE against a threshold D* on |D|
+// (docs/simd.md, "Error bounds", cone). With |N − N_exact| <= eN and |D − D_exact| <= eD:
+//  - |D| >= D*: |t − t_exact| <= (eN + |t_exact|·eD)/|D| <= eps + |t_exact|·eta (eta =
+//    eD/D*, eps = eN/D*). A computed |t| >= tCut means |t_exact| >= tFar (no point of the
+//    cone is that far: the root is not a hit); below it |t_exact| <= tRange and the error is
+//    at most tError.
+//  - |D| < D*: the root is no hit when certainly outside [tNear, tFar] (Outside); else the
+//    PE is uncertain.
+struct ConeDivision {
+  double eN = 0, eD = 0, dStar = 0, tCut = 0, tRange = 0, tError = 0;
+  Format out;  // the quotient (holds 2·tCut; saturation means "beyond")
+};
+
+ConeDivision PlanDivision(double eN, double eD, double tFar, double target, double freeThreshold, int frac) {
+  const double u = std::ldexp(1.0, -frac);
+  ConeDivision v;
+  v.eN = eN, v.eD = eD;
+  v.dStar = std::max({4 * eD, eD + (eN + 2 * tFar * eD) / target, freeThreshold});
+  const double eta = eD / v.dStar, eps = eN / v.dStar;
+  v.tCut = tFar * (1 + eta) + eps + u;  // floor division: N/D in [t, t + u)
+  v.tRange = (v.tCut + eps) / (1 - eta);
+  v.tError = eps + v.tRange * eta + u;
+  v.out = Format::Signed(IntBitsFor(v.tCut) + 1, frac);
+  return v;
+}
+
+// An open truncated cone (NFF `c`) as the array tests it: everything the host folds into uni
+// constants, and the error analysis (docs/simd.md: "The program", cones, and "Error bounds").
+// In object space (ray o' + t·d', d' = T⁻¹d, so t is the world t) with unit axis a,
+// w = o' − base, w⊥ = w − (w·a)a, the radius rw = r0 + σ(w·a) at the eye's height and
+// σ = (r1 − r0)/h, the roots solve A t² + 2β t + C = 0 with
+//   A = |d'⊥|² − (σ·d'·a)²,  β = w⊥·d'⊥ − σ·rw·(d'·a),  C = |w⊥|² − rw²,
+//   β² − AC = |rw·d'⊥ − σ(d'·a)·w⊥|² − (d'·(w × a))²     (the stable discriminant)
+// Every quantity inside a square is a linear form in the world direction d (T⁻¹ folded into
+// the coefficients). Roots: Q = |β| + √disc, t = −sgn(β)·Q/A and −sgn(β)·C/Q, valid where
+// hither < t and the height s = w·a + t·(d'·a) lies in [sLo, sHi].
+struct ConeSetup {
+  LinearForm da, g, u[3], e[3], q, beta;
+  double C = 0, wa = 0, sLo = 0, sHi = 0;
+  bool empty = false;      // no height has a non-negative radius: never hit
+  Format aFormat, discFormat, sum3A, sum3Disc, rootFormat, qFormat;
+  double eA = 0, eDisc = 0, grazeBand = 0, eRoot = 0, eQ = 0;
+  ConeDivision divA, divC;  // t = Q/A and t = C/Q
+  double eS[2] = {};        // height error for each division's root
+  Format sFormat[2];
+  double tFar = 0, tNear = 0;
+  bool degenerate = false;  // the bounds do not close at these widths: always uncertain
+};
+
+// ‖T‖₂ <= √(‖T‖₁‖T‖∞) (tighter than the Frobenius norm for rotations and scales); 1 without
+// a transform.
+double Spectral(const Primitive& p, const ObjectFrame& fr) {
+  if (!p.transform) return 1;
+  double n1 = 0, nInf = 0;
+  for (int i = 0; i < 3; ++i) {
+    double row = 0, col = 0;
+    for (int j = 0; j < 3; ++j) row += std::abs(p.transform->m[i][j]), col += std::abs(p.transform->m[j][i]);
+    nInf = std::max(nInf, row), n1 = std::max(n1, col);
+  }
+  return std::min(fr.forwardNorm, std::sqrt(n1 * nInf));
+}
+
+// The world-space bounding sphere of the cone seen from the eye: every hit has
+// near <= t <= far · (1 + 1e-12) (`far` includes that margin).
+struct ConeReach {
+  double near = 0, far = 0;
+};
+ConeReach Reach(const Primitive& p, const Vec3& eye, double spectral) {
+  const Cone& cone = std::get<Cone>(p.shape);
+  const Vec3 axisFull = cone.apex - cone.base;
+  const double h = Length(axisFull);
+  const Vec3 a = axisFull / h;
+  const double halfH = h / 2, rMax = std::max(std::abs(cone.baseRadius), std::abs(cone.apexRadius));
+  const Vec3 mid = cone.base + a * halfH;
+  const Vec3 midWorld = p.transform ? p.transform->ApplyPoint(mid) : mid;
+  const double reach = std::sqrt(halfH * halfH + rMax * rMax) * spectral;
+  return {std::max(0.0, Length(midWorld - eye) - reach), (Length(midWorld - eye) + reach) * (1 + 1e-12)};
+}
+
+// The geometry and the linear forms of d: wa, C, the heights [sLo, sHi], da, g, u, e, q, β.
+void SetUpForms(ConeSetup& cs, const Cone& cone, const ObjectFrame& fr, const PassFormats& pf) {
+  const Vec3 axisFull = cone.apex - cone.base;
+  const double h = Length(axisFull);
+  const Vec3 a = axisFull / h;
+  const double sigma = (cone.apexRadius - cone.baseRadius) / h;
+  const Vec3 w = fr.eye - cone.base;
+  cs.wa = Dot(w, a);
+  const Vec3 wPerp = w - a * cs.wa;
+  const double rw = cone.baseRadius + sigma * cs.wa;
+  cs.C = Dot(wPerp, wPerp) - rw * rw;
+  // Heights with a non-negative radius within [0, h] (the other nappe is not the cone).
+  cs.sLo = 0, cs.sHi = h;
+  if (sigma > 0) cs.sLo = std::max(cs.sLo, -cone.baseRadius / sigma);
+  if (sigma < 0) cs.sHi = std::min(cs.sHi, -cone.baseRadius / sigma);
+  if (sigma == 0 && cone.baseRadius < 0) cs.empty = true;
+  if (cs.sLo > cs.sHi) cs.empty = true;
+  // Coefficients over the world direction: x·d' = (A3ᵀx)·d.
+  auto pull = [&](const Vec3& x) {
+    double r[3];
+    for (int j = 0; j < 3; ++j) r[j] = fr.a[0][j] * x.x + fr.a[1][j] * x.y + fr.a[2][j] * x.z;
+    return Vec3{r[0], r[1], r[2]};
+  };
+  const Vec3 cDa = pull(a);
+  cs.da = MakeLinear(cDa, pf);
+  cs.g = MakeLinear(cDa * sigma, pf);
+  for (int k = 0; k < 3; ++k) {
+    double row[3];  // row k of the projector I − aaᵀ
+    for (int j = 0; j < 3; ++j) row[j] = (k == j ? 1.0 : 0.0) - a[k] * a[j];
+    const Vec3 cU = pull(Vec3{row[0], row[1], row[2]});
+    cs.u[k] = MakeLinear(cU, pf);
+    cs.e[k] = MakeLinear(cU * rw - cDa * (sigma * wPerp[k]), pf);
+  }
+  cs.q = MakeLinear(pull(Cross(w, a)), pf);
+  cs.beta = MakeLinear(pull(wPerp - a * (sigma * rw)), pf);
+}
+
+// The errors and formats of A = Σu² − g² and disc = Σe² − q² (squares of computed forms;
+// the sums are exact), of √disc and of Q = |β| + √disc.
+void SetUpQuadratic(ConeSetup& cs, const PassFormats& pf) {
+  const double u = pf.Ulp();
+  double maxU = 0, maxE = 0;
+  for (int k = 0; k < 3; ++k) {
+    cs.eA += SquareErr(Length(cs.u[k].c), cs.u[k].err, u);
+    cs.eDisc += SquareErr(Length(cs.e[k].c), cs.e[k].err, u);
+    maxU += cs.u[k].max * cs.u[k].max;
+    maxE += cs.e[k].max * cs.e[k].max;
+  }
+  cs.eA += SquareErr(Length(cs.g.c), cs.g.err, u);
+  // Only |q| <= |e| can hit: where the true disc >= 0, or the computed one >= G, |q| is below
+  // |e|'s bound (plus the errors), however large q's coefficients (the eye's distance).
+  double eNorm = 0, eErr = 0;
+  for (int k = 0; k < 3; ++k) eNorm += Dot(cs.e[k].c, cs.e[k].c), eErr = std::max(eErr, cs.e[k].err);
+  const double qMax = std::min(Length(cs.q.c), std::sqrt(eNorm) + std::sqrt(3.0) * eErr + cs.q.err);
+  cs.eDisc += SquareErr(qMax, cs.q.err, u);
+  const double maxA = std::max(maxU, cs.g.max * cs.g.max), maxDisc = std::max(maxE, cs.q.max * cs.q.max);
+  cs.sum3A = Format::Unsigned(IntBitsFor(maxU + u), pf.fracBits);
+  cs.sum3Disc = Format::Unsigned(IntBitsFor(maxE + u), pf.fracBits);
+  cs.aFormat = Format::Signed(IntBitsFor(maxA + u), pf.fracBits);
+  cs.discFormat = Format::Signed(IntBitsFor(maxDisc + u), pf.fracBits);
+  cs.rootFormat = Format::Unsigned(IntBitsFor(std::sqrt(maxDisc) + 1), pf.fracBits);
+  cs.qFormat = Format::Unsigned(IntBitsFor(cs.beta.max + std::sqrt(maxDisc) + 2), pf.fracBits);
+}
+
+// The divisions, aiming at a t error of 64·tFar·2^-F (the planner's nominal order) or 8×
+// the error of Q, whichever is larger. For C/Q, an in-range root has Q >= |C|/tFar, so a
+// threshold below |C|/(1.25·tFar) costs no flags (smaller Q are certainly beyond). Then
+// the height s = w·a + t·(d'·a) of each root.
+void SetUpDivisions(ConeSetup& cs, const PassFormats& pf) {
+  const double u = pf.Ulp();
+  const double target = std::max({64 * cs.tFar * u, 8 * cs.eQ, 4 * u});
+  cs.divA = PlanDivision(cs.eQ, cs.eA, cs.tFar, target, 0, pf.fracBits);
+  cs.divC = PlanDivision(u / 2, cs.eQ, cs.tFar, target, std::abs(cs.C) / (1.25 * cs.tFar), pf.fracBits);
+  const ConeDivision* divs[2] = {&cs.divA, &cs.divC};
+  for (int i = 0; i < 2; ++i) {
+    const ConeDivision& v = *divs[i];
+    cs.eS[i] = MulErr(v.tRange, v.tError, Length(cs.da.c), cs.da.err, u) + u / 2;
+    cs.sFormat[i] = Format::Signed(IntBitsFor(std::abs(cs.wa) + 2 * v.tCut * cs.da.max + 1), pf.fracBits);
+    if (v.tCut >= std::ldexp(1.0, pf.t.intBits)) cs.degenerate = true;  // a hit would not fit t
+  }
+}
+
+ConeSetup MakeConeSetup(const Primitive& p, const Vec3& eye, const PassFormats& pf) {
+  const Cone& cone = std::get<Cone>(p.shape);
+  const double u = pf.Ulp();
+  const ObjectFrame fr = MakeObjectFrame(p, eye);
+  ConeSetup cs;
+  SetUpForms(cs, cone, fr, pf);
+  SetUpQuadratic(cs, pf);
+  // The grazing band: at least twice the discriminant's error, and (ρ/8)² with ρ the cone's
+  // larger radius in world units (as a sphere's (r/8)²), so the root's error e/√G stays small.
+  const double spectral = Spectral(p, fr);
+  const double rho = std::max(std::abs(cone.baseRadius), std::abs(cone.apexRadius)) / spectral;
+  cs.grazeBand = std::max(2 * cs.eDisc, std::pow(rho / 8, 2));
+  cs.eRoot = cs.eDisc / std::sqrt(cs.grazeBand) + u;
+  cs.eQ = cs.beta.err + cs.eRoot;
+  const ConeReach reach = Reach(p, eye, spectral);
+  cs.tFar = reach.far + u;
+  cs.tNear = reach.near;
+  SetUpDivisions(cs, pf);
+  return cs;
+}
+
+Multi Linear(const Multi (&d)[3], const LinearForm& l, int frac) {
+  const Fixed c[3] = {Tight(l.c.x, frac), Tight(l.c.y, frac), Tight(l.c.z, frac)};
+  return Dot3(d, c, l.format);
+}
+
+// One root of the cone: t = ±N/D where |D| >= D* (`sure`), or certainly outside the cone's
+// range [tNear, tFar] of t (`beyond`: no hit), or neither (uncertain). See ConeDivision.
+struct ConeRoot {
+  Multi t, sure, beyond;
+};
+
+// Certainly |N/D| outside [tNear, tFar] (no point of the cone there), for |N| and |D| with
+// errors eN and eD: |N| − eN >= tFar·(|D| + eD), or |N| + eN <= tNear·(|D| − eD). Products
+// round down and constants to nearest, which the margins absorb.
+Multi Outside(Machine& m, const Multi& absN, const Multi& absD, double eN, double eD, double tNear,
+              double tFar, int frac) {
+  const double u = std::ldexp(1.0, -frac);
+  const Format bf = Format::Unsigned(absD.Format().intBits + IntBitsFor(tFar + u) + 1, frac);
+  const Multi far = Add(Mul(absD, Uni{Tight(tFar + u, frac)}, bf), Broadcast(m, Tight(tFar * eD + eN + 3 * u, frac)), bf);
+  Multi out = far <= absN;
+  if (tNear > 0) {
+    const Multi near = Mul(absD, Uni{Tight(std::max(tNear - u, 0.0), frac)}, bf);
+    const Format nf = Format::Unsigned(absN.Format().intBits + 1, frac);
+    out = out || (Add(absN, Broadcast(m, Tight(tNear * eD + eN + 2 * u, frac)), nf) <= near);
+  }
+  return out;
+}
+
+ConeRoot ConeDivide(Machine& m, const Multi& n, const Multi& den, const Multi& negate, const Multi& active,
+                    const ConeDivision& v, double tNear, double tFar, int frac) {
+  ConeRoot r;
+  const Multi absD = AbsOf(den);
+  r.sure = Broadcast(m, Tight(v.dStar, frac)) <= absD;
+  r.beyond = Outside(m, AbsOf(n), absD, v.eN, v.eD, tNear, tFar, frac);
+  WithExpectedSaturation(m, [&] {  // a saturated quotient is >= tCut: beyond the cone
+    Where(active && r.sure, [&] { r.t = Div(n, den, v.out, kSaturate); });
+    Where(negate, [&] { r.t = Neg(r.t, v.out, kSaturate); });
+  });
+  return r;
+}
+
+class ConeProgram final : public ObjectProgram {
+ public:
+  ConeProgram(const Primitive& p, const Vec3& eye, const PassFormats& pf)
+      : pf_(pf), cs_(MakeConeSetup(p, eye, pf)) {
+    Bound();
+  }
+
+  const ObjectBounds& Bounds() const { return b_; }
+
+  std::vector<PlannedFormat> Formats() const {
+    const LinearForm* forms[] = {&cs_.da, &cs_.g, &cs_.u[0], &cs_.u[1], &cs_.u[2], &cs_.e[0],
+                                 &cs_.e[1], &cs_.e[2], &cs_.q, &cs_.beta};
+    int linear = 1;
+    for (const LinearForm* l : forms) linear = std::max(linear, l->format.intBits);
+    return {{"linear forms of d", Format::Signed(linear, pf_.fracBits),
+             "d'·a, σd'·a, d'⊥, e, d'·(w×a), β (T⁻¹ folded in); the widest of ten"},
+            {"|d'⊥|²", cs_.sum3A, "sum of three squares"},
+            {"A", cs_.aFormat, "|d'⊥|² − (σd'·a)²"},
+            {"|e|²", cs_.sum3Disc, "sum of three squares"},
+            {"disc", cs_.discFormat, "|e|² − (d'·(w×a))²"},
+            {"root √disc", cs_.rootFormat, "half the discriminant's integer bits"},
+            {"Q = |β| + √disc", cs_.qFormat, "sum of the bounds"},
+            {"t = Q/A", cs_.divA.out, "by division where |A| >= its threshold, else flagged unless beyond"},
+            {"t = C/Q", cs_.divC.out, "by division where |Q| >= its threshold, else flagged unless beyond"},
+            {"height s of Q/A's root", cs_.sFormat[0], "w·a + t·(d'·a)"},
+            {"height s of C/Q's root", cs_.sFormat[1], "w·a + t·(d'·a)"},
+            {"t", pf_.t, "the nearer valid root"}};
+  }
+
+  Candidate Run(Machine& m, const Multi (&d)[3]) const override;
+
+ private:
+  // The bounds: t's error from the divisions (ConeDivision); an object whose quotient could
+  // not fit t is always uncertain.
+  void Bound() {
+    b_.kind = ShapeKind::kCone;
+    b_.farthest = cs_.tFar;
+    b_.grazeBand = cs_.grazeBand;
+    for (const Format& f : {cs_.aFormat, cs_.discFormat, cs_.qFormat, cs_.divA.out, cs_.divC.out, cs_.sFormat[0],
+                            cs_.sFormat[1]})
+      b_.intBits = std::max(b_.intBits, f.intBits);
+    if (cs_.degenerate) {
+      b_.alwaysUncertain = true;
+      b_.tError = b_.slack = kInf;
+      return;
+    }
+    b_.tError = std::max(cs_.divA.tError, cs_.divC.tError);
+    b_.slack = b_.tError + pf_.Ulp();
+  }
+
+  Multi UniOf(Machine& m, double x) const { return Broadcast(m, Tight(x, pf_.fracBits)); }
+
+  // Root i's tests: a valid hit (in range, beyond hither, height inside), uncertain (the
+  // division undecided, or near hither or a rim), and where uncertain the least t a true
+  // hit could have.
+  void TestRoot(Machine& m, int i, const ConeRoot& r, const Multi& roots, const Multi& da, const Multi& hither,
+                const Multi& sLo, const Multi& sHi, Multi& valid, Multi& unsure, Multi& low) const;
+
+  PassFormats pf_;
+  ConeSetup cs_;
+  ObjectBounds b_;
+};
+
+void ConeProgram::TestRoot(Machine& m, int i, const ConeRoot& r, const Multi& roots, const Multi& da,
+                           const Multi& hither, const Multi& sLo, const Multi& sHi, Multi& valid, Multi& unsure,
+                           Multi& low) const {
+  const int F = pf_.fracBits;
+  const double u = pf_.Ulp();
+  const ConeDivision& v = i == 0 ? cs_.divA : cs_.divC;
+  const Fixed tMax{pf_.t, pf_.t.MaxRaw()};
+  // The height of the hit: s = w·a + t·(d'·a).
+  Multi s;
+  WithExpectedSaturation(m, [&] { s = Add(Mul(r.t, da, cs_.sFormat[i], kSaturate), UniOf(m, cs_.wa), cs_.sFormat[i], kSaturate); });
+  const Multi inRange = roots && r.sure && (r.t < UniOf(m, v.tCut));
+  valid = inRange && (hither < r.t) && (sLo < s) && (s < sHi);
+  const Multi notBehind = UniOf(m, pf_.hither - v.tError - u) < r.t;
+  const Multi rim = Near(m, r.t - hither, v.tError + u, F) || Near(m, s - sLo, cs_.eS[i] + u, F) ||
+                    Near(m, s - sHi, cs_.eS[i] + u, F);
+  unsure = (roots && !r.sure && !r.beyond) || (inRange && notBehind && rim);
+  // Where uncertain, the true root (if a hit) is >= low.
+  WithExpectedSaturation(m, [&] {
+    const Multi lowSure = Sub(r.t, UniOf(m, v.tError + u), pf_.t, kSaturate);
+    low = Select(r.sure, lowSure, Select(r.beyond, Broadcast(m, tMax), UniOf(m, cs_.tNear), pf_.t), pf_.t, kSaturate);
+  });
+}
+
+Candidate ConeProgram::Run(Machine& m, const Multi (&d)[3]) const {
+  const int F = pf_.fracBits;
+  const double u = pf_.Ulp();
+  const ConeSetup& cs = cs_;
+  auto uni = [&](double x) { return UniOf(m, x); };
+  Candidate out;
+  const Multi zero = Zero(m);
+  if (cs.empty) {  // no height has a non-negative radius
+    out.t = Broadcast(m, Fixed{pf_.t, pf_.t.MaxRaw()});
+    out.hit = out.uncertain = zero;
+    out.tLow = out.t;
+    return out;
+  }
+  // The linear forms of d (uni coefficients with T⁻¹ folded in), then
+  // A = |d'⊥|² − (σ d'·a)² and disc = |rw·d'⊥ − σ(d'·a)w⊥|² − (d'·(w × a))².
+  const Multi da = Linear(d, cs.da, F), beta = Linear(d, cs.beta, F);
+  Multi uv[3], ev[3];
+  for (int k = 0; k < 3; ++k) uv[k] = Linear(d, cs.u[k], F), ev[k] = Linear(d, cs.e[k], F);
+  const Multi sumU = SumOfSquares(uv, cs.sum3A);
+  const Multi aq = Length(cs.g.c) > 0 ? Sub(sumU, Square(Linear(d, cs.g, F), cs.aFormat), cs.aFormat)
+                                      : Convert(sumU, cs.aFormat);
+  const Multi disc = Sub(SumOfSquares(ev, cs.sum3Disc), Square(Linear(d, cs.q, F), cs.discFormat), cs.discFormat);
+  const Multi roots = uni(cs.grazeBand) <= disc;  // certainly two roots (of the infinite cone)
+  Multi grazing = Near(m, disc, cs.grazeBand, F);
+  const Multi root = Sqrt(disc, cs.rootFormat);
+  // Q = |β| + √disc; t = −sgn(β)·Q/A and −sgn(β)·C/Q (the stable pair).
+  const Multi q = Add(AbsOf(beta), root, cs.qFormat);
+  const Multi negate = zero <= beta;
+  const ConeRoot rs[2] = {ConeDivide(m, q, aq, negate, roots, cs.divA, cs.tNear, cs.tFar, F),
+                          ConeDivide(m, uni(cs.C), q, negate, roots, cs.divC, cs.tNear, cs.tFar, F)};
+  // A grazing ray matters only if the double root could lie in [tNear, tFar]: there Q is
+  // within eβ + √(G + e_disc) of its true value (both roots of the true disc >= 0 are).
+  {
+    const double eQg = cs.beta.err + std::sqrt(cs.grazeBand + cs.eDisc) + u;
+    const Multi absQ = AbsOf(q), absC = AbsOf(uni(cs.C));
+    grazing = grazing && !(Outside(m, absQ, AbsOf(aq), eQg, cs.eA, cs.tNear, cs.tFar, F) &&
+                           Outside(m, absC, absQ, u / 2, eQg, cs.tNear, cs.tFar, F));
+  }
+  const Multi hither = uni(pf_.hither), sLo = uni(cs.sLo), sHi = uni(cs.sHi);
+  Multi valid[2], unsure[2], low[2];
+  for (int i = 0; i < 2; ++i) TestRoot(m, i, rs[i], roots, da, hither, sLo, sHi, valid[i], unsure[i], low[i]);
+  out.hit = valid[0] || valid[1];
+  WithExpectedSaturation(m, [&] {
+    out.t = Select(valid[0] && (!valid[1] || rs[0].t < rs[1].t), rs[0].t, rs[1].t, pf_.t, kSaturate);
+  });
+  out.uncertain = grazing || unsure[0] || unsure[1];
+  out.tLow = Select(grazing, uni(cs.tNear), Min(low[0], low[1], pf_.t), pf_.t);
+  if (b_.alwaysUncertain) {  // the bounds do not close: every PE that may hit is flagged
+    out.uncertain = uni(-cs.grazeBand) < disc;
+    out.tLow = Convert(uni(cs.tNear), pf_.t);
+  }
+  return out;
+}
+
+}  // namespace
+
+ObjectExtent ConeExtent(const Primitive& p, const Vec3& eye) {
+  // The planner's range probe: the bounding sphere's far side plus 2^-16 (the margin the
+  // cone's tFar adds at 16 fraction bits).
+  const Cone& cone = std::get<Cone>(p.shape);
+  ObjectExtent e;
+  e.farthest = Reach(p, eye, Spectral(p, MakeObjectFrame(p, eye))).far + std::ldexp(1.0, -16);
+  // Half the larger radius, or half the height, in world units (r / ‖T⁻¹‖_F).
+  e.feature = std::min(std::max(std::abs(cone.baseRadius), std::abs(cone.apexRadius)),
+                       Length(cone.apex - cone.base)) / 2 / InverseFrobenius(p);
+  return e;
+}
+
+ObjectPlan PlanCone(const Primitive& p, const Vec3& eye, const PassFormats& pf) {
+  return PlanOf<ConeProgram>(p, eye, pf);
+}
+
+}  // namespace zephyr::simd

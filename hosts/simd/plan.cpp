@@ -1,0 +1,303 @@
+// hosts/simd/plan.cpp — the format planner of the SIMD primary pass (hosts/simd/plan.h,
+// docs/simd.md "The planner"): the scene's range, the pass-wide formats, each object's plan
+// (hosts/simd/<kind>.cpp), the memory check, and the plan as JSON and text.
+#include "hosts/simd/plan.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include "fixed/check.h"
+#include "hosts/simd/object.h"
+
+namespace zephyr::simd {
+
+using fixed::Format;
+
+UncertainPolicy ParseUncertainPolicy(const std::string& name) {
+  if (name == "recompute") return UncertainPolicy::kRecompute;
+  if (name == "keep") return UncertainPolicy::kKeep;
+  if (name == "fail") return UncertainPolicy::kFail;
+  throw UserError("--uncertain: expected recompute, keep or fail, got '" + name + "'");
+}
+const char* UncertainPolicyName(UncertainPolicy p) {
+  return p == UncertainPolicy::kRecompute ? "recompute" : p == UncertainPolicy::kKeep ? "keep" : "fail";
+}
+
+bitserial::MachineProfile MachineProfileOf(const SimdOptions& o) {
+  bitserial::MachineProfile p = bitserial::Profile(o.profile);
+  for (const std::string& a : o.profileOverrides) p.Override(a);
+  return p;
+}
+
+ObjectFrame MakeObjectFrame(const Primitive& p, const Vec3& eye) {
+  ObjectFrame f;
+  const Affine t = p.transform ? *p.transform : Affine{};
+  const Affine inv = t.Inverse();
+  double fn = 0;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      f.a[i][j] = inv.m[i][j];
+      fn += t.m[i][j] * t.m[i][j];
+      f.rowSum[i] += std::abs(inv.m[i][j]);
+    }
+    f.ddMax += f.rowSum[i] * f.rowSum[i];
+  }
+  f.forwardNorm = std::sqrt(fn);
+  f.eye = inv.ApplyPoint(eye);
+  return f;
+}
+
+double InverseFrobenius(const Primitive& p) {
+  if (!p.transform) return 1;
+  const Affine inv = p.transform->Inverse();
+  double norm = 0;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) norm += inv.m[r][c] * inv.m[r][c];
+  return std::sqrt(norm);
+}
+
+const char* ObjectPlan::KindName() const {
+  switch (bounds.kind) {
+    case ShapeKind::kSphere: return bounds.transformed ? "ellipsoid" : "sphere";
+    case ShapeKind::kPolygon: return "polygon";
+    case ShapeKind::kCone: return "cone";
+  }
+  return "?";
+}
+
+namespace {
+
+ObjectExtent ExtentOf(const Primitive& p, const Vec3& eye) {
+  switch (p.Kind()) {
+    case ShapeKind::kSphere: return p.transform ? EllipsoidExtent(p, eye) : SphereExtent(p, eye);
+    case ShapeKind::kPolygon: return PolygonExtent(p, eye);
+    case ShapeKind::kCone: return ConeExtent(p, eye);
+  }
+  ZEPHYR_CHECK(false);
+  return {};
+}
+
+ObjectPlan PlanObject(const Scene& scene, int index, const PassFormats& pf) {
+  const Primitive& p = scene.objects[index];
+  const Vec3& eye = scene.camera.from;
+  ObjectPlan plan;
+  switch (p.Kind()) {
+    case ShapeKind::kSphere: plan = p.transform ? PlanEllipsoid(p, eye, pf) : PlanSphere(p, eye, pf); break;
+    case ShapeKind::kPolygon: plan = PlanPolygon(p, eye, pf); break;
+    case ShapeKind::kCone: plan = PlanCone(p, eye, pf); break;
+  }
+  plan.index = index;
+  plan.bounds.transformed = bool(p.transform);
+  return plan;
+}
+
+// The scene's range: the farthest point of an object from the eye, the smallest feature and
+// the largest sphere radius (at least 1).
+struct SceneRange {
+  double farthest = 1, rMin = 1e300, rMax = 1;
+};
+
+SceneRange RangeOf(const Scene& scene) {
+  SceneRange r;
+  for (const Primitive& p : scene.objects) {
+    const ObjectExtent e = ExtentOf(p, scene.camera.from);
+    r.farthest = std::max(r.farthest, e.farthest);
+    if (p.Kind() == ShapeKind::kSphere) r.rMax = std::max(r.rMax, e.radius);
+    r.rMin = std::min(r.rMin, e.feature);
+  }
+  if (scene.objects.empty() || !(r.rMin > 0) || r.rMin > 1e299) r.rMin = 1;
+  return r;
+}
+
+// The widths: integer bits for the farthest distance (one more for tca ± root); fraction
+// bits so that the t error bound (≈ 60·D·2^-F, docs/simd.md) is at most 1/64 of the
+// smallest feature, never coarser than 2^-10; the user's overrides win.
+void ChooseWidths(PrimaryPlan& plan, const SceneRange& range, const FormatOverrides& o) {
+  plan.distIntBits = o.intBits >= 0 ? o.intBits : IntBitsFor(range.farthest) + 1;
+  const int planned = std::clamp(CeilLog2(64.0 * 60.0 * range.farthest / range.rMin), 10, 40);
+  plan.fracBits = o.fracBits >= 0 ? o.fracBits : planned;
+  plan.dirFracBits = o.dirFracBits >= 0 ? o.dirFracBits : plan.fracBits;
+  if (plan.fracBits > 56 || plan.dirFracBits > 60 || plan.distIntBits > 40)
+    throw UserError(fmt::format("formats too wide for the primary pass: {} integer bits, {} fraction "
+                                "bits, {} direction fraction bits (limits 40, 56, 60)",
+                                plan.distIntBits, plan.fracBits, plan.dirFracBits));
+}
+
+// The pass-wide table: each quantity at the widest format an object's program uses it in.
+void SummaryTable(PrimaryPlan& plan, const Scene& scene, const SceneRange& range) {
+  const int F = plan.fracBits, R = IntBitsFor(range.rMax);
+  const std::string dist = fmt::format("farthest point of an array object is {:.4g} from the eye", range.farthest);
+  plan.formats = {
+      {"direction d (x,y,z)", plan.direction, "unit components in [-1,1]; fraction bits = F"},
+      {"eye-to-centre f (uni)", plan.length, dist},
+      {"tca = f·d, cross f×d", plan.length, "|f·d|, |f×d| <= |f|"},
+      {"cross, clamped", Format::Signed(R, F), fmt::format("only |f×d| <= r = {:.4g} can hit; larger saturate (a miss)", range.rMax)},
+      {"squares, their sum", Format::Unsigned(2 * R + 2, F), "three squares of the clamped cross product"},
+      {"discriminant r²−|f×d|²", Format::Signed(2 * R + 2, F), "difference of the above"},
+      {"root √disc", Format::Unsigned(R + 1, F), "half the discriminant's integer bits"},
+      {"t = tca ∓ root", plan.t, "t <= farthest (one bit of headroom)"},
+      {"object index + 1", plan.object, fmt::format("{} objects, 0 = none", scene.objects.size())},
+  };
+  int ellipsoids = 0, polygons = 0, ellipsoidBits = 0, cones = 0, coneBits = 0;
+  for (const ObjectPlan& o : plan.objects) {
+    const ObjectBounds& b = o.bounds;
+    if (b.kind == ShapeKind::kPolygon) ++polygons;
+    if (b.kind == ShapeKind::kSphere && b.transformed) ++ellipsoids, ellipsoidBits = std::max(ellipsoidBits, b.intBits);
+    if (b.kind == ShapeKind::kCone) ++cones, coneBits = std::max(coneBits, b.intBits);
+  }
+  if (ellipsoids)
+    plan.formats.push_back({"ellipsoid d' = T⁻¹d, f·d', f×d'", Format::Signed(ellipsoidBits, F),
+                            fmt::format("{} transformed sphere(s): |f|·|d'|, |d'| <= Σ|T⁻¹ row|; t = (f·d' ∓ √disc)/|d'|² by division", ellipsoids)});
+  if (polygons)
+    plan.formats.push_back({"polygon edge/plane ĝ·d, n̂·d", Format::Signed(1, F),
+                            fmt::format("{} polygon(s): unit uni normals (T folded in on the host); t = dist/(n̂·d) by division", polygons)});
+  if (cones)
+    plan.formats.push_back({"cone A, disc, √, t, height", Format::Signed(coneBits, F),
+                            fmt::format("{} cone(s)/cylinder(s): linear forms of d (T⁻¹ folded in), squares up to "
+                                        "the widest; t = −sgn(β)·Q/A and −sgn(β)·C/Q by division where |divisor| >= "
+                                        "its threshold, else flagged unless certainly beyond the cone",
+                                        cones)});
+}
+
+// Memory per virtual PE: the matrix (object, t, d, two flag bits) plus the temporaries of
+// one sphere test (tca, 3 cross, 3 clamped, 3 squares, sum, disc, root, t0, t1, t and the
+// 1-bit masks), the near-tie and grazing trackers. UserError when it cannot fit.
+void CheckMemory(PrimaryPlan& plan, const SceneRange& range, const bitserial::MachineProfile& profile) {
+  const int R = IntBitsFor(range.rMax), F = plan.fracBits;
+  plan.matrixBitsPerPe = plan.objectBits + plan.t.Width() + 3 * plan.direction.Width() + 2;
+  const int wl = plan.length.Width(), ws = 2 * R + 3 + F;
+  plan.memoryBitsPerPe = plan.matrixBitsPerPe + 2 * plan.t.Width() + 6 * wl + 3 * (R + 1 + F) +
+                         5 * ws + 4 * plan.t.Width() + 8;
+  plan.internalCapacity = profile.internalBitsPerPe / plan.layers;
+  plan.externalCapacity = profile.externalBitsPerPe / plan.layers;
+  if (plan.memoryBitsPerPe > plan.internalCapacity + plan.externalCapacity)
+    throw UserError(fmt::format(
+        "the scene does not fit the {} array: the primary pass needs about {} bits per virtual "
+        "PE (t {}, direction {}, {} layers for {}x{} pixels) but each virtual PE has {} internal + "
+        "{} external bits; use a smaller image or fewer bits (--frac-bits, --int-bits)",
+        profile.name, plan.memoryBitsPerPe, plan.t.Name(), plan.direction.Name(), plan.layers,
+        plan.width, plan.height, plan.internalCapacity, plan.externalCapacity));
+}
+
+}  // namespace
+
+PrimaryPlan PlanPrimaryPass(const Scene& scene, const SimdOptions& options) {
+  const bitserial::MachineProfile profile = MachineProfileOf(options);
+  const Camera& cam = scene.camera;
+  PrimaryPlan plan;
+  plan.width = cam.width, plan.height = cam.height;
+  plan.virtualPes = int64_t(cam.width) * cam.height;
+  plan.layers = int((plan.virtualPes + profile.physicalPes - 1) / profile.physicalPes);
+  const SceneRange range = RangeOf(scene);
+  ChooseWidths(plan, range, options.formats);
+  const int L = plan.distIntBits, F = plan.fracBits;
+  plan.objectBits = std::max(1, CeilLog2(double(scene.objects.size()) + 1));
+  plan.direction = Format::Signed(1, plan.dirFracBits);
+  plan.length = Format::Signed(L, F);
+  plan.t = Format::Signed(L, F);
+  plan.object = Format::Unsigned(plan.objectBits, 0);
+  plan.pass.fracBits = plan.fracBits;
+  plan.pass.dirFracBits = plan.dirFracBits;
+  plan.pass.t = plan.t;
+  plan.pass.hither = std::max(cam.hither, 0.0);
+  // Each object's bounds, formats and program, derived from these formats (docs/simd.md,
+  // "Error bounds").
+  plan.grazingFraction = 1.0 / 8;
+  for (size_t i = 0; i < scene.objects.size(); ++i) {
+    plan.objects.push_back(PlanObject(scene, int(i), plan.pass));
+    const ObjectBounds& b = plan.objects.back().bounds;
+    if (!b.alwaysUncertain) plan.tErrorBound = std::max(plan.tErrorBound, b.tError);
+    else ++plan.alwaysUncertainObjects;
+  }
+  SummaryTable(plan, scene, range);
+  CheckMemory(plan, range, profile);
+  return plan;
+}
+
+nlohmann::json PrimaryPlan::Json() const {
+  nlohmann::json j = {{"width", width}, {"height", height}, {"virtualPes", virtualPes},
+                      {"layers", layers}, {"distIntBits", distIntBits}, {"fracBits", fracBits},
+                      {"dirFracBits", dirFracBits}, {"objectBits", objectBits},
+                      {"tErrorBound", tErrorBound},
+                      {"grazingFraction", grazingFraction}, {"memoryBitsPerPe", memoryBitsPerPe},
+                      {"matrixBitsPerPe", matrixBitsPerPe}, {"internalCapacity", internalCapacity},
+                      {"externalCapacity", externalCapacity},
+                      {"alwaysUncertainObjects", alwaysUncertainObjects}};
+  for (const PlannedFormat& f : formats)
+    j["formats"].push_back({{"quantity", f.quantity}, {"format", f.format.Name()}, {"reason", f.reason}});
+  return j;
+}
+
+nlohmann::json PrimaryPlan::ObjectsJson() const {
+  nlohmann::json all = nlohmann::json::array();
+  for (const ObjectPlan& o : objects) {
+    const ObjectBounds& b = o.bounds;
+    auto finite = [](double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json("inf"); };
+    nlohmann::json j = {{"index", o.index}, {"kind", o.KindName()}, {"farthest", b.farthest},
+                        {"tError", finite(b.tError)}, {"slack", finite(b.slack)},
+                        {"grazeBand", b.grazeBand}, {"alwaysUncertain", b.alwaysUncertain}};
+    for (const PlannedFormat& f : o.formats)
+      j["formats"].push_back({{"quantity", f.quantity}, {"format", f.format.Name()}, {"reason", f.reason}});
+    all.push_back(j);
+  }
+  return all;
+}
+
+std::string PrimaryPlan::Text() const {
+  std::string s = fmt::format("{}x{} pixels = {} virtual PEs in {} layer(s)\n", width, height,
+                              virtualPes, layers);
+  for (const PlannedFormat& f : formats)
+    s += fmt::format("  {:<26} {:<8} {}\n", f.quantity, f.format.Name(), f.reason);
+  s += fmt::format("error bound on t (certain pixels): {:.3g} (the largest object's e); near tie per pair: "
+                   "|t_i - t_j| <= e_i + e_j; grazing when disc < max((r/{:g})^2, 2 x its error "
+                   "bound), per object\n",
+                   tErrorBound, 1 / grazingFraction);
+  s += fmt::format("memory per virtual PE: ~{} bits (matrix {} bits, external) of {} internal + {} "
+                   "external\n",
+                   memoryBitsPerPe, matrixBitsPerPe, internalCapacity, externalCapacity);
+  if (alwaysUncertainObjects > 0)
+    s += fmt::format("{} object(s) have bounds that do not close at these widths: every pixel that may "
+                     "hit them is uncertain\n",
+                     alwaysUncertainObjects);
+  // Per object, as the pass runs it: objects with the same kind and formats share one row
+  // group (their index ranges, and the largest t error and grazing band among them).
+  struct Group {
+    std::vector<int> indices;
+    double tError = 0, band = 0;
+    const ObjectPlan* first = nullptr;
+  };
+  std::map<std::string, Group> groups;
+  std::vector<std::string> order;
+  for (const ObjectPlan& o : objects) {
+    std::string key = o.KindName();
+    for (const PlannedFormat& f : o.formats) key += "|" + f.format.Name();
+    auto [it, fresh] = groups.try_emplace(key);
+    if (fresh) order.push_back(key), it->second.first = &o;
+    it->second.indices.push_back(o.index);
+    it->second.tError = std::max(it->second.tError, o.bounds.tError);
+    it->second.band = std::max(it->second.band, o.bounds.grazeBand);
+  }
+  s += fmt::format("per object ({} object(s), {} group(s) of equal formats):\n", objects.size(), order.size());
+  for (const std::string& key : order) {
+    const Group& g = groups[key];
+    std::string which;
+    for (size_t k = 0; k < g.indices.size(); ++k) {
+      size_t e = k;
+      while (e + 1 < g.indices.size() && g.indices[e + 1] == g.indices[e] + 1) ++e;
+      which += fmt::format("{}{}", which.empty() ? "" : ",",
+                           e == k ? fmt::format("{}", g.indices[k]) : fmt::format("{}-{}", g.indices[k], g.indices[e]));
+      k = e;
+    }
+    s += fmt::format("  {} x{} (objects {}): t error <= {:.3g}, grazing band {:.3g}{}\n", g.first->KindName(),
+                     g.indices.size(), which, g.tError, g.band,
+                     std::isfinite(g.tError) ? "" : " (always uncertain)");
+    for (const PlannedFormat& f : g.first->formats)
+      s += fmt::format("    {:<26} {:<8} {}\n", f.quantity, f.format.Name(), f.reason);
+  }
+  return s;
+}
+
+}  // namespace zephyr::simd

@@ -1,0 +1,109 @@
+// hosts/simd/plan.h — the format planner of the SIMD primary pass (docs/simd.md, "The
+// planner"): for one scene, the pass-wide formats and, per object, the bounds, formats and
+// host set-up its array program runs with. The pass (hosts/simd/pass.h) takes all of them
+// from here, and `zephyr plan` prints exactly these.
+//
+//   const PrimaryPlan plan = PlanPrimaryPass(scene, options);  // UserError if it cannot fit
+//   plan.objects[i].bounds.tError, plan.objects[i].formats     // object i, as the pass uses it
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "bitserial/profile.h"
+#include "fixed/format.h"
+#include "hosts/scene/scene.h"
+#include "hosts/simd/bounds.h"
+
+namespace zephyr::simd {
+
+// What to do with uncertain pixels (overflow, grazing, near tie).
+enum class UncertainPolicy { kRecompute, kKeep, kFail };
+UncertainPolicy ParseUncertainPolicy(const std::string& name);  // recompute|keep|fail
+const char* UncertainPolicyName(UncertainPolicy p);
+
+// User overrides of the planner (negative = the planner chooses).
+struct FormatOverrides {
+  int fracBits = -1;     // --frac-bits: fraction bits of lengths, t and directions
+  int dirFracBits = -1;  // --dir-frac-bits: fraction bits of the direction components only
+  int intBits = -1;      // --int-bits: integer bits of distances
+};
+
+struct SimdOptions {
+  std::string profile = "wavetracer";
+  std::vector<std::string> profileOverrides;  // "readExternal=3", ...
+  FormatOverrides formats;
+  UncertainPolicy uncertain = UncertainPolicy::kRecompute;
+};
+
+// The machine profile the options name, with their overrides (UserError on a bad one).
+bitserial::MachineProfile MachineProfileOf(const SimdOptions& options);
+
+// One chosen quantity of the plan: its format and why.
+struct PlannedFormat {
+  std::string quantity;
+  fixed::Format format;
+  std::string reason;
+};
+
+// What the host knows about one object before the pass (world-space eye), derived from the
+// formats (docs/simd.md, "Error bounds"). Lengths in scene units.
+struct ObjectBounds {
+  ShapeKind kind = ShapeKind::kSphere;
+  bool transformed = false;
+  double farthest = 0;     // farthest point of the object from the eye
+  double tError = 0;       // |t − t_exact| for a hit that is not flagged
+  double slack = 0;        // a flagged candidate's true t is >= its computed t − slack
+  double grazeBand = 0;    // |discriminant| (or |edge function|) below this is grazing
+  int intBits = 1;         // widest integer part among the object's quantities
+  bool alwaysUncertain = false;  // bounds degenerate at these widths: every candidate flagged
+};
+
+class ObjectProgram;  // hosts/simd/object.h: the host set-up and the array program
+
+// One object as the pass runs it.
+struct ObjectPlan {
+  int index = 0;                         // in scene.objects
+  ObjectBounds bounds;
+  std::vector<PlannedFormat> formats;    // every format its array program uses
+  std::shared_ptr<const ObjectProgram> program;
+  const char* KindName() const;          // sphere, ellipsoid, polygon, cone
+};
+
+// The format planner's choice for one scene (docs/simd.md: model no more than a scene needs).
+struct PrimaryPlan {
+  int width = 0, height = 0;
+  int64_t virtualPes = 0;
+  int layers = 0;
+  int distIntBits = 0;      // integer bits of every distance (eye-to-object, t)
+  int fracBits = 0;         // fraction bits of lengths, products, discriminants, t
+  int dirFracBits = 0;      // fraction bits of the direction components
+  int objectBits = 0;       // width of the object index (+1, 0 = none)
+  fixed::Format direction, length, t, object;
+  PassFormats pass;         // the formats every object's program shares
+  double tErrorBound = 0;   // |t_fixed − t_exact| for a certain (unflagged) hit: the largest
+                            // per-object bound (always-uncertain objects excluded)
+  double grazingFraction = 0;  // grazing band G = max((r·this)², 2·e_disc), per object
+  // The pass-wide table: each quantity at the widest format any object's program uses it in
+  // (the per-object formats are in `objects`).
+  std::vector<PlannedFormat> formats;
+  std::vector<ObjectPlan> objects;  // one per scene object, in scene order
+  int64_t memoryBitsPerPe = 0;  // peak estimate per virtual PE
+  int64_t matrixBitsPerPe = 0;  // the per-pixel matrix in external memory
+  int64_t internalCapacity = 0, externalCapacity = 0;  // bits per virtual PE
+  int alwaysUncertainObjects = 0;  // objects whose bounds degenerate at these widths (every
+                                   // pixel that may hit them is flagged)
+  nlohmann::json Json() const;         // the report's plan (pass-wide)
+  nlohmann::json ObjectsJson() const;  // per object: kind, bounds, formats
+  std::string Text() const;            // `zephyr plan`'s output, per-object formats included
+};
+
+// Throws UserError when no format within the machine's memory can hold the scene, or the
+// requested widths are beyond the pass's limits.
+PrimaryPlan PlanPrimaryPass(const Scene& scene, const SimdOptions& options);
+
+}  // namespace zephyr::simd

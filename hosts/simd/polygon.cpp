@@ -1,0 +1,188 @@
+// hosts/simd/polygon.cpp — a polygon on the array: signs of edge functions ĝ·d (one linear
+// form of the direction per edge) and the plane's t = dist/(n̂·d), with their error bounds
+// (docs/simd.md, "The program", "Error bounds").
+//
+// An affine map keeps a polygon planar, so T⁻¹ folds into the host's constants:
+// g·(T⁻¹d) = (T⁻ᵀg)·d; the polygon is taken to world space once.
+#include <fmt/format.h>
+
+#include <array>
+#include <cmath>
+
+#include "hosts/simd/object.h"
+#include "hosts/simd/ops.h"
+
+namespace zephyr::simd {
+
+using bitserial::Machine;
+using bitserial::Multi;
+using fixed::Fixed;
+using fixed::Format;
+
+namespace {
+
+// A polygon in world space, its unit normal and the eye's signed distance.
+struct WorldPolygon {
+  std::vector<Vec3> v;
+  Vec3 normal;
+  double eyeDistance = 0;  // n̂·(v0 − eye)
+  bool convex = true;
+  // Edge groups: inside a group iff every edge function is > 0 (oriented on the host);
+  // a convex polygon is one group, a concave one a fan of triangles (even-odd = parity).
+  std::vector<std::vector<Vec3>> groups;  // unit edge normals ĝ per group
+  bool degenerate = false;
+};
+
+std::vector<Vec3> WorldVertices(const Primitive& p) {
+  std::vector<Vec3> v;
+  for (const Vec3& x : std::get<Polygon>(p.shape).vertices) v.push_back(p.transform ? p.transform->ApplyPoint(x) : x);
+  return v;
+}
+
+WorldPolygon MakeWorldPolygon(const Primitive& p, const Vec3& eye) {
+  WorldPolygon w;
+  w.v = WorldVertices(p);
+  const size_t n = w.v.size();
+  Vec3 nn;
+  for (size_t i = 0; i < n; ++i) {
+    const Vec3 &a = w.v[i], &b = w.v[(i + 1) % n];
+    nn += Vec3{(a.y - b.y) * (a.z + b.z), (a.z - b.z) * (a.x + b.x), (a.x - b.x) * (a.y + b.y)};
+  }
+  w.normal = Normalize(nn);
+  w.eyeDistance = Dot(w.normal, w.v[0] - eye);
+  const double sigma = w.eyeDistance >= 0 ? 1 : -1;
+  for (size_t i = 0; i < n; ++i) {
+    const Vec3 e0 = w.v[(i + 1) % n] - w.v[i], e1 = w.v[(i + 2) % n] - w.v[(i + 1) % n];
+    if (Dot(Cross(e0, e1), w.normal) < 0) w.convex = false;
+  }
+  // ĝ = σ·τ·normalize((a − eye) × (b − eye)): for a ray in front of the eye through the
+  // group's inside, every ĝ·d > 0 (τ: the group's winding against the polygon's normal).
+  auto edge = [&](const Vec3& a, const Vec3& b, double tau) {
+    const Vec3 g = Cross(a - eye, b - eye);
+    const double len = Length(g);
+    if (!(len > 1e-300)) {
+      w.degenerate = true;
+      return Vec3{};
+    }
+    return g * (sigma * tau / len);
+  };
+  if (w.convex) {
+    std::vector<Vec3> g;
+    for (size_t i = 0; i < n; ++i) g.push_back(edge(w.v[i], w.v[(i + 1) % n], 1));
+    w.groups.push_back(g);
+  } else {
+    for (size_t i = 1; i + 1 < n; ++i) {
+      const Vec3 area = Cross(w.v[i] - w.v[0], w.v[i + 1] - w.v[0]);
+      const double tau = Dot(area, w.normal);
+      if (tau == 0) continue;  // a collinear fan triangle covers nothing
+      const double s = tau > 0 ? 1 : -1;
+      w.groups.push_back({edge(w.v[0], w.v[i], s), edge(w.v[i], w.v[i + 1], s), edge(w.v[i + 1], w.v[0], s)});
+    }
+  }
+  if (w.groups.empty()) w.degenerate = true;
+  return w;
+}
+
+class PolygonProgram final : public ObjectProgram {
+ public:
+  PolygonProgram(const Primitive& p, const Vec3& eye, const PassFormats& pf)
+      : pf_(pf), w_(MakeWorldPolygon(p, eye)) {
+    Bound(eye);
+  }
+
+  const ObjectBounds& Bounds() const { return b_; }
+
+  std::vector<PlannedFormat> Formats() const {
+    size_t edges = 0;
+    for (const auto& g : w_.groups) edges += g.size();
+    return {{"edge functions ĝ·d, n̂·d", Format::Signed(1, pf_.fracBits),
+             fmt::format("{} unit edge normal(s), unit plane normal (T folded in on the host)", edges)},
+            {"t = dist/(n̂·d)", pf_.t, "by division"}};
+  }
+
+  Candidate Run(Machine& m, const Multi (&d)[3]) const override {
+    const int F = pf_.fracBits;
+    const Format unit = Format::Signed(1, F);
+    // Inside: parity over the groups of (every edge function ĝ·d > 0); each edge function is
+    // a linear form in d with uni coefficients. Uncertain: some group neither clearly inside
+    // (all > band) nor clearly outside (one < −band).
+    const Multi band = Broadcast(m, Tight(b_.grazeBand, F)), zero = Zero(m);
+    const Multi negBand = Broadcast(m, fixed::Neg(Tight(b_.grazeBand, F), Format::Signed(1, F)));
+    Multi inside, edgeUncertain;
+    for (const std::vector<Vec3>& group : w_.groups) {
+      Multi in, clearIn, clearOut;
+      for (const Vec3& g : group) {
+        const Fixed cc[3] = {Tight(g.x, F), Tight(g.y, F), Tight(g.z, F)};
+        const Multi e = Dot3(d, cc, unit);
+        Multi pos = zero < e, posClear = band < e, negClear = e < negBand;
+        in = in.Empty() ? pos : (in && pos);
+        clearIn = clearIn.Empty() ? posClear : (clearIn && posClear);
+        clearOut = clearOut.Empty() ? negClear : (clearOut || negClear);
+      }
+      const Multi unsure = !(clearIn || clearOut);
+      inside = inside.Empty() ? in : Xor(inside, in);
+      edgeUncertain = edgeUncertain.Empty() ? unsure : (edgeUncertain || unsure);
+    }
+    if (w_.groups.empty()) inside = zero, edgeUncertain = !zero;  // degenerate: always flagged
+    // The plane: t = |n̂·(v0 − eye)| / (σ n̂·d), in front where the denominator is positive.
+    const double sigma = w_.eyeDistance >= 0 ? 1 : -1;
+    const Vec3 n = w_.normal * sigma;
+    const Fixed ncc[3] = {Tight(n.x, F), Tight(n.y, F), Tight(n.z, F)};
+    const Multi den = Dot3(d, ncc, unit);
+    const Multi num = Broadcast(m, Tight(std::abs(w_.eyeDistance), F));
+    Candidate out;
+    const Multi front = zero < den;
+    const Multi cand = front && (inside || edgeUncertain);
+    Where(cand, [&] { out.t = Div(num, den, pf_.t, kSaturate); });
+    const Multi hither = Broadcast(m, Tight(pf_.hither, F));
+    out.hit = cand && inside && (hither < out.t);
+    const Multi nearHither = b_.alwaysUncertain ? Broadcast(m, Fixed{Format::Unsigned(1, 0), 1})
+                                                : Near(m, out.t - hither, b_.tError + pf_.Ulp(), F);
+    out.uncertain = cand && (edgeUncertain || nearHither);
+    out.tLow = SubBound(m, out.t, b_.slack, pf_.t);
+    return out;
+  }
+
+ private:
+  // The bounds: every ĝ·d and n̂·d is a unit constant (rounded to nearest) times d; the
+  // division's error from n̂·d >= |dist|/farthest − eE for any ray that reaches the polygon.
+  void Bound(const Vec3& eye) {
+    const double u = pf_.Ulp(), dd = pf_.DirError();
+    b_.kind = ShapeKind::kPolygon;
+    for (const Vec3& v : w_.v) b_.farthest = std::max(b_.farthest, Length(v - eye));
+    b_.intBits = IntBitsFor(b_.farthest) + 1;
+    const double eE = std::sqrt(3.0) * dd + 1.5 * u * (1 + dd) + 3 * u;
+    b_.grazeBand = eE;
+    const double n = std::abs(w_.eyeDistance);
+    const double denMin = n / b_.farthest - eE;
+    if (w_.degenerate || !(denMin > 0)) {
+      b_.alwaysUncertain = true;
+      b_.tError = b_.slack = kInf;
+      return;
+    }
+    b_.tError = b_.farthest * eE / denMin + (u / 2) / denMin + u;
+    b_.slack = b_.tError + u;
+  }
+
+  PassFormats pf_;
+  WorldPolygon w_;
+  ObjectBounds b_;
+};
+
+}  // namespace
+
+ObjectExtent PolygonExtent(const Primitive& p, const Vec3& eye) {
+  ObjectExtent e;
+  const std::vector<Vec3> v = WorldVertices(p);
+  for (size_t k = 0; k < v.size(); ++k) {
+    e.farthest = std::max(e.farthest, Length(v[k] - eye));
+    e.feature = std::min(e.feature, Length(v[k] - v[(k + 1) % v.size()]) / 2);
+  }
+  return e;
+}
+
+ObjectPlan PlanPolygon(const Primitive& p, const Vec3& eye, const PassFormats& pf) {
+  return PlanOf<PolygonProgram>(p, eye, pf);
+}
+
+}  // namespace zephyr::simd
