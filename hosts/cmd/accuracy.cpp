@@ -42,7 +42,7 @@ CommandRegistration reg("accuracy", [](CLI::App& program) {
   cmd->add_option("--frac-bits", o->extra["frac-bits"], "Fraction bits of lengths, t and directions");
   cmd->add_option("--dir-frac-bits", o->extra["dir-frac-bits"], "Fraction bits of the directions only");
   cmd->add_option("--int-bits", o->extra["int-bits"], "Integer bits of distances");
-  cmd->add_option("--uncertain", o->extra["uncertain"], "recompute (default), keep or fail");
+  cmd->add_option("--uncertain", o->extra["uncertain"], "recompute (default), refine, keep or fail");
   cmd->add_flag("--json", *json, "Machine-readable output");
   cmd->callback([scene, sample, o, json, method, precision] {
     if (*method != "simd" && *method != "seq")
@@ -115,6 +115,7 @@ CommandRegistration reg("accuracy", [](CLI::App& program) {
     if (simd) {
       j["tErrorBound"] = pass.plan.tErrorBound;
       j["uncertain"] = pass.Json()["uncertain"];
+      if (pass.refinedPixels > 0) j["refine"] = pass.Json()["refine"];
     } else {
       j["precision"] = PrecisionName(seqOptions.precision);
     }

@@ -53,6 +53,11 @@ void RenderSimd(const Scene& scene, const RenderOptions& options, RenderOutput& 
   std::fprintf(stderr, "uncertain pixels: %lld overflow, %lld grazing, %lld near tie; %lld recomputed on the host\n",
                (long long)pass.overflowPixels, (long long)pass.grazingPixels,
                (long long)pass.tiePixels, (long long)pass.recomputedPixels);
+  if (pass.refinedPixels > 0)
+    std::fprintf(stderr, "refine pass: %lld pixel(s) at %d fraction bits in %d layer(s), %.4g cycles; %lld still uncertain\n%s",
+                 (long long)pass.refinedPixels, pass.refine["fracBits"].get<int>(), pass.refine["layers"].get<int>(),
+                 pass.refine["cycles"]["totalCycles"].get<double>(), (long long)pass.refine["stillUncertain"].get<int64_t>(),
+                 pass.refineCycleTable.c_str());
   const auto tracer = Tracer::Create(scene, options.trace);
   TraceStats stats;
   out.image = Image(c.width, c.height);
@@ -79,7 +84,8 @@ RenderFlagRegistration flags([](CLI::App& cmd, RenderOptions& o) {
   cmd.add_option("--dir-frac-bits", o.extra["dir-frac-bits"], "simd: fraction bits of the directions only");
   cmd.add_option("--int-bits", o.extra["int-bits"], "simd: integer bits of distances");
   cmd.add_option("--uncertain", o.extra["uncertain"],
-                 "simd: uncertain pixels: recompute (default, in double on the host), keep, fail");
+                 "simd: uncertain pixels: recompute (default, in double on the host), refine (a second, "
+                 "wider array pass on them first), keep, fail");
   cmd.add_option("--machine", o.extra["machine"], "simd: machine profile (wavetracer, mpp)");
 });
 

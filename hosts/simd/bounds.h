@@ -21,8 +21,14 @@ struct PassFormats {
   int dirFracBits = 0;  // Fd: fraction bits of the direction components
   fixed::Format t;      // t (and the distances it is built from)
   double hither = 0;    // max(camera hither, 0)
+  // The ulp the bounds' nominal sizes refer to (the grazing bands' radius-fraction floors, a
+  // cone's target t error): 0 = this pass's own. A refine pass at wider formats keeps the
+  // first pass's nominal t error and shrinks those floors by Ulp()/nominal.
+  double nominalUlp = 0;
   double Ulp() const;        // 2^-F: a floor-rounded result's error
   double DirError() const;   // 2^-Fd / 2: a direction component's rounding error
+  double NominalUlp() const { return nominalUlp > 0 ? nominalUlp : Ulp(); }
+  double BandScale() const { return Ulp() / NominalUlp(); }  // 1 for a first pass
 };
 
 // ceil(log2 x), 0 for x <= 1.

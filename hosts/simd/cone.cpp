@@ -167,7 +167,7 @@ void SetUpQuadratic(ConeSetup& cs, const PassFormats& pf) {
 // the height s = w·a + t·(d'·a) of each root.
 void SetUpDivisions(ConeSetup& cs, const PassFormats& pf) {
   const double u = pf.Ulp();
-  const double target = std::max({64 * cs.tFar * u, 8 * cs.eQ, 4 * u});
+  const double target = std::max({64 * cs.tFar * pf.NominalUlp(), 8 * cs.eQ, 4 * u});
   cs.divA = PlanDivision(cs.eQ, cs.eA, cs.tFar, target, 0, pf.fracBits);
   cs.divC = PlanDivision(u / 2, cs.eQ, cs.tFar, target, std::abs(cs.C) / (1.25 * cs.tFar), pf.fracBits);
   const ConeDivision* divs[2] = {&cs.divA, &cs.divC};
@@ -190,7 +190,7 @@ ConeSetup MakeConeSetup(const Primitive& p, const Vec3& eye, const PassFormats& 
   // larger radius in world units (as a sphere's (r/8)²), so the root's error e/√G stays small.
   const double spectral = Spectral(p, fr);
   const double rho = std::max(std::abs(cone.baseRadius), std::abs(cone.apexRadius)) / spectral;
-  cs.grazeBand = std::max(2 * cs.eDisc, std::pow(rho / 8, 2));
+  cs.grazeBand = std::max(2 * cs.eDisc, std::pow(rho / 8, 2) * pf.BandScale());
   cs.eRoot = cs.eDisc / std::sqrt(cs.grazeBand) + u;
   cs.eQ = cs.beta.err + cs.eRoot;
   const ConeReach reach = Reach(p, eye, spectral);

@@ -107,7 +107,7 @@ class EllipsoidProgram final : public ObjectProgram {
     const double ddMin = std::pow((1 - std::sqrt(3.0) * dd) / fr_.forwardNorm, 2) - eDd;
     const double eR2dd = r * r * eDd + ddMax * u / 2 + u;
     const auto [band, eDisc] =
-        GrazingBand(r * r * ddMax, std::pow(r * std::sqrt(std::max(ddMin, 0.0)) / 8, 2), eCross, eR2dd,
+        GrazingBand(r * r * ddMax, std::pow(r * std::sqrt(std::max(ddMin, 0.0)) / 8, 2) * pf_.BandScale(), eCross, eR2dd,
                     std::ldexp(1.0, IntBitsFor(r * std::sqrt(fr_.ddMax))), u);
     const Vec3 centre = p.transform->ApplyPoint(std::get<Sphere>(p.shape).center);
     b_.farthest = Length(centre - eye) + r * fr_.forwardNorm;

@@ -23,7 +23,7 @@ using fixed::Fixed;
 using fixed::Format;
 
 nlohmann::json PrimaryPass::Json() const {
-  return {{"plan", plan.Json()},
+  nlohmann::json j = {{"plan", plan.Json()},
           {"cycles", cycles},
           {"hostSeconds", hostSeconds},
           {"modelledSeconds", modelledSeconds},
@@ -31,6 +31,8 @@ nlohmann::json PrimaryPass::Json() const {
           {"recomputeSeconds", recomputeSeconds},
           {"uncertain", {{"overflow", overflowPixels}, {"grazing", grazingPixels},
                          {"nearTie", tiePixels}, {"recomputed", recomputedPixels}}}};
+  if (!refine.is_null()) j["refine"] = refine;
+  return j;
 }
 
 namespace {
@@ -48,15 +50,17 @@ struct ArrayMatrix {
   Multi object, t, d[3], grazing, nearTie;
 };
 
-// The host computes each pixel's eye ray and loads the directions (one plane per bit).
-void LoadDirections(ArrayMatrix& a, const PrimaryRays& rays, const PrimaryPlan& plan) {
+// The host computes each pixel's eye ray and loads the directions (one plane per bit): PE k
+// takes pixel pixels[k], or pixel k when `pixels` is empty (row-major).
+void LoadDirections(ArrayMatrix& a, const PrimaryRays& rays, const PrimaryPlan& plan,
+                    const std::vector<int64_t>& pixels) {
   std::vector<int64_t> raw[3];
   for (auto& r : raw) r.resize(plan.virtualPes);
-  for (int y = 0; y < plan.height; ++y)
-    for (int x = 0; x < plan.width; ++x) {
-      const Vec3 dir = rays.At(x, y).direction;
-      for (int k = 0; k < 3; ++k) raw[k][size_t(y) * plan.width + x] = std::llround(std::ldexp(dir[k], plan.dirFracBits));
-    }
+  for (int64_t pe = 0; pe < plan.virtualPes; ++pe) {
+    const int64_t pixel = pixels.empty() ? pe : pixels[pe];
+    const Vec3 dir = rays.At(int(pixel % plan.width), int(pixel / plan.width)).direction;
+    for (int k = 0; k < 3; ++k) raw[k][pe] = std::llround(std::ldexp(dir[k], plan.dirFracBits));
+  }
   for (int k = 0; k < 3; ++k) a.d[k].LoadRaw(raw[k]);
 }
 
@@ -102,18 +106,31 @@ void SetFlags(Machine& m, const Fixed& tMax, ArrayMatrix& a, const Trackers& k) 
   a.nearTie = (k.otherLow <= limit) && (k.otherLow < none);
 }
 
-// The matrix as the host reads it (charged to the host link).
+// The matrix as the host reads it (charged to the host link), and the per-PE flags.
 struct MatrixRaw {
   std::vector<int64_t> object, t, d[3], grazing, nearTie;
+  std::vector<bool> overflow;  // overflow or divide by zero (Invalid: √ of a miss)
 };
 
-MatrixRaw ReadMatrix(const ArrayMatrix& a) {
-  return {a.object.ReadRaw(), a.t.ReadRaw(), {a.d[0].ReadRaw(), a.d[1].ReadRaw(), a.d[2].ReadRaw()},
-          a.grazing.ReadRaw(), a.nearTie.ReadRaw()};
+MatrixRaw ReadMatrix(Machine& m, const ArrayMatrix& a) {
+  MatrixRaw r{a.object.ReadRaw(), a.t.ReadRaw(), {a.d[0].ReadRaw(), a.d[1].ReadRaw(), a.d[2].ReadRaw()},
+              a.grazing.ReadRaw(), a.nearTie.ReadRaw(), {}};
+  m.Charge("hostRead", bitserial::HostTransferCost(1));  // the overflow flags
+  r.overflow.resize(m.VirtualPes());
+  for (int64_t pe = 0; pe < m.VirtualPes(); ++pe) r.overflow[pe] = m.Overflow(pe) || m.DivideByZero(pe);
+  return r;
 }
 
-// The cycle report, memory and timing of the array part into the pass.
-void ReportCycles(PrimaryPass& pass, Machine& m) {
+// One run of the program on the array: the matrix as read, the cycle report and timing.
+struct ArrayRun {
+  MatrixRaw raw;
+  nlohmann::json cycles;
+  std::string cycleTable;
+  double hostSeconds = 0, modelledSeconds = 0;
+};
+
+// The cycle report, memory and timing of the array part.
+void ReportCycles(ArrayRun& pass, Machine& m) {
   const bitserial::CycleReport& report = m.Report();
   pass.modelledSeconds = report.ModelledSeconds();
   pass.cycles = report.Json();
@@ -133,7 +150,7 @@ void ReportCycles(PrimaryPass& pass, Machine& m) {
 }
 
 // The host side: decode the matrix, count the flags.
-void DecodeMatrix(PrimaryPass& pass, const Machine& m, const MatrixRaw& raw) {
+void DecodeMatrix(PrimaryPass& pass, const MatrixRaw& raw) {
   const PrimaryPlan& plan = pass.plan;
   PrimaryMatrix& out = pass.matrix;
   out.width = plan.width, out.height = plan.height;
@@ -147,7 +164,7 @@ void DecodeMatrix(PrimaryPass& pass, const Machine& m, const MatrixRaw& raw) {
     h.object = int(raw.object[pe]) - 1;
     h.t = h.object >= 0 ? std::ldexp(double(raw.t[pe]), -plan.fracBits) : 0.0;
     uint32_t& fl = out.flags[pe];
-    if (m.Overflow(pe) || m.DivideByZero(pe)) fl |= kOverflow;  // Invalid: √ of a miss
+    if (raw.overflow[pe]) fl |= kOverflow;
     if (raw.grazing[pe]) fl |= kGrazing;
     if (raw.nearTie[pe]) fl |= kNearTie;
     if (fl & kOverflow) ++pass.overflowPixels;
@@ -163,7 +180,7 @@ void HandleUncertain(PrimaryPass& pass, const Scene& scene, const PrimaryRays& r
   if (policy == UncertainPolicy::kFail && uncertain > 0)
     throw UserError(fmt::format("--uncertain fail: {} uncertain pixel(s): {} overflow, {} grazing, {} near tie",
                                 uncertain, pass.overflowPixels, pass.grazingPixels, pass.tiePixels));
-  if (policy != UncertainPolicy::kRecompute || uncertain == 0) return;
+  if ((policy != UncertainPolicy::kRecompute && policy != UncertainPolicy::kRefine) || uncertain == 0) return;
   TraceOptions trace;
   trace.depth = 1;
   const auto tracer = Tracer::Create(scene, trace);
@@ -178,26 +195,74 @@ void HandleUncertain(PrimaryPass& pass, const Scene& scene, const PrimaryRays& r
 
 }  // namespace
 
-PrimaryPass RunPrimaryPass(const Scene& scene, const SimdOptions& options) {
-  PrimaryPass pass;
-  pass.plan = PlanPrimaryPass(scene, options);
-  const PrimaryPlan& plan = pass.plan;
+namespace {
+
+// The program over the plan's PEs (pixel pixels[k] in PE k; every pixel when empty).
+ArrayRun RunArray(const Scene& scene, const PrimaryPlan& plan, const SimdOptions& options, const PrimaryRays& rays,
+                  const std::vector<int64_t>& pixels) {
+  ArrayRun run;
   const auto start = std::chrono::steady_clock::now();
   Machine m(MachineProfileOf(options), plan.virtualPes);
   ArrayMatrix matrix(m, plan);
-  const PrimaryRays rays(scene.camera);
-  LoadDirections(matrix, rays, plan);
+  LoadDirections(matrix, rays, plan, pixels);
   const Fixed tMax{plan.t, plan.t.MaxRaw()};
   matrix.t = Broadcast(m, tMax);
   Trackers trackers(m, tMax);
   for (const ObjectPlan& object : plan.objects) FoldCandidate(m, object, plan, matrix, trackers);
   SetFlags(m, tMax, matrix, trackers);
-  const MatrixRaw raw = ReadMatrix(matrix);
-  m.Charge("hostRead", bitserial::HostTransferCost(1));  // the overflow flags
-  pass.hostSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  ReportCycles(pass, m);
+  run.raw = ReadMatrix(m, matrix);
+  run.hostSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  ReportCycles(run, m);
+  return run;
+}
+
+// The refine pass (docs/simd.md, "Refine pass"): the uncertain pixels, compacted, once more
+// on the array at wider formats; a pixel it certifies takes its object and t (the direction
+// stays the first pass's, as the matrix and the heterogeneous entries decode it).
+void Refine(PrimaryPass& pass, const Scene& scene, const SimdOptions& options, const PrimaryRays& rays) {
+  PrimaryMatrix& out = pass.matrix;
+  std::vector<int64_t> pixels;
+  for (int64_t pe = 0; pe < int64_t(out.flags.size()); ++pe)
+    if (out.flags[pe]) pixels.push_back(pe);
+  if (pixels.empty()) return;
+  const PrimaryPlan plan = PlanRefinePass(scene, options, pass.plan, int64_t(pixels.size()), kRefineExtraBits);
+  const ArrayRun run = RunArray(scene, plan, options, rays, pixels);
+  int64_t still = 0, overflow = 0, grazing = 0, tie = 0;
+  for (size_t k = 0; k < pixels.size(); ++k) {
+    uint32_t fl = 0;
+    if (run.raw.overflow[k]) fl |= kOverflow, ++overflow;
+    if (run.raw.grazing[k]) fl |= kGrazing, ++grazing;
+    if (run.raw.nearTie[k]) fl |= kNearTie, ++tie;
+    PrimaryHit& h = out.hits[pixels[k]];
+    h.object = int(run.raw.object[k]) - 1;
+    h.t = h.object >= 0 ? std::ldexp(double(run.raw.t[k]), -plan.fracBits) : 0.0;
+    out.flags[pixels[k]] = fl;
+    still += fl != 0;
+  }
+  pass.refinedPixels = int64_t(pixels.size());
+  pass.refine = {{"pixels", pixels.size()}, {"layers", plan.layers}, {"fracBits", plan.fracBits},
+                 {"dirFracBits", plan.dirFracBits}, {"tErrorBound", plan.tErrorBound},
+                 {"stillUncertain", still},
+                 {"uncertain", {{"overflow", overflow}, {"grazing", grazing}, {"nearTie", tie}}},
+                 {"hostSeconds", run.hostSeconds}, {"modelledSeconds", run.modelledSeconds},
+                 {"cycles", run.cycles}};
+  pass.refineCycleTable = run.cycleTable;
+}
+
+}  // namespace
+
+PrimaryPass RunPrimaryPass(const Scene& scene, const SimdOptions& options) {
+  PrimaryPass pass;
+  pass.plan = PlanPrimaryPass(scene, options);
+  const PrimaryRays rays(scene.camera);
+  ArrayRun run = RunArray(scene, pass.plan, options, rays, {});
+  pass.cycles = std::move(run.cycles);
+  pass.cycleTable = std::move(run.cycleTable);
+  pass.hostSeconds = run.hostSeconds;
+  pass.modelledSeconds = run.modelledSeconds;
   const auto hostStart = std::chrono::steady_clock::now();
-  DecodeMatrix(pass, m, raw);
+  DecodeMatrix(pass, run.raw);
+  if (options.uncertain == UncertainPolicy::kRefine) Refine(pass, scene, options, rays);
   HandleUncertain(pass, scene, rays, options.uncertain);
   pass.recomputeSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - hostStart).count();
   return pass;

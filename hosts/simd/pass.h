@@ -49,9 +49,18 @@ struct PrimaryPass {
   double hostSeconds = 0;     // wall time of the emulated pass (array part)
   double modelledSeconds = 0; // at the profile's clock
   double recomputeSeconds = 0;
+  // The first pass's uncertain pixels (by cause), and how many the host recomputed.
   int64_t overflowPixels = 0, grazingPixels = 0, tiePixels = 0, recomputedPixels = 0;
-  nlohmann::json Json() const;  // everything above but the matrix
+  // --uncertain refine: the pixels the refine pass ran on (0: none ran), and its report
+  // (pixels, layers, formats, stillUncertain and its causes, cycles, timing; null if none).
+  int64_t refinedPixels = 0;
+  nlohmann::json refine;
+  std::string refineCycleTable;
+  nlohmann::json Json() const;  // everything above but the matrix and the tables
 };
+
+// Fraction bits the refine pass adds to the planned widths (docs/simd.md, "Refine pass").
+inline constexpr int kRefineExtraBits = 8;
 
 // The simd flags of a render command (--frac-bits, --dir-frac-bits, --int-bits,
 // --uncertain, --machine) from RenderOptions::extra; UserError on a bad value.

@@ -20,10 +20,17 @@ UncertainPolicy ParseUncertainPolicy(const std::string& name) {
   if (name == "recompute") return UncertainPolicy::kRecompute;
   if (name == "keep") return UncertainPolicy::kKeep;
   if (name == "fail") return UncertainPolicy::kFail;
-  throw UserError("--uncertain: expected recompute, keep or fail, got '" + name + "'");
+  if (name == "refine") return UncertainPolicy::kRefine;
+  throw UserError("--uncertain: expected recompute, refine, keep or fail, got '" + name + "'");
 }
 const char* UncertainPolicyName(UncertainPolicy p) {
-  return p == UncertainPolicy::kRecompute ? "recompute" : p == UncertainPolicy::kKeep ? "keep" : "fail";
+  switch (p) {
+    case UncertainPolicy::kRecompute: return "recompute";
+    case UncertainPolicy::kRefine: return "refine";
+    case UncertainPolicy::kKeep: return "keep";
+    case UncertainPolicy::kFail: return "fail";
+  }
+  return "?";
 }
 
 bitserial::MachineProfile MachineProfileOf(const SimdOptions& o) {
@@ -184,12 +191,15 @@ void CheckMemory(PrimaryPlan& plan, const SceneRange& range, const bitserial::Ma
 
 }  // namespace
 
-PrimaryPlan PlanPrimaryPass(const Scene& scene, const SimdOptions& options) {
+namespace {
+
+// A plan over `virtualPes` PEs whose bounds' nominal sizes refer to `nominalUlp` (0: its own).
+PrimaryPlan PlanFor(const Scene& scene, const SimdOptions& options, int64_t virtualPes, double nominalUlp) {
   const bitserial::MachineProfile profile = MachineProfileOf(options);
   const Camera& cam = scene.camera;
   PrimaryPlan plan;
   plan.width = cam.width, plan.height = cam.height;
-  plan.virtualPes = int64_t(cam.width) * cam.height;
+  plan.virtualPes = virtualPes;
   plan.layers = int((plan.virtualPes + profile.physicalPes - 1) / profile.physicalPes);
   const SceneRange range = RangeOf(scene);
   ChooseWidths(plan, range, options.formats);
@@ -203,6 +213,7 @@ PrimaryPlan PlanPrimaryPass(const Scene& scene, const SimdOptions& options) {
   plan.pass.dirFracBits = plan.dirFracBits;
   plan.pass.t = plan.t;
   plan.pass.hither = std::max(cam.hither, 0.0);
+  plan.pass.nominalUlp = nominalUlp;
   // Each object's bounds, formats and program, derived from these formats (docs/simd.md,
   // "Error bounds").
   plan.grazingFraction = 1.0 / 8;
@@ -215,6 +226,20 @@ PrimaryPlan PlanPrimaryPass(const Scene& scene, const SimdOptions& options) {
   SummaryTable(plan, scene, range);
   CheckMemory(plan, range, profile);
   return plan;
+}
+
+}  // namespace
+
+PrimaryPlan PlanPrimaryPass(const Scene& scene, const SimdOptions& options) {
+  return PlanFor(scene, options, int64_t(scene.camera.width) * scene.camera.height, 0);
+}
+
+PrimaryPlan PlanRefinePass(const Scene& scene, const SimdOptions& options, const PrimaryPlan& first,
+                           int64_t pixels, int extraBits) {
+  SimdOptions wide = options;
+  wide.formats = {std::min(first.fracBits + extraBits, 56), std::min(first.dirFracBits + extraBits, 60),
+                  first.distIntBits};
+  return PlanFor(scene, wide, std::max<int64_t>(pixels, 1), first.pass.Ulp());
 }
 
 nlohmann::json PrimaryPlan::Json() const {

@@ -21,9 +21,11 @@
 
 namespace zephyr::simd {
 
-// What to do with uncertain pixels (overflow, grazing, near tie).
-enum class UncertainPolicy { kRecompute, kKeep, kFail };
-UncertainPolicy ParseUncertainPolicy(const std::string& name);  // recompute|keep|fail
+// What to do with uncertain pixels (overflow, grazing, near tie): recompute them on the host
+// in double; refine them first in a second, wider array pass and recompute only what is
+// still uncertain; keep the array's answer (flagged); or fail.
+enum class UncertainPolicy { kRecompute, kKeep, kFail, kRefine };
+UncertainPolicy ParseUncertainPolicy(const std::string& name);  // recompute|refine|keep|fail
 const char* UncertainPolicyName(UncertainPolicy p);
 
 // User overrides of the planner (negative = the planner chooses).
@@ -105,5 +107,13 @@ struct PrimaryPlan {
 // Throws UserError when no format within the machine's memory can hold the scene, or the
 // requested widths are beyond the pass's limits.
 PrimaryPlan PlanPrimaryPass(const Scene& scene, const SimdOptions& options);
+
+// The plan of a refine pass (docs/simd.md, "Refine pass"): `pixels` virtual PEs (the first
+// pass's uncertain pixels, compacted into as few layers as they need) at the first plan's
+// integer bits and its fraction bits plus `extraBits` (capped at the pass's limits), with
+// the bounds' nominal sizes kept at the first pass's (PassFormats::nominalUlp). UserError as
+// PlanPrimaryPass.
+PrimaryPlan PlanRefinePass(const Scene& scene, const SimdOptions& options, const PrimaryPlan& first,
+                           int64_t pixels, int extraBits);
 
 }  // namespace zephyr::simd

@@ -72,7 +72,7 @@ class SphereProgram final : public ObjectProgram {
       eCross = std::max(eCross, MulErr(1, dd, std::abs(f_[(k + 1) % 3]), u / 2, u) +
                                     MulErr(1, dd, std::abs(f_[(k + 2) % 3]), u / 2, u));
     }
-    const auto [band, eDisc] = GrazingBand(radius_ * radius_, std::pow(radius_ / 8, 2), eCross,
+    const auto [band, eDisc] = GrazingBand(radius_ * radius_, std::pow(radius_ / 8, 2) * pf_.BandScale(), eCross,
                                            u / 2, std::ldexp(1.0, IntBitsFor(radius_)), u);
     b_.grazeBand = band;
     b_.tError = eTca + eDisc / std::sqrt(b_.grazeBand) + u;

@@ -342,3 +342,52 @@ TEST(SimdCone, PlanListsTheConeFormats) {
 
 }  // namespace
 }  // namespace zephyr::simd
+
+// The refine pass (--uncertain refine): the uncertain pixels run again on the array at wider
+// formats; what it certifies must be right (no pixel it leaves unflagged and unrecomputed
+// differs from the exact reference), it runs on fewer PEs than the first pass, and it
+// leaves fewer pixels to the host than recompute alone.
+namespace zephyr::simd {
+namespace {
+
+void CheckRefine(const Scene& scene, int fracBits) {
+  const auto want = ExactHits(scene);
+  SimdOptions o;
+  o.formats.fracBits = fracBits;
+  o.uncertain = UncertainPolicy::kRefine;
+  const PrimaryPass pass = RunPrimaryPass(scene, o);
+  const int64_t first = pass.overflowPixels + pass.grazingPixels + pass.tiePixels;
+  ASSERT_GT(first, 0) << "the scene should have uncertain pixels at " << fracBits << " bits";
+  ASSERT_GT(pass.refinedPixels, 0);
+  EXPECT_LE(pass.refinedPixels, first);
+  EXPECT_LT(pass.refinedPixels, pass.plan.virtualPes);
+  EXPECT_EQ(pass.refine["fracBits"].get<int>(), std::min(pass.plan.fracBits + kRefineExtraBits, 56));
+  EXPECT_EQ(pass.recomputedPixels, pass.refine["stillUncertain"].get<int64_t>());
+  EXPECT_LT(pass.recomputedPixels, pass.refinedPixels) << "refine certified nothing";
+  EXPECT_EQ(ObjectMismatches(pass.matrix, want), 0);
+  for (size_t i = 0; i < want.size(); ++i) {
+    if (pass.matrix.flags[i] & kRecomputed) continue;
+    ASSERT_EQ(pass.matrix.hits[i].object, want[i].object) << fracBits << " bits, pixel " << i;
+  }
+  EXPECT_GT(pass.refine["cycles"]["totalCycles"].get<double>(), 0);
+}
+
+TEST(SimdRefine, CertifiesSoundlyOnSpheresAtLowAndPlannedWidths) {
+  const Scene scene = GenerateRandomSpheres({.count = 64, .seed = 1, .width = 64, .height = 64});
+  CheckRefine(scene, 8);
+  CheckRefine(scene, -1);
+}
+
+TEST(SimdRefine, CertifiesSoundlyOnConesEllipsoidsAndPolygons) {
+  CheckRefine(ConeScene(48), 10);
+  CheckRefine(GenerateTransformedShowcase(48, 48), -1);
+}
+
+TEST(SimdRefine, PolicyNameParses) {
+  EXPECT_EQ(ParseUncertainPolicy("refine"), UncertainPolicy::kRefine);
+  EXPECT_STREQ(UncertainPolicyName(UncertainPolicy::kRefine), "refine");
+  EXPECT_THROW(ParseUncertainPolicy("refin"), UserError);
+}
+
+}  // namespace
+}  // namespace zephyr::simd
