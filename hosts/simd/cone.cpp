@@ -161,13 +161,20 @@ void SetUpQuadratic(ConeSetup& cs, const PassFormats& pf) {
   cs.qFormat = Format::Unsigned(IntBitsFor(cs.beta.max + std::sqrt(maxDisc) + 2), pf.fracBits);
 }
 
-// The divisions, aiming at a t error of 64·tFar·2^-F (the planner's nominal order) or 8×
-// the error of Q, whichever is larger. For C/Q, an in-range root has Q >= |C|/tFar, so a
-// threshold below |C|/(1.25·tFar) costs no flags (smaller Q are certainly beyond). Then
-// the height s = w·a + t·(d'·a) of each root.
+// The divisions' target t error in units of e_Q. The threshold D* ≈ 2·tFar·e_Q/target does
+// not shrink with the width when the target is a multiple of e_Q, so this factor decides
+// how much of a cone the array certifies: 8 left every root with Q < tFar/4 uncertain (the
+// showcase's cone: 8.8 % of its pixels); 16 halves that threshold at twice the t error
+// (measured with tools/refine-table.sh, docs/simd.md "Refine pass").
+constexpr double kConeTargetPerEq = 16;
+
+// The divisions, aiming at a t error of 64·tFar·2^-F (the planner's nominal order) or
+// kConeTargetPerEq × the error of Q, whichever is larger. For C/Q, an in-range root has
+// Q >= |C|/tFar, so a threshold below |C|/(1.25·tFar) costs no flags (smaller Q are
+// certainly beyond). Then the height s = w·a + t·(d'·a) of each root.
 void SetUpDivisions(ConeSetup& cs, const PassFormats& pf) {
   const double u = pf.Ulp();
-  const double target = std::max({64 * cs.tFar * pf.NominalUlp(), 8 * cs.eQ, 4 * u});
+  const double target = std::max({64 * cs.tFar * pf.NominalUlp(), kConeTargetPerEq * cs.eQ, 4 * u});
   cs.divA = PlanDivision(cs.eQ, cs.eA, cs.tFar, target, 0, pf.fracBits);
   cs.divC = PlanDivision(u / 2, cs.eQ, cs.tFar, target, std::abs(cs.C) / (1.25 * cs.tFar), pf.fracBits);
   const ConeDivision* divs[2] = {&cs.divA, &cs.divC};
