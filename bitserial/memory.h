@@ -2,7 +2,7 @@
 //
 // Every multi variable has a width and an address (in bits) in the internal (2048 bits per
 // PE on the WaveTracer) or the external (32 KB per PE) memory. With n virtual-PE layers
-// each virtual PE owns 1/n of each physical PE's memory (SPEC §3: "the controller splits
+// each virtual PE owns 1/n of each physical PE's memory (paper §5.1, docs/background.md: "the controller splits
 // each PE's memory into n equal parts"), so addresses here are per virtual PE and the
 // capacity is floor(physical capacity / n). Allocation is first fit in address order, so
 // the same program always gets the same layout.

@@ -20,11 +20,11 @@ using Table = std::map<std::string, std::pair<double, std::string>>;
 
 // ---- WaveTracer Zephyr -----------------------------------------------------------------
 // Facts: paper §5.1 (8192 PEs, 64x128 or 16x32x16, ~2 Kbit internal + 32 KB external per
-// PE). Nothing about its timing survives in any source we found (SPEC §3), so every cost
+// PE). Nothing about its timing survives in any source we found (docs/background.md, "The machine"), so every cost
 // below is an ASSUMPTION, each with the reason for its value.
 Table WaveTracerTable() {
   return {
-      {"clockHz", {10e6, "assumed: an era-typical 10 MHz, as the Goodyear MPP (SPEC §3)"}},
+      {"clockHz", {10e6, "assumed: an era-typical 10 MHz, as the Goodyear MPP (docs/background.md)"}},
       {"physicalPes", {8192, "paper §5.1: two boards of 4096 one-bit PEs"}},
       {"internalBitsPerPe", {2048, "paper §5.1: about 2 Kbit of internal memory per PE"}},
       {"externalBitsPerPe", {32 * 1024 * 8, "paper §5.1: 32 KB of external memory per PE"}},
@@ -155,7 +155,7 @@ MachineProfile ProfileFromTable(const std::string& name, const Table& entries) {
   else p.shapes = {MeshShape{{64, p.physicalPes / 64}}};
   p.source = name == "mpp" ? "Batcher, Design of a Massively Parallel Processor, IEEE Trans. "
                              "Computers C-29(9), 1980"
-                           : "paper §5.1 for the geometry; costs assumed (SPEC §3)";
+                           : "paper §5.1 for the geometry; costs assumed (docs/background.md)";
   return p;
 }
 

@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Compares the outputs of two zephyr builds: the PNG, the --dump-primary CSV and the JSON
 # report of seq, simd, dist and hetero on the generated scenes (spheres, flake, showcase)
-# and, when ../shared/scenes is there, every SPD scene, all at 128×128.
+# and every NFF scene in SCENES (default: the SPD samples in tests/fuzz/corpus; point it at a
+# folder of Eric Haines' SPD scenes for more), all at 128×128.
 #
-#   tools/compare-builds.sh OLD/zephyr NEW/zephyr [WORKDIR]
+#   [SCENES=DIR] tools/compare-builds.sh OLD/zephyr NEW/zephyr [WORKDIR]
 #
 # Used to show that a change which should not change behaviour (a re-layout, a speed-up)
 # does not: every PNG and CSV must be byte-identical, and every report identical once the
@@ -23,18 +24,19 @@ here=$(cd "$(dirname "$0")/.." && pwd)
 "$old" gen spheres --count 16 --seed 1 --size 128x128 --out "$work/scenes/spheres.nff"
 "$old" gen flake --depth 3 --size 128x128 --out "$work/scenes/flake.nff"
 "$old" gen showcase --size 128x128 --out "$work/scenes/showcase.nff"
-if [ -d "$here/../shared/scenes" ]; then
-  for f in "$here"/../shared/scenes/*.nff; do
+scenes=${SCENES:-$here/tests/fuzz/corpus}
+if [ -d "$scenes" ]; then
+  for f in "$scenes"/*.nff; do
+    [ -e "$work/scenes/$(basename "$f")" ] && continue  # a generated scene of that name
     sed 's/^resolution .*/resolution 128 128/' "$f" > "$work/scenes/$(basename "$f")"
   done
 fi
 
-# Removes what differs between two runs of the same build.
+# Removes what differs between two runs of the same build. Each child's ready message
+# carries its process id and its stats message its timings, as text: their sizes vary.
 normalise() {
   jq -S 'walk(if type == "object" then with_entries(select(.key
            | test("[Ss]econds|^perChild$|^phases$|^pid$|^host$|[Rr]ealTime") | not)) else . end)
-         # each child ready message carries its process id and its stats message its
-         # timings, as text: their sizes vary
          | del(.distributed.traffic.childrenToParent.stats?,
                .distributed.traffic.childrenToParent.ready.payloadBytes?,
                .distributed.traffic.childrenToParent.total.payloadBytes?)' "$1"
@@ -45,7 +47,9 @@ run() {  # run BIN OUTDIR SCENE METHOD
   name=$(basename "$scene" .nff).$method
   local args=(render --method "$method" "$scene" --out "$dir/$name.png" --report "$dir/$name.json"
               --no-progress)
-  [ "$method" = dist ] || args+=(--dump-primary "$dir/$name.csv")
+  case $method in  # dist and hetero produce no --dump-primary (it is an error there)
+    seq|simd) args+=(--dump-primary "$dir/$name.csv") ;;
+  esac
   case $method in
     dist|hetero) mpirun --oversubscribe -np 3 "$bin" "${args[@]}" --frame 32 >/dev/null 2>"$dir/$name.err" ;;
     *) "$bin" "${args[@]}" >/dev/null 2>"$dir/$name.err" ;;

@@ -2,10 +2,10 @@
 # The refine-pass table of docs/simd.md: per scene, the SIMD pass's uncertain pixels, what
 # the refine pass (--uncertain refine) leaves to the host, and the cycles of each pass.
 #
-#   tools/refine-table.sh ZEPHYR [SIZE] [WORKDIR]     SIZE e.g. 256 (default), square images
+#   [SCENES=DIR] tools/refine-table.sh ZEPHYR [SIZE] [WORKDIR]   SIZE e.g. 256 (default)
 #
-# Scenes: the generated ones (spheres, flake, showcase) and, when ../shared/scenes is there,
-# every SPD scene, all rendered at SIZE×SIZE. Prints a Markdown table.
+# Scenes: the generated ones (spheres, flake, showcase) and every NFF scene in SCENES (e.g. a
+# folder of Eric Haines' SPD scenes), all rendered at SIZE×SIZE. Prints a Markdown table.
 set -euo pipefail
 zephyr=${1:?usage: tools/refine-table.sh ZEPHYR [SIZE] [WORKDIR]}
 size=${2:-256}
@@ -15,8 +15,8 @@ mkdir -p "$work"
 "$zephyr" gen spheres --count 64 --seed 1 --size "${size}x$size" --out "$work/spheres.nff" >/dev/null
 "$zephyr" gen flake --depth 3 --size "${size}x$size" --out "$work/flake.nff" >/dev/null
 "$zephyr" gen showcase --size "${size}x$size" --out "$work/showcase.nff" >/dev/null
-if [ -d "$here/../shared/scenes" ]; then
-  for f in "$here"/../shared/scenes/*.nff; do
+if [ -n "${SCENES:-}" ] && [ -d "$SCENES" ]; then
+  for f in "$SCENES"/*.nff; do
     sed "s/^resolution .*/resolution $size $size/" "$f" > "$work/$(basename "$f")"
   done
 fi

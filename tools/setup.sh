@@ -10,8 +10,8 @@ PACKAGES=(
   libopenmpi-dev openmpi-bin
   libcli11-dev nlohmann-json3-dev libfmt-dev
   clang libclang-rt-14-dev   # libFuzzer + sanitizers for `make fuzz`
-  povray                     # independent reference renderer (SPEC §6)
-  libembree-dev              # outside speed reference in `make bench` (SPEC §6)
+  povray                     # independent reference renderer (docs/background.md)
+  libembree-dev              # outside speed reference in `make bench` (docs/background.md)
   gnuplot-nox jq             # `make charts` (tools/charts.sh: bash + jq + gnuplot, no Python)
 )
 

@@ -1,5 +1,5 @@
 // hosts/cmd/accuracy.cpp — `zephyr accuracy SCENE`: a method's primary hits against an exact
-// reference (SPEC §4). For every pixel (or a stated random sample) the first hit is
+// reference (docs/simd.md, "Accuracy"). For every pixel (or a stated random sample) the first hit is
 // recomputed by the exact reference (hosts/trace/exact.h, 128-bit floats) along the same
 // double eye ray: spheres, ellipsoids and cones (ray through T⁻¹) and polygons. Also the PSNR of the
 // final image against the sequential method in double.

@@ -1,5 +1,5 @@
 // hosts/cmd/stability.cpp — `zephyr stability`: where the ray–sphere test fails
-// (SPEC §4 "Stability where methods fail", issue 7).
+// (docs/background.md, "Precision, accuracy, speed"; docs/results.md, "Where methods fail").
 //
 //   zephyr stability distance --out FILE.csv   error against distance for a small, far sphere
 //   zephyr stability overflow --out FILE.csv   largest scene extent each fixed format holds

@@ -1,5 +1,5 @@
 // hosts/farm/farm.h — the frame farm shared by the distributed and heterogeneous methods
-// (paper §4, SPEC §1): rank 0 (the parent) cuts the image into frames and hands them out on
+// (paper §4; docs/distributed.md): rank 0 (the parent) cuts the image into frames and hands them out on
 // demand; ranks 1..K (the children) receive the job once, then render frame after frame.
 //
 // What a child computes is a FrameWork: "given a frame rectangle (and, for hetero, the

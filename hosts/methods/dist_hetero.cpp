@@ -1,5 +1,5 @@
 // hosts/methods/dist_hetero.cpp — the distributed and heterogeneous methods as render methods
-// (paper §4, SPEC §1), built on the frame farm of hosts/farm/farm.h.
+// (paper §4; docs/distributed.md), built on the frame farm of hosts/farm/farm.h.
 //
 //   dist:   children trace whole frames with the sequential tracer (RenderRegion), so the
 //           image is bit-identical to --method seq.

@@ -1,7 +1,7 @@
 // hosts/scene/geometry.h — 3-vectors and 3×4 affine transforms, shared by the scene, the tracers
 // and the exporters.
 //
-// Vec3T is templated on the scalar so the tracer can run in float or double (SPEC §4: the
+// Vec3T is templated on the scalar so the tracer can run in float or double (docs/background.md, "Precision, accuracy, speed": the
 // accuracy chart needs both); scenes are always held in double (Vec3).
 #pragma once
 

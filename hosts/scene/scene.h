@@ -1,5 +1,5 @@
 // hosts/scene/scene.h — a scene as every method sees it: camera, lights, materials and the
-// primitives in scene-file order (SPEC §2). Everything is double; a tracer templated on
+// primitives in scene-file order (docs/background.md, "The ray tracer"). Everything is double; a tracer templated on
 // float converts when it prepares its own copy.
 //
 // The object index used everywhere (primary-hit matrices, --dump-primary, accuracy
@@ -24,7 +24,7 @@ struct SourceLocation {
 };
 
 // NFF `v` block. angle is the full vertical field of view in degrees between the centres of
-// the top and bottom pixel rows (SPEC §2); hither is the near clipping distance along each
+// the top and bottom pixel rows (docs/scene-format.md); hither is the near clipping distance along each
 // primary ray.
 struct Camera {
   Vec3 from, at, up;

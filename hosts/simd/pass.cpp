@@ -278,7 +278,7 @@ void ShadeRegion(const Tracer& tracer, const PrimaryMatrix& matrix, int x0, int 
       PrimaryHit hit = matrix.hits[size_t(y0 + y) * matrix.width + x0 + x];
       ++stats.rays[int(RayKind::kPrimary)];
       // A fixed-point t is off by up to the plan's bound, enough to put the hit point on
-      // the wrong side of the surface so secondary rays re-hit it (SPEC §4). The host
+      // the wrong side of the surface so secondary rays re-hit it (docs/simd.md, "Uncertain pixels"). The host
       // refines t against the one object the array found (one double test, not N).
       if (hit.object >= 0) {
         const Scene& scene = tracer.GetScene();

@@ -1,4 +1,4 @@
-// hosts/simd/pass.h — the SIMD/sequential method (paper §3, SPEC §1): primary rays on the
+// hosts/simd/pass.h — the SIMD/sequential method (paper §3): primary rays on the
 // emulated array in fixed point, the per-pixel matrix, host shading from it. The planner
 // (hosts/simd/plan.h) chooses every format and bound the pass runs with.
 //

@@ -1,5 +1,5 @@
 // hosts/trace/intersect.h — ray–primitive intersection in the primitive's own coordinates,
-// templated on the scalar (float or double). The tracer applies transforms (SPEC §2: the ray
+// templated on the scalar (float or double). The tracer applies transforms (docs/background.md, "The ray tracer": the ray
 // is mapped by T⁻¹, t is the same in both spaces).
 //
 // Each routine writes the roots it finds in (tMin, +inf) in increasing order into
@@ -14,7 +14,7 @@
 
 namespace zephyr {
 
-// The two algebraic forms of the ray–sphere test (SPEC §4, Ray Tracing Gems ch. 7).
+// The two algebraic forms of the ray–sphere test (docs/background.md, "Precision, accuracy, speed"; Ray Tracing Gems ch. 7).
 enum class SphereTest {
   kHearnBaker,  // discriminant r² − |f − (f·d̂)d̂|²: keeps its bits for small, far spheres
   kNaive,       // c = |f|² − r², discriminant b² − c: loses them (kept for the stability study)

@@ -1,4 +1,4 @@
-// hosts/trace/tracer.h — the exhaustive Whitted tracer every method shares (SPEC §2, paper §2).
+// hosts/trace/tracer.h — the exhaustive Whitted tracer every method shares (paper §2, docs/shading.md).
 //
 // It comes in three pieces so the other methods can swap the middle one:
 //   (a) PrimaryRays::At(x, y)        — the eye ray through pixel (x, y), in double;

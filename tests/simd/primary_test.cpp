@@ -107,7 +107,7 @@ TEST(SimdPrimary, SceneThatCannotFitIsAClearError) {
 TEST(SimdPrimary, PlannerFollowsTheSceneAndTheOverrides) {
   Scene scene = GenerateRandomSpheres({.count = 8, .seed = 1, .width = 384, .height = 384});
   const PrimaryPlan base = PlanPrimaryPass(scene, {});
-  EXPECT_EQ(base.layers, 18);  // 147,456 rays = 18 × 8192 (SPEC §3)
+  EXPECT_EQ(base.layers, 18);  // 147,456 rays = 18 × 8192 (paper §5.1)
   EXPECT_EQ(base.dirFracBits, base.fracBits);
   // Smaller spheres need more fraction bits; a farther scene more integer bits.
   Scene small = scene, far = scene;
