@@ -155,3 +155,48 @@ $(BIN)/bench_%: $(BUILD)/obj/tools/bench/%.o $(LIB_OBJS) | $(BIN)
 	  $$(sed -n 's@^// LIBS: @@p' tools/bench/$*.cpp)
 
 -include $(shell find $(BUILD)/obj -name '*.d' 2>/dev/null)
+
+# ---------------------------------------------------------------------------
+# The simulated build (docs/testbed.md): the same sources compiled a second time with
+# SimGrid's smpicxx into build/bin/zephyr-smpi, which smpirun runs on a platform file of the
+# paper's network (hosts/testbed/platforms/). -DZEPHYR_SMPI switches hosts/testbed to
+# SimGrid's clock; smpi_prelude.h lets CLI11 through SMPI's exit() macro. No -g: smpirun
+# copies the program once per simulated rank.
+SMPICXX    ?= smpicxx
+HAVE_SMPI  := $(shell command -v $(SMPICXX) 2>/dev/null)
+# smpicxx calls the compiler itself; ccache in front of it still caches (rebuilds after a
+# rebase are the slow part on a shared machine).
+SMPI_CC    := $(if $(shell command -v ccache 2>/dev/null),ccache )$(SMPICXX)
+SMPI_BUILD := $(BUILD)/smpi
+SMPI_OPT   ?= $(OPT)
+ZEPHYR_SMPI_BIN := $(BIN)/zephyr-smpi
+SMPI_CXXFLAGS = -std=c++20 -Wall -Wextra -Wno-unused-parameter -I. \
+  $(shell pkg-config --cflags libhwy libpng fmt 2>/dev/null) $(SMPI_OPT) \
+  -DZEPHYR_SMPI -DSMPI_NO_OVERRIDE_MALLOC -include hosts/testbed/smpi_prelude.h
+SMPI_LIBS = $(shell pkg-config --libs libhwy libpng fmt 2>/dev/null) -lpthread
+# zephyr-smpi is for `render` (and `testbed`): the other commands stay out of it.
+SMPI_SRCS := $(filter-out hosts/cmd/accuracy.cpp hosts/cmd/cycles.cpp hosts/cmd/stability.cpp \
+               hosts/cmd/mpi_check.cpp hosts/scene/gen.cpp hosts/scene/pov.cpp,$(LIB_SRCS))
+SMPI_OBJS := $(SMPI_SRCS:%.cpp=$(SMPI_BUILD)/obj/%.o) $(SMPI_BUILD)/obj/hosts/cmd/main.o
+
+.PHONY: smpi
+smpi: ## Build build/bin/zephyr-smpi (dist/hetero on a simulated 1992 network under smpirun)
+	$(Q)$(MAKE) --no-print-directory -j$(JOBS) $(ZEPHYR_SMPI_BIN)
+
+# Its own flags file: the ordinary build's must not rebuild this one (nor the reverse).
+SMPI_FLAGS_FILE := $(SMPI_BUILD)/flags.txt
+$(SMPI_FLAGS_FILE): FORCE
+	@mkdir -p $(@D)
+	@echo '$(SMPI_CC) $(SMPI_CXXFLAGS) $(SMPI_LIBS)' | cmp -s - $@ || echo '$(SMPI_CC) $(SMPI_CXXFLAGS) $(SMPI_LIBS)' > $@
+
+$(SMPI_BUILD)/obj/%.o: %.cpp $(SMPI_FLAGS_FILE)
+	$(call say,SMPICXX,$<)
+	@mkdir -p $(@D)
+	$(Q)$(SMPI_CC) $(SMPI_CXXFLAGS) -MMD -MP -c $< -o $@
+
+$(ZEPHYR_SMPI_BIN): $(SMPI_OBJS) | $(BIN)
+	$(call say,LINK,$@)
+	$(Q)$(SMPICXX) $(SMPI_CXXFLAGS) $^ -o $@ $(SMPI_LIBS)
+	$(Q)strip --strip-debug $@  # smpirun copies the program once per rank
+
+-include $(shell find $(SMPI_BUILD)/obj -name '*.d' 2>/dev/null)

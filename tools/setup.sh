@@ -13,6 +13,7 @@ PACKAGES=(
   povray                     # independent reference renderer (docs/background.md)
   libembree-dev              # outside speed reference in `make bench` (docs/background.md)
   gnuplot-nox jq             # `make charts` (tools/charts.sh: bash + jq + gnuplot, no Python)
+  simgrid libsimgrid-dev libxml2-utils  # `make smpi`: the 1992 testbed under SMPI (docs/testbed.md)
 )
 
 missing=()

@@ -33,7 +33,9 @@ int RunZephyr(int argc, const char* const* argv) {
   try {
     program.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return program.exit(e);
+    // (program.exit): parenthesised so SMPI's exit(x) macro (zephyr-smpi, docs/testbed.md)
+    // leaves CLI11's member alone.
+    return (program.exit)(e);
   } catch (const UserError& e) {
     std::fprintf(stderr, "zephyr: error: %s\n", e.what());
     return e.ExitCode();

@@ -227,7 +227,9 @@ void PollBackoff::Wait() {
     std::this_thread::yield();
     return;
   }
-  std::this_thread::sleep_for(std::chrono::microseconds(micros_));
+  // usleep, not std::this_thread::sleep_for: under SimGrid (zephyr-smpi) SMPI turns it into
+  // a simulated sleep, so polling costs simulated time, not the simulation's wall time.
+  ::usleep(useconds_t(micros_));
   micros_ = std::min(maxMicros_, micros_ * 2);
 }
 

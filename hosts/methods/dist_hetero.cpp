@@ -20,6 +20,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <limits>
 
 #include "fixed/check.h"
 #include "hosts/farm/farm.h"
@@ -28,6 +29,7 @@
 #include "hosts/methods/render.h"
 #include "hosts/methods/phases.h"
 #include "hosts/simd/pass.h"
+#include "hosts/testbed/testbed.h"
 
 namespace zephyr {
 namespace {
@@ -127,8 +129,9 @@ class TracerWork : public FrameWork {
   }
   void RenderFrame(const Frame& f, std::span<const std::byte> slice,
                    std::span<std::byte> pixels) override {
+    TraceStats frameStats;
     if (method_ == "dist") {
-      RenderRegion(*tracer_, f.x0, f.y0, f.width, f.height, block_, stats_);
+      RenderRegion(*tracer_, f.x0, f.y0, f.width, f.height, block_, frameStats);
     } else {
       // The frame's own piece of the matrix, at (0, 0): ShadeRegion's pixels depend only on
       // each pixel's hit, so they equal the full image's. Directions are recomputed from the
@@ -143,12 +146,26 @@ class TracerWork : public FrameWork {
           m.hits[i] = hetero::GetEntry(&slice[i * kEntryBytes], int(scene_.objects.size()), m.flags[i]);
           m.hits[i].direction = hetero::MatrixDirection(tracer_->Rays(), x, y, dirFracBits_, m.flags[i]);
         }
-      simd::ShadeRegion(*tracer_, m, 0, 0, f.width, f.height, block_, stats_);
+      simd::ShadeRegion(*tracer_, m, 0, 0, f.width, f.height, block_, frameStats);
     }
+    stats_.Add(frameStats);
+    chargedSeconds_ += testbed::ChargeHostWork(frameStats);  // simulated testbed only
     ZEPHYR_CHECK_EQ(block_.size() * kPixelBytes, pixels.size());
     std::memcpy(pixels.data(), block_.data(), pixels.size());
   }
-  nlohmann::json Stats() const override { return stats_.ToJson(); }
+  nlohmann::json Stats() const override {
+    nlohmann::json j = stats_.ToJson();
+    if (testbed::Simulated()) {
+      // Simulated time of this child: charged work is busy, the rest waiting on the network
+      // and the parent.
+      const double now = testbed::SimulatedNow();
+      j["testbed"] = testbed::SimulatedHost();
+      j["testbed"]["busySeconds"] = chargedSeconds_;
+      j["testbed"]["idleSeconds"] = now - chargedSeconds_;
+      j["testbed"]["clockAtStats"] = now;
+    }
+    return j;
+  }
 
  private:
   std::string method_;
@@ -158,6 +175,7 @@ class TracerWork : public FrameWork {
   std::unique_ptr<Tracer> tracer_;
   std::vector<Vec3> block_;
   TraceStats stats_;
+  double chargedSeconds_ = 0;
 };
 
 double DoubleFlag(const RenderOptions& o, const std::string& name, double fallback) {
@@ -177,6 +195,8 @@ FramedOptions FarmOptions(const RenderOptions& o) {
   f.checkpointPath = o.out.empty() ? "" : CheckpointPathFor(o.out);
   f.resume = o.extra.count("resume") && o.extra.at("resume") == "true";
   f.childTimeoutSeconds = DoubleFlag(o, "child-timeout", 60);
+  // Under SimGrid wall-clock time means nothing to the simulated run: no timeout.
+  if (testbed::Simulated()) f.childTimeoutSeconds = std::numeric_limits<double>::infinity();
   f.framesInFlight = int(DoubleFlag(o, "in-flight", 2));
   if (f.framesInFlight < 1 || double(f.framesInFlight) != DoubleFlag(o, "in-flight", 2))
     throw UserError("--in-flight: expected a whole number ≥ 1");
@@ -241,6 +261,7 @@ void RenderHetero(const Scene& scene, const RenderOptions& options, RenderOutput
         pass = simd::RunPrimaryPass(scene, simd::SimdOptionsFrom(options));
         job.parentPassSeconds =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        if (testbed::Simulated()) job.parentPassSeconds = testbed::ChargeArrayPass(pass, scene);
         job.setup = SetupText("hetero", scene, options.trace, pass.plan.dirFracBits);
         std::fprintf(stderr, "cycle report (SIMD primary pass):\n%s", pass.cycleTable.c_str());
         tracer = Tracer::Create(scene, options.trace);

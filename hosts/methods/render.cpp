@@ -10,6 +10,7 @@
 #include "hosts/cmd/command.h"
 #include "hosts/scene/nff.h"
 #include "hosts/methods/phases.h"
+#include "hosts/testbed/testbed.h"
 
 namespace zephyr {
 
@@ -93,6 +94,7 @@ RenderOutput RunRender(const RenderOptions& options) {
     PhaseTimer timer(out.report, "render");
     it->second.run(scene, options, out);
   }
+  testbed::AddModelledTime(options, scene, out);  // --testbed: modelled 1992 seconds
   ZEPHYR_CHECK(out.image.width == c.width && out.image.height == c.height);
   if (!options.out.empty()) {
     PhaseTimer timer(out.report, "write_png");

@@ -283,11 +283,14 @@ void ShadeRegion(const Tracer& tracer, const PrimaryMatrix& matrix, int x0, int 
       if (hit.object >= 0) {
         const Scene& scene = tracer.GetScene();
         const double tMin = std::max(scene.camera.hither, 0.0);
+        ++stats.tests[int(scene.objects[hit.object].Kind())];
+        ++stats.hits;
         if (auto t = IntersectObject(scene, hit.object, scene.camera.from, hit.direction, tMin,
                                      tracer.Options().sphereTest))
           hit.t = *t;
       }
       out[size_t(y) * w + x] = tracer.ShadeFromPrimaryHit(hit, stats);
+      ++stats.pixels;
     }
 }
 

@@ -42,14 +42,33 @@ PrimaryRay PrimaryRays::At(int x, int y) const {
 void TraceStats::Add(const TraceStats& o) {
   for (int i = 0; i < kRayKinds; ++i) rays[i] += o.rays[i];
   for (int i = 0; i < kShapeKinds; ++i) tests[i] += o.tests[i];
+  hits += o.hits;
+  shades += o.shades;
+  lightSamples += o.lightSamples;
+  pixels += o.pixels;
+}
+
+namespace {
+constexpr const char* kRayNames[kRayKinds] = {"primary", "shadow", "reflected", "refracted"};
+}
+
+TraceStats TraceStats::FromJson(const nlohmann::json& j) {
+  TraceStats s;
+  for (int i = 0; i < kRayKinds; ++i) s.rays[i] = j.at("rays").at(kRayNames[i]).get<uint64_t>();
+  for (int i = 0; i < kShapeKinds; ++i)
+    s.tests[i] = j.at("tests").at(ShapeKindName(ShapeKind(i))).get<uint64_t>();
+  s.hits = j.at("hits").get<uint64_t>();
+  s.shades = j.at("shades").get<uint64_t>();
+  s.lightSamples = j.at("lightSamples").get<uint64_t>();
+  s.pixels = j.at("pixels").get<uint64_t>();
+  return s;
 }
 
 nlohmann::json TraceStats::ToJson() const {
   nlohmann::json j;
-  const char* rayNames[kRayKinds] = {"primary", "shadow", "reflected", "refracted"};
   uint64_t total = 0;
   for (int i = 0; i < kRayKinds; ++i) {
-    j["rays"][rayNames[i]] = rays[i];
+    j["rays"][kRayNames[i]] = rays[i];
     total += rays[i];
   }
   j["rays"]["total"] = total;
@@ -59,6 +78,10 @@ nlohmann::json TraceStats::ToJson() const {
     total += tests[i];
   }
   j["tests"]["total"] = total;
+  j["hits"] = hits;
+  j["shades"] = shades;
+  j["lightSamples"] = lightSamples;
+  j["pixels"] = pixels;
   return j;
 }
 
@@ -274,6 +297,7 @@ class TracerT final : public Tracer {
     ++stats.rays[int(RayKind::kPrimary)];
     T t;
     const int object = Nearest(V(ray.origin), V(ray.direction), hither_, stats, t);
+    if (object >= 0) ++stats.hits;
     return {object, object >= 0 ? double(t) : 0.0, ray.direction};
   }
 
@@ -327,10 +351,12 @@ class TracerT final : public Tracer {
     T t;
     const int object = Nearest(o, d, epsilon_, stats, t);
     if (object < 0) return V(scene_.background);
+    ++stats.hits;
     return Shade(o, d, object, t, depth, stats);
   }
 
   V Shade(const V& o, const V& d, int object, T t, int depth, TraceStats& stats) const {
+    ++stats.shades;
     const Prepared<T>& obj = objects_[object];
     const Material& m = scene_.materials[obj.material];
     const V p = o + d * t;
@@ -340,6 +366,7 @@ class TracerT final : public Tracer {
     const V surface(m.colour);
     V colour{};
     for (const Light& light : scene_.lights) {
+      ++stats.lightSamples;
       V toLight = V(light.position) - p;
       const T dist = Length(toLight);
       toLight = toLight / dist;
@@ -416,6 +443,7 @@ void RenderRegion(const Tracer& tracer, int x0, int y0, int w, int h, std::vecto
     for (int x = 0; x < w; ++x) {
       const size_t i = size_t(y) * w + x;
       out[i] = tracer.TracePixel(x0 + x, y0 + y, stats, primary ? &(*primary)[i] : nullptr);
+      ++stats.pixels;
     }
     if (onRow) onRow();
   }

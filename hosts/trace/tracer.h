@@ -67,12 +67,20 @@ struct PrimaryHit {
 enum class RayKind { kPrimary = 0, kShadow = 1, kReflected = 2, kRefracted = 3 };
 inline constexpr int kRayKinds = 4;
 
-// Counters for one render (or one frame); add them up across frames and workers.
+// Counters for one render (or one frame); add them up across frames and workers. They are
+// the counted host work a host profile turns into modelled seconds (hosts/testbed/, the
+// paper's 1992 testbed); every count is of work done, never of a result's value.
 struct TraceStats {
   uint64_t rays[kRayKinds] = {};
   uint64_t tests[kShapeKinds] = {};  // ray–primitive tests performed, by primitive kind
+  uint64_t hits = 0;         // rays (not shadow rays) whose nearest object was found
+  uint64_t shades = 0;       // surface points shaded (normal, material, recursion)
+  uint64_t lightSamples = 0; // light sources evaluated at a shaded point (local light)
+  uint64_t pixels = 0;       // pixels written
   void Add(const TraceStats& other);
-  nlohmann::json ToJson() const;     // {"rays": {...}, "tests": {...}}
+  // {"rays": {...}, "tests": {...}, "hits", "shades", "lightSamples", "pixels"}
+  nlohmann::json ToJson() const;
+  static TraceStats FromJson(const nlohmann::json& j);  // ToJson's inverse (json exceptions)
 };
 
 class Tracer {

@@ -1,0 +1,311 @@
+#include "hosts/testbed/testbed.h"
+
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <fstream>
+#include <map>
+
+#include "bitserial/profile.h"
+#include "fixed/check.h"
+#include "hosts/cmd/command.h"
+#include "hosts/methods/render.h"
+#include "hosts/simd/pass.h"
+
+#ifdef ZEPHYR_SMPI
+#include <mpi.h>
+#include <simgrid/s4u.hpp>
+#endif
+
+namespace zephyr::testbed {
+
+namespace {
+
+const std::map<std::string, Testbed>& Testbeds() {
+  static const std::map<std::string, Testbed> testbeds = {
+      {"ufmg1992",
+       {"ufmg1992",
+        "the paper's runs (§6.1): a SPARCstation 2 host/parent with the Zephyr on SCSI, "
+        "SPARCstation SLC children, the department's Ethernet under PVM",
+        "sparcstation2", "sparcstation-slc", "wavetracer",
+        {10e6, "bit/s", "assumed: the SPARCstations' built-in 10 Mbit/s Ethernet (10BASE), one "
+                        "medium shared by every station"},
+        {1e-3, "s", "assumed: per-message latency of PVM 3 over Ethernet of the order of a "
+                    "millisecond (daemon-routed UDP)"},
+        {5e6, "byte/s", "assumed: SCSI-1 synchronous at 5 MB/s, the same figure as the "
+                        "wavetracer profile's hostPlane cost"}}},
+  };
+  return testbeds;
+}
+
+// The SIMD pass's modelled seconds split into the array's own cycles and the host link
+// (the cycle report's "host" class: the matrix moving over SCSI).
+struct ArraySplit {
+  double arraySeconds = 0, scsiSeconds = 0, scsiBytes = 0, clockHz = 0, arrayCycles = 0;
+};
+ArraySplit SplitPass(const nlohmann::json& cycles) {
+  ArraySplit a;
+  const bitserial::MachineProfile profile = bitserial::Profile(cycles.at("profile").get<std::string>());
+  a.clockHz = cycles.at("clockHz").get<double>();
+  const double total = cycles.at("totalCycles").get<double>();
+  const double host = cycles.at("byClass").at("host").get<double>();
+  a.arrayCycles = total - host;
+  a.arraySeconds = a.arrayCycles / a.clockHz;
+  a.scsiSeconds = host / a.clockHz;
+  // One hostPlane moves one bit of every physical PE.
+  const double planeCycles = profile.Cost(bitserial::MicroOp::HostPlane);
+  a.scsiBytes = planeCycles > 0 ? host / planeCycles * profile.physicalPes / 8 : 0;
+  return a;
+}
+
+}  // namespace
+
+nlohmann::json Testbed::Json() const {
+  return {{"name", name},
+          {"description", description},
+          {"parentProfile", parentProfile},
+          {"childProfile", childProfile},
+          {"arrayProfile", arrayProfile},
+          {"ethernetBandwidth", ethernetBandwidth.Json()},
+          {"ethernetLatency", ethernetLatency.Json()},
+          {"scsiBandwidth", scsiBandwidth.Json()}};
+}
+
+const Testbed& TestbedNamed(const std::string& name) {
+  auto it = Testbeds().find(name);
+  if (it == Testbeds().end()) {
+    std::string known;
+    for (const auto& n : TestbedNames()) known += (known.empty() ? "" : ", ") + n;
+    throw UserError("--testbed: unknown testbed '" + name + "' (known: " + known + ")");
+  }
+  return it->second;
+}
+
+std::vector<std::string> TestbedNames() {
+  std::vector<std::string> names;
+  for (const auto& [name, t] : Testbeds()) names.push_back(name);
+  return names;
+}
+
+void AddModelledTime(const RenderOptions& options, const Scene& scene, RenderOutput& out) {
+  auto it = options.extra.find("testbed");
+  if (it == options.extra.end() || it->second.empty()) return;
+  nlohmann::json& r = out.report;
+  nlohmann::json t;
+  if (options.method == "dist" || options.method == "hetero") {
+    if (!Simulated())
+      throw UserError("--testbed with --method " + options.method +
+                      " runs on a simulated network: build/bin/zephyr-smpi under smpirun "
+                      "(`make smpi`; docs/testbed.md)");
+    t["testbed"] = it->second;
+    t["modelledSeconds"] = SimulatedNow();
+    t["clock"] = "SimGrid (simulated seconds from MPI start to the finished image at the parent)";
+    r["testbed"] = t;
+    return;
+  }
+  const Testbed& bed = TestbedNamed(it->second);
+  const HostProfile& host = HostProfileNamed(bed.parentProfile);
+  TraceStats stats;
+  try {
+    stats = TraceStats::FromJson(r);
+  } catch (const nlohmann::json::exception&) {
+    throw UserError("--testbed: method '" + options.method + "' does not report counted work");
+  }
+  t["testbed"] = bed.Json();
+  t["hostProfile"] = host.Json();
+  if (options.method == "simd") {
+    const nlohmann::json& pass = r.at("simd");
+    if (pass.at("cycles").at("profile").get<std::string>() != bed.arrayProfile)
+      throw UserError("--testbed " + bed.name + ": its array is '" + bed.arrayProfile +
+                      "', but --machine chose '" + pass.at("cycles").at("profile").get<std::string>() + "'");
+    // The host recomputes each uncertain pixel against every object, in double.
+    stats.Add(RecomputeWork(pass.at("uncertain").at("recomputed").get<uint64_t>(), scene));
+    const ArraySplit a = SplitPass(pass.at("cycles"));
+    const HostTime h = ModelHostTime(stats, host);
+    t["array"] = {{"profile", bed.arrayProfile},  {"clockHz", a.clockHz},
+                  {"cycles", a.arrayCycles},      {"seconds", a.arraySeconds},
+                  {"scsiBytes", a.scsiBytes},     {"scsiSeconds", a.scsiSeconds},
+                  {"scsiSource", "the cycle report's host class (hostPlane cycles of the matrix)"}};
+    t["host"] = h.Json();
+    t["modelledSeconds"] = a.arraySeconds + a.scsiSeconds + h.seconds;
+  } else {
+    const HostTime h = ModelHostTime(stats, host);
+    t["host"] = h.Json();
+    t["modelledSeconds"] = h.seconds;
+  }
+  r["testbed"] = t;
+}
+
+namespace {
+// XML comments may not hold "--" (a flag's name in a source note).
+std::string Comment(std::string text) {
+  for (size_t at; (at = text.find("--")) != std::string::npos;) text.replace(at, 2, "-");
+  return text;
+}
+}  // namespace
+
+std::string PlatformXml(const Testbed& bed, int children) {
+  if (children < 1 || children > 4096)
+    throw UserError("--children: expected 1..4096, got " + std::to_string(children));
+  const HostProfile& parent = HostProfileNamed(bed.parentProfile);
+  const HostProfile& child = HostProfileNamed(bed.childProfile);
+  const bitserial::MachineProfile array = bitserial::Profile(bed.arrayProfile);
+  auto host = [](const std::string& id, double speed, const std::string& profile,
+                 const std::string& role) {
+    std::string s = "    <host id=\"" + id + "\" speed=\"" + std::to_string(speed) + "f\">\n";
+    if (!profile.empty()) s += "      <prop id=\"zephyr:profile\" value=\"" + profile + "\"/>\n";
+    s += "      <prop id=\"zephyr:role\" value=\"" + role + "\"/>\n    </host>\n";
+    return s;
+  };
+  std::string x =
+      "<?xml version='1.0'?>\n"
+      "<!DOCTYPE platform SYSTEM \"https://simgrid.org/simgrid.dtd\">\n"
+      "<!-- Written by zephyr testbed platform (testbed " + bed.name + ", " +
+      std::to_string(children) + " children; docs/testbed.md): " + Comment(bed.description) + ".\n"
+      "     Host speeds are the profiles' Linpack rates (flops/s) and the array's clock "
+      "(cycles/s);\n     work is charged as the profiles' modelled seconds, so the speeds "
+      "only convert. -->\n"
+      "<platform version=\"4.1\">\n  <zone id=\"" + bed.name + "\" routing=\"Full\">\n";
+  x += host("parent", parent.mflops.value * 1e6, parent.name, "parent");
+  x += host("zephyr", array.clockHz, "", "array");
+  for (int i = 1; i <= children; ++i)
+    x += host("child-" + std::to_string(i), child.mflops.value * 1e6, child.name, "child");
+  x += "    <!-- " + Comment(bed.ethernetBandwidth.source + "; " + bed.ethernetLatency.source) + " -->\n";
+  x += "    <link id=\"ethernet\" bandwidth=\"" + std::to_string(bed.ethernetBandwidth.value) +
+       "bps\" latency=\"" + std::to_string(bed.ethernetLatency.value) +
+       "s\" sharing_policy=\"SHARED\"/>\n";
+  x += "    <!-- " + Comment(bed.scsiBandwidth.source) + " -->\n";
+  x += "    <link id=\"scsi\" bandwidth=\"" + std::to_string(bed.scsiBandwidth.value) +
+       "Bps\" latency=\"0s\"/>\n";
+  x += "    <route src=\"parent\" dst=\"zephyr\"><link_ctn id=\"scsi\"/></route>\n";
+  for (int i = 1; i <= children; ++i)
+    x += "    <route src=\"parent\" dst=\"child-" + std::to_string(i) +
+         "\"><link_ctn id=\"ethernet\"/></route>\n";
+  x += "  </zone>\n</platform>\n";
+  return x;
+}
+
+std::string Hostfile(int children) {
+  std::string s = "parent\n";
+  for (int i = 1; i <= children; ++i) s += "child-" + std::to_string(i) + "\n";
+  return s;
+}
+
+namespace {
+
+void WriteText(const std::string& path, const std::string& text) {
+  std::ofstream f(path);
+  f << text;
+  if (!f.flush()) throw UserError(path + ": cannot write");
+}
+
+CommandRegistration testbedCommand("testbed", [](CLI::App& program) {
+  auto* cmd = program.add_subcommand("testbed", "The paper's 1992 testbed: host profiles, platform files");
+  cmd->require_subcommand(1);
+  auto* profiles = cmd->add_subcommand("profiles", "Print the host profiles and the work table, with sources");
+  profiles->callback([] {
+    for (const auto& name : HostProfileNames()) std::printf("%s\n", HostProfileNamed(name).Table().c_str());
+    std::printf("work table (per counted event):\n");
+    for (int e = 0; e < kWorkEvents; ++e)
+      std::printf("  %-12s %5g flops %5g instructions  %s\n", WorkEventName(WorkEvent(e)),
+                  CostOf(WorkEvent(e)).flops, CostOf(WorkEvent(e)).instructions,
+                  CostOf(WorkEvent(e)).source.c_str());
+    for (const auto& name : TestbedNames())
+      std::printf("\ntestbed %s:\n%s\n", name.c_str(), TestbedNamed(name).Json().dump(2).c_str());
+  });
+  auto* platform = cmd->add_subcommand("platform", "Write a SimGrid platform file (and hostfile) of a testbed");
+  auto bed = std::make_shared<std::string>("ufmg1992");
+  auto children = std::make_shared<int>(8);
+  auto out = std::make_shared<std::string>();
+  auto hostfile = std::make_shared<std::string>();
+  platform->add_option("--testbed", *bed, "Testbed name")->capture_default_str();
+  platform->add_option("--children", *children, "Number of child hosts")->capture_default_str();
+  platform->add_option("--out", *out, "Platform XML (default: standard output)");
+  platform->add_option("--hostfile", *hostfile, "Also write smpirun's hostfile: the parent, then the children");
+  auto bps = std::make_shared<double>(0);
+  platform->add_option("--ethernet-bps", *bps, "Override the Ethernet's bandwidth, bit/s (what-if runs)");
+  platform->callback([bed, children, out, hostfile, bps] {
+    Testbed t = TestbedNamed(*bed);
+    if (*bps < 0 || (*bps > 0 && *bps < 1e3))
+      throw UserError("--ethernet-bps: expected a bandwidth of at least 1000 bit/s");
+    if (*bps > 0) t.ethernetBandwidth = {*bps, "bit/s", "--ethernet-bps (what-if; not the paper's network)"};
+    const std::string xml = PlatformXml(t, *children);
+    if (out->empty()) std::fputs(xml.c_str(), stdout);
+    else WriteText(*out, xml);
+    if (!hostfile->empty()) WriteText(*hostfile, Hostfile(*children));
+  });
+});
+
+RenderFlagRegistration flags([](CLI::App& cmd, RenderOptions& o) {
+  cmd.add_option("--testbed", o.extra["testbed"],
+                 "Model the paper's 1992 system (ufmg1992): the report's \"testbed\" gives "
+                 "modelled seconds (dist/hetero: under smpirun, docs/testbed.md)");
+});
+}  // namespace
+
+// ---- Simulation ---------------------------------------------------------------------------
+#ifdef ZEPHYR_SMPI
+
+bool Simulated() { return true; }
+
+double SimulatedNow() { return simgrid::s4u::Engine::get_clock(); }
+
+namespace {
+const HostProfile* ProfileOf(simgrid::s4u::Host* h) {
+  const char* name = h->get_property("zephyr:profile");
+  return name ? &HostProfileNamed(name) : nullptr;
+}
+}  // namespace
+
+nlohmann::json SimulatedHost() {
+  simgrid::s4u::Host* h = simgrid::s4u::this_actor::get_host();
+  const HostProfile* p = ProfileOf(h);
+  return {{"host", h->get_name()}, {"speedFlops", h->get_speed()},
+          {"profile", p ? p->name : std::string("(none: flops + instructions at the host speed)")}};
+}
+
+double ChargeHostWork(const TraceStats& work) {
+  simgrid::s4u::Host* h = simgrid::s4u::this_actor::get_host();
+  const double start = SimulatedNow();
+  // With a profile: its modelled seconds, as flops at this host's speed (so the charge is
+  // exactly those seconds on an unshared host). Without: every operation as one flop.
+  double flops;
+  if (const HostProfile* p = ProfileOf(h)) {
+    flops = ModelHostTime(work, *p).seconds * h->get_speed();
+  } else {
+    const HostTime t = ModelHostTime(work, HostProfileNamed("sparcstation2"));
+    flops = t.flops + t.instructions;
+  }
+  if (flops > 0) smpi_execute_flops(flops);
+  return SimulatedNow() - start;
+}
+
+double ChargeArrayPass(const simd::PrimaryPass& pass, const Scene& scene) {
+  const double start = SimulatedNow();
+  simgrid::s4u::Host* self = simgrid::s4u::this_actor::get_host();
+  const auto arrays = simgrid::s4u::Engine::get_instance()->get_filtered_hosts([](simgrid::s4u::Host* h) {
+    const char* role = h->get_property("zephyr:role");
+    return role && std::string(role) == "array";
+  });
+  if (arrays.size() != 1)
+    throw UserError("the platform has " + std::to_string(arrays.size()) +
+                    " hosts with zephyr:role=array; the heterogeneous method needs exactly one "
+                    "(docs/testbed.md)");
+  const ArraySplit a = SplitPass(pass.cycles);
+  // The array computes at its clock (the platform gives its speed in cycles per second).
+  simgrid::s4u::this_actor::exec_init(a.arrayCycles)->set_host(arrays[0])->wait();
+  if (a.scsiBytes > 0) simgrid::s4u::Comm::sendto(arrays[0], self, uint64_t(a.scsiBytes));
+  ChargeHostWork(RecomputeWork(uint64_t(pass.recomputedPixels), scene));
+  return SimulatedNow() - start;
+}
+
+#else
+
+bool Simulated() { return false; }
+double SimulatedNow() { return 0; }
+nlohmann::json SimulatedHost() { return nlohmann::json::object(); }
+double ChargeHostWork(const TraceStats&) { return 0; }
+double ChargeArrayPass(const simd::PrimaryPass&, const Scene&) { return 0; }
+
+#endif
+
+}  // namespace zephyr::testbed

@@ -1,0 +1,84 @@
+// hosts/testbed/testbed.h — the paper's 1992 testbed, modelled (§5–6.1; docs/testbed.md).
+//
+// A testbed names the machines of a run: the host/parent and the children (host profiles,
+// hosts/testbed/host_profile.h), the SIMD array (a bitserial machine profile) and the
+// network (a SimGrid platform: one shared Ethernet, the SCSI link to the array).
+//
+//   * seq and simd need no network: `zephyr render --testbed ufmg1992` adds report
+//     "testbed" with the modelled seconds from the counted work (AddModelledTime).
+//   * dist and hetero run unmodified under SimGrid's SMPI (build/bin/zephyr-smpi under
+//     smpirun, `make smpi`): each child charges its counted work to its simulated host
+//     (ChargeHostWork), the parent charges the array pass (ChargeArrayPass); the report's
+//     modelled seconds are SimGrid's clock. In the ordinary build these calls do nothing.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "hosts/scene/scene.h"
+#include "hosts/testbed/host_profile.h"
+#include "hosts/trace/tracer.h"
+
+namespace zephyr {
+struct RenderOptions;
+struct RenderOutput;
+namespace simd {
+struct PrimaryPass;
+}
+}  // namespace zephyr
+
+namespace zephyr::testbed {
+
+struct Testbed {
+  std::string name;           // "ufmg1992"
+  std::string description;
+  std::string parentProfile;  // host profile of the host/parent (seq, simd, parent of dist/hetero)
+  std::string childProfile;   // host profile of every child
+  std::string arrayProfile;   // bitserial machine profile of the SIMD array
+  Sourced ethernetBandwidth;  // bit/s, one medium shared by every host
+  Sourced ethernetLatency;    // s, per message
+  Sourced scsiBandwidth;      // byte/s, host <-> array
+  nlohmann::json Json() const;
+};
+
+// The named testbeds ("ufmg1992"); UserError for an unknown name, listing the known ones.
+const Testbed& TestbedNamed(const std::string& name);
+std::vector<std::string> TestbedNames();
+
+// A SimGrid platform (XML v4.1) of the testbed with `children` child hosts: "parent" (the
+// parent's profile), "zephyr" (the array, speed = its clock), "child-1".."child-K", one
+// SHARED Ethernet link on every parent-child route, the SCSI link parent-zephyr. Hosts carry
+// "zephyr:profile" and "zephyr:role" properties. UserError for children outside 1..4096.
+std::string PlatformXml(const Testbed& bed, int children);
+// smpirun's hostfile for it: rank 0 on the parent, rank i on child-i.
+std::string Hostfile(int children);
+
+// True in the build made with smpicxx (zephyr-smpi), where time is SimGrid's.
+bool Simulated();
+
+// Modelled seconds of seq/simd from the counts in a finished render's report (the method's
+// TraceStats at the top level; simd's cycle report under "simd"). Adds report["testbed"]:
+// {"testbed", "modelledSeconds", "host": HostTime, "array": {...}}. For dist/hetero it
+// requires the simulated build and reports SimGrid's clock (UserError otherwise).
+void AddModelledTime(const RenderOptions& options, const Scene& scene, RenderOutput& out);
+
+// Under simulation: charges counted host work to this rank's simulated host (its profile
+// is the platform host's "zephyr:profile" property; without one, the work's flops plus
+// instructions at the host's speed). Returns the simulated seconds charged (0 otherwise).
+double ChargeHostWork(const TraceStats& work);
+
+// Under simulation, at the parent: the SIMD pass's array cycles on the platform's array
+// host ("zephyr:role" = "array"), the matrix over the SCSI link between them, and the
+// host's share of the pass (uncertain pixels recomputed) on the parent. Returns the
+// simulated seconds it took (0 when not simulated).
+double ChargeArrayPass(const simd::PrimaryPass& pass, const Scene& scene);
+
+// The simulated seconds since the simulation started (0 when not simulated).
+double SimulatedNow();
+
+// Under simulation, a JSON object with this rank's host name, its profile and speed.
+nlohmann::json SimulatedHost();
+
+}  // namespace zephyr::testbed

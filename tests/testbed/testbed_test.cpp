@@ -1,0 +1,210 @@
+// The modelled 1992 testbed (docs/testbed.md): counted host work, host profiles, modelled
+// seconds of seq and simd, the platform files, and — when `make smpi` built zephyr-smpi —
+// dist and hetero under smpirun: the same PNG as seq/simd and the same seconds twice.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "fixed/check.h"
+#include "hosts/methods/render.h"
+#include "hosts/scene/nff.h"
+#include "hosts/testbed/host_profile.h"
+#include "hosts/testbed/testbed.h"
+#include "tests/farm/mpi_launch.h"
+
+namespace zephyr {
+namespace {
+
+using testing::ReadFile;
+using testing::ReadJson;
+using testing::RunCommand;
+using testing::RunZephyrProcess;
+using testing::TempDir;
+
+std::string WriteScene(const TempDir& dir, int count = 6, const std::string& size = "24x16") {
+  std::string path = dir / "s.nff";
+  auto r = RunZephyrProcess("gen spheres --count " + std::to_string(count) + " --seed 5 --size " +
+                            size + " --out " + path);
+  EXPECT_EQ(r.status, 0) << r.output;
+  return path;
+}
+
+RenderOutput Render(const std::string& scene, const std::string& method, const std::string& bed) {
+  RenderOptions o;
+  o.method = method;
+  o.scenePath = scene;
+  o.progress = false;
+  o.extra["testbed"] = bed;
+  return RunRender(o);
+}
+
+TEST(TestbedWork, SeqCountsEveryPixelAndShadesEveryHit) {
+  TempDir dir;
+  const RenderOutput out = Render(WriteScene(dir), "seq", "");
+  const TraceStats s = TraceStats::FromJson(out.report);
+  EXPECT_EQ(s.pixels, 24u * 16u);
+  EXPECT_EQ(s.rays[int(RayKind::kPrimary)], 24u * 16u);
+  EXPECT_EQ(s.shades, s.hits);  // every ray that hits is shaded
+  EXPECT_GT(s.hits, 0u);
+  EXPECT_GT(s.lightSamples, 0u);
+  EXPECT_EQ(TraceStats::FromJson(s.ToJson()).ToJson(), s.ToJson());
+}
+
+TEST(TestbedProfile, SecondsAreTheWorkTableAtTheProfilesRates) {
+  TraceStats s;
+  s.tests[int(ShapeKind::kSphere)] = 1000;
+  s.pixels = 10;
+  const testbed::HostProfile& ss2 = testbed::HostProfileNamed("sparcstation2");
+  const testbed::HostTime t = testbed::ModelHostTime(s, ss2);
+  const auto& sphere = testbed::CostOf(testbed::WorkEvent::kSphereTest);
+  const auto& pixel = testbed::CostOf(testbed::WorkEvent::kPixel);
+  const double expected = 1000 * sphere.flops / (ss2.mflops.value * 1e6) +
+                          (1000 * sphere.instructions + 10 * pixel.instructions) / (ss2.mips.value * 1e6);
+  EXPECT_DOUBLE_EQ(t.seconds, expected);
+  // The same work on the slower SLC takes longer.
+  EXPECT_GT(testbed::ModelHostTime(s, testbed::HostProfileNamed("sparcstation-slc")).seconds, t.seconds);
+  // Every used entry has a source.
+  for (const auto& name : testbed::HostProfileNames()) {
+    const auto& p = testbed::HostProfileNamed(name);
+    EXPECT_FALSE(p.mips.source.empty());
+    EXPECT_FALSE(p.mflops.source.empty());
+  }
+  EXPECT_THROW(testbed::HostProfileNamed("vax780"), UserError);
+}
+
+TEST(TestbedModel, SeqReportsModelledSecondsFromItsCounts) {
+  TempDir dir;
+  const std::string scene = WriteScene(dir);
+  const RenderOutput a = Render(scene, "seq", "ufmg1992");
+  const RenderOutput b = Render(scene, "seq", "ufmg1992");
+  const nlohmann::json& t = a.report.at("testbed");
+  const double seconds = t.at("modelledSeconds").get<double>();
+  EXPECT_GT(seconds, 0);
+  EXPECT_EQ(seconds, b.report.at("testbed").at("modelledSeconds").get<double>());
+  const testbed::HostTime h = testbed::ModelHostTime(TraceStats::FromJson(a.report),
+                                                     testbed::HostProfileNamed("sparcstation2"));
+  EXPECT_DOUBLE_EQ(seconds, h.seconds);
+  EXPECT_EQ(t.at("host").at("events").at("pixel").at("count").get<double>(), 24 * 16);
+}
+
+TEST(TestbedModel, SimdIsArrayPlusScsiPlusHostShading) {
+  TempDir dir;
+  const RenderOutput out = Render(WriteScene(dir), "simd", "ufmg1992");
+  const nlohmann::json& t = out.report.at("testbed");
+  const nlohmann::json& cycles = out.report.at("simd").at("cycles");
+  const double clock = cycles.at("clockHz").get<double>();
+  EXPECT_DOUBLE_EQ(t.at("array").at("scsiSeconds").get<double>(),
+                   cycles.at("byClass").at("host").get<double>() / clock);
+  EXPECT_DOUBLE_EQ(t.at("array").at("seconds").get<double>() + t.at("array").at("scsiSeconds").get<double>(),
+                   cycles.at("totalCycles").get<double>() / clock);
+  EXPECT_DOUBLE_EQ(t.at("modelledSeconds").get<double>(),
+                   cycles.at("totalCycles").get<double>() / clock + t.at("host").at("seconds").get<double>());
+  EXPECT_GT(t.at("array").at("scsiBytes").get<double>(), 0);
+}
+
+TEST(TestbedModel, BadTestbedAndUnsimulatedFarmAreUserErrors) {
+  TempDir dir;
+  const std::string scene = WriteScene(dir);
+  try {
+    Render(scene, "seq", "cray1");
+    FAIL() << "an unknown testbed must be refused";
+  } catch (const UserError& e) {
+    EXPECT_NE(std::string(e.what()).find("cray1"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("ufmg1992"), std::string::npos) << e.what();
+  }
+  RenderOptions o;
+  o.method = "dist";
+  o.extra["testbed"] = "ufmg1992";
+  RenderOutput out;
+  try {
+    testbed::AddModelledTime(o, ReadNffFile(scene), out);
+    FAIL() << "dist with --testbed outside SimGrid must be refused";
+  } catch (const UserError& e) {
+    EXPECT_NE(std::string(e.what()).find("zephyr-smpi"), std::string::npos) << e.what();
+  }
+}
+
+TEST(TestbedPlatform, OneSharedEthernetOnEveryChildRoute) {
+  const std::string xml = testbed::PlatformXml(testbed::TestbedNamed("ufmg1992"), 3);
+  EXPECT_NE(xml.find("sharing_policy=\"SHARED\""), std::string::npos);
+  for (const char* host : {"\"parent\"", "\"zephyr\"", "\"child-1\"", "\"child-3\""})
+    EXPECT_NE(xml.find(std::string("id=") + host), std::string::npos) << host;
+  EXPECT_EQ(xml.find("\"child-4\""), std::string::npos);
+  size_t routes = 0;
+  for (size_t at = xml.find("<link_ctn id=\"ethernet\""); at != std::string::npos;
+       at = xml.find("<link_ctn id=\"ethernet\"", at + 1))
+    ++routes;
+  EXPECT_EQ(routes, 3u);
+  EXPECT_EQ(testbed::Hostfile(2), "parent\nchild-1\nchild-2\n");
+  EXPECT_THROW(testbed::PlatformXml(testbed::TestbedNamed("ufmg1992"), 0), UserError);
+}
+
+std::string Repo() {  // the checkout: $(BUILD)/bin/zephyr_tests -> ../../
+  return std::filesystem::read_symlink("/proc/self/exe").parent_path().parent_path().parent_path().string();
+}
+
+TEST(TestbedPlatform, TheCommittedPlatformIsWhatTheProfilesGive) {
+  // hosts/testbed/platforms/ufmg1992.xml is data in the repo; it must not drift from the
+  // profiles it is written from (`zephyr testbed platform --children 8`).
+  EXPECT_EQ(ReadFile(Repo() + "/hosts/testbed/platforms/ufmg1992.xml"),
+            testbed::PlatformXml(testbed::TestbedNamed("ufmg1992"), 8));
+  EXPECT_EQ(ReadFile(Repo() + "/hosts/testbed/platforms/ufmg1992.hosts"), testbed::Hostfile(8));
+}
+
+// ---- Under SimGrid (skipped when `make smpi` has not built zephyr-smpi) -------------------
+
+std::string SmpiPath() {
+  return (std::filesystem::read_symlink("/proc/self/exe").parent_path() / "zephyr-smpi").string();
+}
+
+TEST(TestbedSimulated, DistAndHeteroMatchSeqAndSimdAndRepeatExactly) {
+  if (!std::filesystem::exists(SmpiPath())) GTEST_SKIP() << "no zephyr-smpi (make smpi)";
+  TempDir dir;
+  const std::string scene = WriteScene(dir, 8, "64x64");
+  auto single = [&](const std::string& method) {
+    std::string out = dir / (method + ".png");
+    auto r = RunZephyrProcess("render --no-progress --method " + method + " " + scene + " --out " + out);
+    EXPECT_EQ(r.status, 0) << r.output;
+    return ReadFile(out);
+  };
+  const std::string seq = single("seq"), simd = single("simd");
+  for (const auto& [method, reference] : {std::pair{"dist", &seq}, std::pair{"hetero", &simd}}) {
+    double seconds[2];
+    for (int run = 0; run < 2; ++run) {
+      const std::string out = dir / (std::string(method) + std::to_string(run) + ".png");
+      const std::string report = dir / (std::string(method) + std::to_string(run) + ".json");
+      auto r = RunCommand("timeout -k 5 300 bash " + Repo() + "/tools/testbed/simrun.sh --children 2 --zephyr " +
+                          SmpiPath() + " -- render --no-progress --method " + method + " " + scene +
+                          " --frame 32 --testbed ufmg1992 --out " + out + " --report " + report);
+      ASSERT_EQ(r.status, 0) << r.output;
+      EXPECT_EQ(ReadFile(out), *reference) << method;
+      const nlohmann::json j = ReadJson(report);
+      seconds[run] = j.at("testbed").at("modelledSeconds").get<double>();
+      EXPECT_GT(seconds[run], 0);
+      for (const auto& child : j.at("distributed").at("perChild"))
+        EXPECT_GT(child.at("work").at("testbed").at("busySeconds").get<double>(), 0) << r.output;
+    }
+    EXPECT_EQ(seconds[0], seconds[1]) << method << ": the same render, the same modelled seconds";
+  }
+}
+
+TEST(TestbedSimulated, TooFewHostsNamesTheFile) {
+  if (!std::filesystem::exists(SmpiPath())) GTEST_SKIP() << "no zephyr-smpi (make smpi)";
+  TempDir dir;
+  const std::string platform = dir / "p.xml";
+  auto r = RunZephyrProcess("testbed platform --children 1 --out " + platform);
+  ASSERT_EQ(r.status, 0) << r.output;
+  r = RunCommand("bash " + Repo() + "/tools/testbed/simrun.sh --children 3 --platform " + platform +
+                 " --zephyr " + SmpiPath() + " -- render --method dist x.nff");
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.output.find(platform), std::string::npos) << r.output;
+  const std::string broken = dir / "broken.xml";
+  std::ofstream(broken) << "<platform version=\"4.1\"><zone id=\"z\" routing=\"Full\"><host id=\"parent\"\n";
+  r = RunCommand("bash " + Repo() + "/tools/testbed/simrun.sh --children 1 --platform " + broken +
+                 " --zephyr " + SmpiPath() + " -- render --method dist x.nff");
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.output.find(broken), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace zephyr

@@ -1,0 +1,64 @@
+#!/usr/bin/env bash
+# tools/testbed/simrun.sh — run build/bin/zephyr-smpi under SimGrid's smpirun on a testbed
+# platform (docs/testbed.md): rank 0 on the host "parent", rank i on the i-th child host.
+#
+#   tools/testbed/simrun.sh --children K [--platform FILE] [--hostfile FILE] [--zephyr PATH] \
+#       -- render --method dist|hetero SCENE --testbed ufmg1992 --out x.png --report r.json
+#
+# Without --platform the ufmg1992 platform with K children is written by
+# `zephyr testbed platform` (from the host profiles). With --platform FILE the hosts are
+# taken from it (or from --hostfile): a malformed file or too few hosts is an error naming
+# the file. Computation is never measured (smpi/simulate-computation:no): the children
+# charge their counted work; SimGrid's network factors are 1 (the link figures as given).
+set -euo pipefail
+
+children="" platform="" hostfile="" zephyr=""
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+while [[ $# -gt 0 ]]; do
+  case "$1" in
+    --children) children="$2"; shift 2 ;;
+    --platform) platform="$2"; shift 2 ;;
+    --hostfile) hostfile="$2"; shift 2 ;;
+    --zephyr) zephyr="$2"; shift 2 ;;
+    --) shift; break ;;
+    *) echo "simrun.sh: unknown option '$1' (see the header of $0)" >&2; exit 2 ;;
+  esac
+done
+[[ "$children" =~ ^[1-9][0-9]*$ ]] || { echo "simrun.sh: --children K (K >= 1) is required" >&2; exit 2; }
+zephyr="${zephyr:-$here/build/bin/zephyr-smpi}"
+[[ -f "$zephyr" ]] || { echo "simrun.sh: $zephyr not found: build it with \`make smpi\`" >&2; exit 2; }
+command -v smpirun >/dev/null || { echo "simrun.sh: smpirun not found (Debian package simgrid; tools/setup.sh)" >&2; exit 2; }
+
+tmp="$(mktemp -d)"
+trap 'rm -rf "$tmp"' EXIT
+if [[ -z "$platform" ]]; then
+  platform="$tmp/ufmg1992.xml"
+  "$(dirname "$zephyr")/zephyr" testbed platform --children "$children" --out "$platform" \
+    --hostfile "$tmp/hosts"
+  hostfile="${hostfile:-$tmp/hosts}"
+else
+  [[ -r "$platform" ]] || { echo "$platform: cannot read the platform file" >&2; exit 2; }
+  if ! err="$(xmllint --noout "$platform" 2>&1)"; then
+    echo "$platform: not a well-formed platform file:" >&2
+    echo "$err" | head -n 5 >&2
+    exit 2
+  fi
+  if [[ -z "$hostfile" ]]; then
+    # Every host of the file but the array, in file order: the first is the parent.
+    xmllint --xpath '//host[not(prop[@id="zephyr:role" and @value="array"])]/@id' "$platform" \
+      2>/dev/null | grep -o 'id="[^"]*"' | sed 's/^id="\(.*\)"$/\1/' > "$tmp/hosts" || true
+    hostfile="$tmp/hosts"
+    source_name="$platform"
+  fi
+fi
+source_name="${source_name:-$hostfile}"
+have=$(grep -c . "$hostfile" || true)
+if (( have < children + 1 )); then
+  echo "$source_name: $have host(s) for the parent and $children children; $((children + 1)) needed" >&2
+  exit 2
+fi
+
+exec smpirun -np "$((children + 1))" -platform "$platform" -hostfile "$hostfile" \
+  --cfg=smpi/simulate-computation:no --cfg=smpi/bw-factor:1 --cfg=smpi/lat-factor:1 \
+  --cfg=smpi/display-timing:no --log=root.thres:warning \
+  "$zephyr" "$@"
