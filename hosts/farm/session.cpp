@@ -106,7 +106,12 @@ MpiSession::MpiSession() : pending_(new PendingSends) {
   MPI_Initialized(&initialized);
   if (!initialized) {
     CheckMpi(MPI_Init(nullptr, nullptr), "MPI_Init");
+#ifndef ZEPHYR_SMPI
     std::atexit(FinalizeMpiAtExit);
+#endif
+    // Under SimGrid (zephyr-smpi, docs/testbed.md) a rank is a simulated actor: MPI_Finalize
+    // from an at-exit hook runs after the simulation and crashes, so main() and a child's
+    // exit finalize explicitly instead.
   }
   // Errors come back as codes (turned into UserError) instead of aborting the job, so the
   // parent can say what happened and keep its checkpoint.

@@ -214,6 +214,7 @@ int FrameSize(const RenderOptions& o) {
 // A child has served its frames and has nothing to write: end the process here (MPI is
 // finalized by the at-exit hook), before the render command would write outputs.
 [[noreturn]] void EndChild() {
+  if (testbed::Simulated()) FinalizeMpiAtExit();  // no at-exit hook under SMPI (session.cpp)
   std::fflush(stdout);
   std::exit(0);
 }
