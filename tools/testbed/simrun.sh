@@ -59,6 +59,6 @@ if (( have < children + 1 )); then
 fi
 
 exec smpirun -np "$((children + 1))" -platform "$platform" -hostfile "$hostfile" \
-  --cfg=smpi/simulate-computation:no --cfg=smpi/bw-factor:1 --cfg=smpi/lat-factor:1 \
+  --cfg=smpi/simulate-computation:no --cfg=smpi/bw-factor:0:1 --cfg=smpi/lat-factor:0:1 \
   --cfg=smpi/display-timing:no --log=root.thres:warning \
   "$zephyr" "$@"
