@@ -112,7 +112,10 @@ void ServeFrames(const FrameWorkFactory& factory) {
   };
 
   ReceivedMessage first = next();
-  if (first.header.kind == MessageKind::kStop) return;  // nothing for this child
+  if (first.header.kind == MessageKind::kStop) {  // nothing for this child
+    if (first.header.aux == kStopWithoutFinalize) mpi.LeaveWithoutFinalize();
+    return;
+  }
   if (first.header.kind != MessageKind::kSetup)
     return fail(std::string("expected a setup message first, got ") +
                 MessageKindName(first.header.kind));
@@ -133,7 +136,10 @@ void ServeFrames(const FrameWorkFactory& factory) {
   auto loopStart = Clock::now();
   for (;;) {
     ReceivedMessage m = next();
-    if (m.header.kind == MessageKind::kStop) break;
+    if (m.header.kind == MessageKind::kStop) {
+      if (m.header.aux == kStopWithoutFinalize) mpi.LeaveWithoutFinalize();
+      break;
+    }
     if (m.header.kind != MessageKind::kWork)
       return fail(std::string("unexpected ") + MessageKindName(m.header.kind) + " message");
     Frame frame;
@@ -407,7 +413,9 @@ void Parent::StopAll() {
   for (ChildState& child : children_) {
     if (!child.alive || child.stopped) continue;
     try {
-      mpi_.Send(child.rank, {.kind = MessageKind::kStop}, {}, sent_);
+      mpi_.Send(child.rank,
+                {.kind = MessageKind::kStop, .aux = mpi_.LostChild() ? kStopWithoutFinalize : 0},
+                {}, sent_);
     } catch (const UserError&) {
       child.alive = false;
     }

@@ -21,11 +21,15 @@ enum class MessageKind : std::uint16_t {
   kReady = 2,   // child→parent, once: {pid, host} after the set-up succeeded
   kWork = 3,    // parent→child: frame rectangle + (hetero) the frame's slice of the pixel matrix
   kResult = 4,  // child→parent: frame rectangle + the frame's pixels; aux = busy nanoseconds
-  kStop = 5,    // parent→child: no more work
+  kStop = 5,    // parent→child: no more work; aux = kStopWithoutFinalize when a child was lost
   kStats = 6,   // child→parent, last: the child's own counters (JSON)
   kFailed = 7,  // child→parent: the child could not go on; payload = the error text
 };
 inline constexpr int kMessageKindCount = 7;
+// kStop's aux when a child was lost: the job ends without MPI_Finalize (the parent leaves
+// with status 3 and mpirun ends the job), so the child must not enter MPI_Finalize either
+// (docs/distributed.md, "What OpenMPI 4.1 does around this").
+inline constexpr std::uint64_t kStopWithoutFinalize = 1;
 const char* MessageKindName(MessageKind kind);
 // Which way a kind travels; the receiver rejects a kind coming the wrong way.
 bool TravelsToChild(MessageKind kind);

@@ -38,6 +38,18 @@ void FinalizeMpiAtExit() {
   MPI_Finalized(&finalized);
   if (finalized) return;
   MpiSession& mpi = MpiSession::Get();
+  if (mpi.rank_ != 0 && mpi.leaveWithoutFinalize_) {
+    // The parent lost a child and leaves without MPI_Finalize; mpirun then ends the job.
+    // A child inside MPI_Finalize at that moment can wedge mpirun 4.1.4 for good (its PMIx
+    // server deadlocks in PMIx_server_finalize with the ranks left as zombies; seen in
+    // MpiCheck.AHungChildIsLostAfterTheTimeoutAndItsFramesReRendered), so this child hands
+    // over its last messages and waits outside MPI to be ended with the job.
+    mpi.FlushSends(10);
+    std::fflush(stdout);
+    std::fflush(stderr);
+    std::this_thread::sleep_for(std::chrono::seconds(60));
+    std::_Exit(3);
+  }
   mpi.ReleaseChildren();
   mpi.DrainChildren();
   if (mpi.lostChild_ || !mpi.FlushSends(10)) {
@@ -135,7 +147,8 @@ void MpiSession::ReleaseChildren() {
   for (int r = 1; r < size_; ++r) {
     if (released_[r]) continue;
     try {
-      Send(r, {.kind = MessageKind::kStop}, {}, unused);
+      Send(r, {.kind = MessageKind::kStop, .aux = lostChild_ ? kStopWithoutFinalize : 0}, {},
+           unused);
     } catch (const UserError&) {
       released_[r] = true;
     }

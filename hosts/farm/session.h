@@ -54,6 +54,11 @@ class MpiSession {
   // the final stop. It may never reach MPI_Finalize, so rank 0 then exits without it
   // (status 3) and mpirun ends the job (see docs/distributed.md).
   void MarkGone(int rank);
+  // Rank 0: whether a child was lost (the job then ends without MPI_Finalize).
+  bool LostChild() const { return lostChild_; }
+  // A child told (by its stop) that a child was lost: at exit it sends what is pending and
+  // waits outside MPI for mpirun to end the job instead of entering MPI_Finalize.
+  void LeaveWithoutFinalize() { leaveWithoutFinalize_ = true; }
   // Rank 0: a child that was never set up and only got a stop sends nothing more.
   void MarkFinished(int rank) { finished_[rank] = true; }
   // Rank 0, at exit (also after an error): sends a stop to every child that has not had one,
@@ -72,6 +77,7 @@ class MpiSession {
   std::vector<bool> released_;                   // per rank: sent a stop, or gone
   std::vector<bool> gone_, finished_;            // per rank: lost; sent its stats or failure
   bool lostChild_ = false;
+  bool leaveWithoutFinalize_ = false;
   struct PendingSends;
   PendingSends* pending_;  // never freed, like the session
   friend void FinalizeMpiAtExit();

@@ -388,19 +388,12 @@ class TracerT final : public Tracer {
       const V reflected = d - n * (T(2) * dn);
       if (m.ks > 0) colour += Trace(p, reflected, depth + 1, RayKind::kReflected, stats) * T(m.ks);
       if (m.t > 0) {
-        // Snell: entering uses 1/ior, leaving uses ior/1.
+        // Snell: entering uses 1/ior, leaving uses ior/1. Under total internal reflection
+        // the transmitted share is reflected.
         const T eta = inside ? T(m.ior) : T(1) / T(m.ior);
-        const T cosi = -dn;
-        const T k = T(1) - eta * eta * (T(1) - cosi * cosi);
-        V dir;
-        RayKind kind = RayKind::kRefracted;
-        if (k < T(0)) {  // total internal reflection: the transmitted share is reflected
-          dir = reflected;
-          kind = RayKind::kReflected;
-        } else {
-          dir = Normalize(d * eta + n * (eta * cosi - std::sqrt(k)));
-        }
-        colour += Trace(p, dir, depth + 1, kind, stats) * T(m.t);
+        const std::optional<V> refracted = Refract(d, n, eta);
+        colour += Trace(p, refracted ? *refracted : reflected, depth + 1,
+                        refracted ? RayKind::kRefracted : RayKind::kReflected, stats) * T(m.t);
       }
     }
     return colour;

@@ -115,6 +115,18 @@ std::optional<double> IntersectObject(const Scene& scene, int object, const Vec3
                                       const Vec3& direction, double tMin = 0,
                                       SphereTest form = SphereTest::kHearnBaker);
 
+// Snell's law (docs/shading.md, "The colour at a hit"): the unit direction of a ray with unit
+// direction d refracted at a surface whose unit normal n faces it (d·n <= 0), with
+// eta = n₁/n₂ (the index on d's side over the other's): sinθt = eta·sinθi, in the plane of d
+// and n, across the surface. Nothing under total internal reflection (1 − eta²(1 − cos²θi) < 0).
+template <typename T>
+std::optional<Vec3T<T>> Refract(const Vec3T<T>& d, const Vec3T<T>& n, T eta) {
+  const T cosi = -Dot(d, n);
+  const T k = T(1) - eta * eta * (T(1) - cosi * cosi);
+  if (k < T(0)) return std::nullopt;
+  return Normalize(d * eta + n * (eta * cosi - std::sqrt(k)));
+}
+
 // Renders the w×h rectangle at (x0, y0): pixels row by row into out (resized to w*h, linear
 // RGB), and, if primary is given, the primary hits likewise. onRow is called after each row.
 void RenderRegion(const Tracer& tracer, int x0, int y0, int w, int h, std::vector<Vec3>& out,

@@ -3,18 +3,25 @@
 // MPP profile reproduces Batcher's published figures from the same engine code.
 #include <gtest/gtest.h>
 
+#include <fmt/format.h>
+
+#include <functional>
 #include <random>
 
 #include "bitserial/multi.h"
 #include "fixed/check.h"
+#include "tests/bitserial/closed_forms.h"
 #include "tests/bitserial/testing.h"
 
 namespace zephyr::bitserial {
 namespace {
 
 using fixed::Format;
+using fixed::Policy;
+using testutil::ChargedMicroOps;
 using testutil::Cycles;
 using testutil::ExpectFormula;
+using testutil::kPolicies;
 
 TEST(BitserialCycles, MppReproducesBatcher1980) {
   // 8-bit add = 25 cycles (6553 MOPS on 16384 PEs at 100 ns), 8x8 multiply = 88 (1861 MOPS).
@@ -23,8 +30,12 @@ TEST(BitserialCycles, MppReproducesBatcher1980) {
     ExpectFormula(Cycles("mpp", f, f, "add", [&](auto& a, auto& b) { return Add(a, b, f); }), 25, "add8");
     ExpectFormula(Cycles("mpp", f, f, "mul", [&](auto& a, auto& b) { return Mul(a, b, f); }), 88, "mul8");
   }
-  EXPECT_NEAR(16384 / (25 * 100e-9) / 1e6, 6553, 1);
-  EXPECT_NEAR(16384 / (88 * 100e-9) / 1e6, 1861, 1);
+  // The published rates follow from the engine's cycles and the profile's geometry and clock
+  // (16384 PEs at 100 ns): MOPS = PEs / (cycles / clock).
+  const MachineProfile mpp = Profile("mpp");
+  auto mops = [&](double cycles) { return mpp.physicalPes / (cycles / mpp.clockHz) / 1e6; };
+  EXPECT_NEAR(mops(Cycles("mpp", s8, s8, "add", [&](auto& a, auto& b) { return Add(a, b, s8); })), 6553, 1);
+  EXPECT_NEAR(mops(Cycles("mpp", s8, s8, "mul", [&](auto& a, auto& b) { return Mul(a, b, s8); })), 1861, 1);
   for (int n = 1; n <= 40; ++n) {
     const Format f = Format::Signed(n - 1, 0);
     ExpectFormula(Cycles("mpp", f, f, "add", [&](auto& a, auto& b) { return Add(a, b, f); }),
@@ -55,6 +66,90 @@ TEST(BitserialCycles, WaveTracerClosedForms) {
   ExpectFormula(m.Report().OpCycles("add"), 4 * 16 + 2 + 2 * 16, "add external operands");
 }
 
+// Every operation's micro-op counts equal its closed form (tests/bitserial/closed_forms.h,
+// from docs/bitserial.md) under each of the four rounding/overflow policies, with the
+// operands and the result in internal or external memory (all eight placements), for
+// results that drop 0..3 fraction bits (Nearest's rounding pass; overflow possible or not).
+TEST(BitserialCycles, ClosedFormsUnderEveryPolicyAndPlacement) {
+  const Space I = Space::Internal, E = Space::External;
+  const fixed::Fixed constant = fixed::Fixed{Format::Signed(7, 0), 0x35};  // 4 one bits
+  int checked = 0;
+  for (int n : {8, 13}) {
+    const Format f = closed::Operand(n), integer = Format::Signed(n - 1, 0);
+    for (const Policy& p : kPolicies)
+      for (Space sa : {I, E})
+        for (Space sb : {I, E})
+          for (Space so : {I, E}) {
+            const std::string where = fmt::format("n={} rounding {} overflow {} a {} b {} out {}", n,
+                                                  int(p.rounding), int(p.overflow), SpaceName(sa),
+                                                  SpaceName(sb), SpaceName(so));
+            // Runs `op` on fresh operands placed in sa/sb (the result lands in so: internal
+            // memory is filled first for an external result) and compares the micro-ops.
+            auto check = [&](const char* name, const Format& fa, const closed::Counts& want,
+                             const std::function<void(Multi&, Multi&, Multi&)>& op) {
+              Machine m(Profile("wavetracer"));
+              Multi a(m, fa, "a", sa), b(m, fa, "b", sb), mask(m, BoolFormat(), "mask", sb);
+              std::mt19937_64 rng(n);
+              std::vector<int64_t> ra(m.VirtualPes()), rb(m.VirtualPes()), rm(m.VirtualPes());
+              for (size_t i = 0; i < ra.size(); ++i)
+                ra[i] = static_cast<int64_t>(rng()) >> (64 - n), rb[i] = static_cast<int64_t>(rng()) >> (64 - n),
+                rm[i] = rng() & 1;
+              a.LoadRaw(ra), b.LoadRaw(rb), mask.LoadRaw(rm);
+              PeMemory& mem = m.Memory();
+              const int64_t free = mem.Capacity(I) - mem.Used(I);
+              if (so == E && free > 0) mem.Allocate("filler", free, I);
+              op(a, b, mask);
+              EXPECT_EQ(ChargedMicroOps(m, name), want.n) << name << " " << fa.Name() << " " << where;
+              ++checked;
+            };
+            for (int drop = 0; drop <= 3; ++drop) {
+              const std::string d = " drop " + std::to_string(drop);
+              const Format out = closed::Out(n, closed::kFrac - drop);
+              check("add", f, closed::AddSub(n, drop, p, sa, sb, so),
+                    [&](auto& a, auto& b, auto&) { Multi r = Add(a, b, out, p); });
+              check("sub", f, closed::AddSub(n, drop, p, sa, sb, so),
+                    [&](auto& a, auto& b, auto&) { Multi r = Sub(a, b, out, p); });
+              check("neg", f, closed::Neg(n, drop, p, sa, so), [&](auto& a, auto&, auto&) { Multi r = Neg(a, out, p); });
+              check("abs", f, closed::Abs(n, drop, p, sa, so), [&](auto& a, auto&, auto&) { Multi r = Abs(a, out, p); });
+              check("min", f, closed::MinMax(n, drop, p, sa, sb, so),
+                    [&](auto& a, auto& b, auto&) { Multi r = Min(a, b, out, p); });
+              check("max", f, closed::MinMax(n, drop, p, sa, sb, so),
+                    [&](auto& a, auto& b, auto&) { Multi r = Max(a, b, out, p); });
+              check("select", f, closed::Select(n, drop, p, sa, sb, so),
+                    [&](auto& a, auto& b, auto& mask) { Multi r = Select(mask, a, b, out, p); });
+              check("convert", f, closed::Shift(n, drop, 0, p, sa, so),
+                    [&](auto& a, auto&, auto&) { Multi r = Convert(a, out, p); });
+              for (int s : {1, 2})
+                check("shift", f, closed::Shift(n, drop, s, p, sa, so),
+                      [&](auto& a, auto&, auto&) { Multi r = Shift(a, s, out, p); });
+              const Format mulOut = closed::MulOut(n, drop), uniOut = closed::MulUniOut(n, drop);
+              check("mul", f, closed::Mul(n, drop, p, sa, sb, so, false),
+                    [&](auto& a, auto& b, auto&) { Multi r = Mul(a, b, mulOut, p); });
+              check("square", f, closed::Mul(n, drop, p, sa, sb, so, true),
+                    [&](auto& a, auto&, auto&) { Multi r = Square(a, mulOut, p); });
+              check("mulUni", f, closed::MulUni(n, 4, drop, p, sa, so),
+                    [&](auto& a, auto&, auto&) { Multi r = Mul(a, Uni{constant}, uniOut, p); });
+            }
+            check("compare", f, closed::Compare(n, sa, sb, so), [&](auto& a, auto& b, auto&) { Multi r = a < b; });
+            check("div", integer, closed::Div(n, p, sa, sb, so),
+                  [&](auto& a, auto& b, auto&) { Multi r = Div(a, b, integer, p); });
+            const int h = n / 2;
+            check("sqrt", integer, closed::Sqrt(n, n, p, sa, so),
+                  [&](auto& a, auto&, auto&) { Multi r = Sqrt(a, integer, p); });
+            check("sqrt", integer, closed::Sqrt(n, h - 1, p, sa, so),
+                  [&](auto& a, auto&, auto&) { Multi r = Sqrt(a, Format::Signed(h - 2, 0), p); });
+            if (so == sa) {  // reductions have no multi result; a mesh shift writes in a's space
+              check("reduceSum", f, closed::Reduce(n, false, sa), [&](auto& a, auto&, auto&) { ReduceSum(a); });
+              check("reduceMax", f, closed::Reduce(n, true, sa), [&](auto& a, auto&, auto&) { ReduceMax(a); });
+              check("reduceMin", f, closed::Reduce(n, true, sa), [&](auto& a, auto&, auto&) { ReduceMin(a); });
+              check("meshShift", f, closed::MeshShift(n, 3, sa),
+                    [&](auto& a, auto&, auto&) { Multi r = MeshShift(a, 1, -3); });
+            }
+          }
+  }
+  EXPECT_GT(checked, 2 * 4 * 8 * 40);
+}
+
 TEST(BitserialCycles, MulUniCostFollowsTheConstantsOneBits) {
   const Format c8 = Format::Signed(7, 0);
   for (int n : {8, 12, 20}) {
@@ -71,18 +166,38 @@ TEST(BitserialCycles, MulUniCostFollowsTheConstantsOneBits) {
   }
 }
 
+// Whatever the operands hold (zeros, all ones, the extremes, random), the engine charges
+// exactly the closed form's micro-ops (an independent count, tests/bitserial/closed_forms.h),
+// and on 18 layers 18 times as many.
 TEST(BitserialCycles, CountsDoNotDependOnDataAndScaleWithLayers) {
-  const Format fa = Format::Signed(9, 6), fb = Format::Unsigned(4, 9), out = Format::Signed(5, 7);
-  const fixed::Policy p{fixed::Rounding::Nearest, fixed::OverflowPolicy::Saturate};
-  auto mul = [&](auto& a, auto& b) { return Mul(a, b, out, p); };
-  auto add = [&](auto& a, auto& b) { return Add(a, b, out, p); };
-  for (const char* prof : {"wavetracer", "mpp"}) {
-    EXPECT_EQ(Cycles(prof, fa, fb, "mul", mul, 1), Cycles(prof, fa, fb, "mul", mul, 2));
-    EXPECT_EQ(Cycles(prof, fa, fb, "add", add, 1), Cycles(prof, fa, fb, "add", add, 99));
+  const Policy p{fixed::Rounding::Nearest, fixed::OverflowPolicy::Saturate};
+  const int n = 12;
+  const Format f = closed::Operand(n);
+  for (int data = 0; data < 5; ++data) {
+    Machine m(Profile("wavetracer"));
+    std::mt19937_64 rng(data);
+    std::vector<int64_t> ra(m.VirtualPes()), rb(m.VirtualPes());
+    for (size_t i = 0; i < ra.size(); ++i) {
+      const int64_t r1 = static_cast<int64_t>(rng()) >> (64 - n), r2 = static_cast<int64_t>(rng()) >> (64 - n);
+      const int64_t fixedValue[] = {0, -1, f.MaxRaw().convert_to<int64_t>(), f.MinRaw().convert_to<int64_t>()};
+      ra[i] = data < 4 ? fixedValue[data] : r1;
+      rb[i] = data < 4 ? fixedValue[3 - data] : r2;
+    }
+    Multi a(m, f, "a"), b(m, f, "b");
+    a.LoadRaw(ra), b.LoadRaw(rb);
+    const Space I = Space::Internal;
+    Multi r1 = Mul(a, b, closed::MulOut(n, 2), p);
+    Multi r2 = Add(a, b, closed::Out(n, closed::kFrac - 1), p);
+    EXPECT_EQ(ChargedMicroOps(m, "mul"), closed::Mul(n, 2, p, I, I, I, false).n) << "data " << data;
+    EXPECT_EQ(ChargedMicroOps(m, "add"), closed::AddSub(n, 1, p, I, I, I).n) << "data " << data;
   }
-  // 384x384 virtual PEs = 18 layers, each charged the one-layer cycles.
-  const double one = Cycles("wavetracer", fa, fb, "mul", mul, 1);
-  EXPECT_EQ(Cycles("wavetracer", fa, fb, "mul", mul, 1, 384 * 384), 18 * one);
+  // 384x384 virtual PEs = 18 layers, each charged the one-layer micro-ops.
+  Machine m(Profile("wavetracer"), 384 * 384);
+  Multi a(m, f, "a"), b(m, f, "b");
+  Multi r = Mul(a, b, closed::MulOut(n, 2), p);
+  closed::Counts want = closed::Mul(n, 2, p, Space::Internal, Space::Internal, Space::Internal, false);
+  for (auto& [op, k] : want.n) k *= 18;
+  EXPECT_EQ(ChargedMicroOps(m, "mul"), want.n);
 }
 
 TEST(BitserialCycles, ProfilesAreDataAndCheckedByName) {
@@ -128,6 +243,39 @@ TEST(BitserialCycles, CyclesCommandPrintsBatchersFigures) {
   testing::internal::CaptureStderr();
   EXPECT_NE(RunZephyr(4, bad), 0);
   EXPECT_NE(testing::internal::GetCapturedStderr().find("'teleport'"), std::string::npos);
+}
+
+// `zephyr cycles` passes --rounding, --overflow, --frac and --external to the engine: its
+// figure equals the engine's own for the same operation (issue 17: div, 16 bits, 8 fraction
+// bits, nearest: 2899 cycles on the WaveTracer).
+TEST(BitserialCycles, CyclesCommandFollowsPolicyAndPlacement) {
+  const Format f = Format::Signed(7, 8);
+  for (const char* op : {"add", "mul", "div", "sqrt"})
+    for (const Policy& p : testutil::kPolicies)
+      for (bool external : {false, true}) {
+        std::vector<std::string> args = {"zephyr", "cycles", "--op", op, "--bits", "16", "--frac", "8",
+                                         "--rounding", p.rounding == fixed::Rounding::Nearest ? "nearest" : "floor",
+                                         "--overflow", p.overflow == fixed::OverflowPolicy::Saturate ? "saturate" : "wrap",
+                                         "--json"};
+        if (external) args.push_back("--external");
+        std::vector<const char*> argv;
+        for (const std::string& a : args) argv.push_back(a.c_str());
+        testing::internal::CaptureStdout();
+        ASSERT_EQ(RunZephyr(int(argv.size()), argv.data()), 0);
+        const auto j = nlohmann::json::parse(testing::internal::GetCapturedStdout());
+        Machine m(Profile("wavetracer"));
+        const std::optional<Space> s = external ? std::optional<Space>(Space::External) : std::nullopt;
+        Multi a(m, f, "a", s), b(m, f, "b", s);
+        const std::string name = op;
+        Multi r = name == "add" ? Add(a, b, f, p) : name == "mul" ? Mul(a, b, f, p)
+                : name == "div" ? Div(a, b, f, p) : Sqrt(a, f, p);
+        EXPECT_EQ(j["cycles"].get<double>(), m.Report().OpCycles(name))
+            << op << " rounding " << int(p.rounding) << " overflow " << int(p.overflow) << " external " << external;
+        if (name == "div" && p.rounding == fixed::Rounding::Nearest && !external &&
+            p.overflow == fixed::OverflowPolicy::Wrap) {
+          EXPECT_EQ(j["cycles"].get<double>(), 2899);
+        }
+      }
 }
 
 }  // namespace

@@ -14,6 +14,7 @@
 #include "bitserial/multi.h"
 #include "fixed/format.h"
 #include "hosts/cmd/command.h"
+#include "tests/bitserial/closed_forms.h"
 #include "tests/bitserial/testing.h"
 
 namespace zephyr::bitserial {
@@ -251,17 +252,37 @@ TEST(BitserialDivSqrt, ClosedFormCycles) {
   }
 }
 
+// Whatever the operands hold (zero divisors, negative radicands, the extremes, random), div
+// and sqrt charge exactly their closed forms' micro-ops (tests/bitserial/closed_forms.h, an
+// independent count), and on 18 layers 18 times as many.
 TEST(BitserialDivSqrt, CyclesDoNotDependOnDataAndScaleWithLayers) {
-  const Format f = Format::Signed(9, 6);
+  const int n = 16;
+  const Format f = Format::Signed(n - 1, 0);
   const Policy p{fixed::Rounding::Nearest, fixed::OverflowPolicy::Saturate};
-  auto div = [&](auto& a, auto& b) { return Div(a, b, Format::Unsigned(4, 9), p); };
-  auto sqrt = [&](auto& a, auto&) { return Sqrt(a, Format::Signed(3, 8), p); };
-  for (const char* prof : {"wavetracer", "mpp"}) {
-    EXPECT_EQ(Cycles(prof, f, f, "div", div, 1), Cycles(prof, f, f, "div", div, 2));
-    EXPECT_EQ(Cycles(prof, f, f, "sqrt", sqrt, 1), Cycles(prof, f, f, "sqrt", sqrt, 3));
+  const Space I = Space::Internal;
+  std::mt19937_64 rng(31);
+  for (int data = 0; data < 4; ++data) {
+    Machine m(Profile("wavetracer"));
+    const auto a = Values(f, 8192, rng), b = Values(f, 8192, rng);
+    std::vector<Fixed> va = a, vb = b;
+    if (data < 3) {
+      const fixed::BigInt fill[] = {0, f.MinRaw(), f.MaxRaw()};
+      for (auto& x : vb) x.raw = fill[data];           // all zero, all most negative, all max
+      for (auto& x : va) x.raw = fill[(data + 1) % 3];
+    }
+    Multi ma(m, f, "a"), mb(m, f, "b");
+    ma.Load(va), mb.Load(vb);
+    Multi q = Div(ma, mb, f, p);
+    Multi r = Sqrt(ma, Format::Signed(n / 2 - 2, 0), p);
+    EXPECT_EQ(ChargedMicroOps(m, "div"), closed::Div(n, p, I, I, I).n) << "data " << data;
+    EXPECT_EQ(ChargedMicroOps(m, "sqrt"), closed::Sqrt(n, n / 2 - 1, p, I, I).n) << "data " << data;
   }
-  const double one = Cycles("wavetracer", f, f, "div", div, 1);
-  EXPECT_EQ(Cycles("wavetracer", f, f, "div", div, 1, 384 * 384), 18 * one);
+  Machine m(Profile("wavetracer"), 384 * 384);
+  Multi a(m, f, "a"), b(m, f, "b");
+  Multi q = Div(a, b, f, p);
+  closed::Counts want = closed::Div(n, p, I, I, I);
+  for (auto& [op, k] : want.n) k *= 18;
+  EXPECT_EQ(ChargedMicroOps(m, "div"), want.n);
 }
 
 TEST(BitserialDivSqrt, CyclesCommandPrintsTheClosedForms) {

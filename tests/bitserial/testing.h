@@ -7,6 +7,7 @@
 #include <hwy/targets.h>
 
 #include <functional>
+#include <map>
 #include <random>
 #include <string>
 #include <vector>
@@ -69,7 +70,16 @@ double Cycles(const std::string& profile, const fixed::Format& fa, const fixed::
 
 inline void ExpectFormula(double got, double formula, const std::string& what) {
   EXPECT_EQ(got, formula) << what;
-  EXPECT_NE(got, formula - 1) << what;  // one cycle fewer is not accepted
+}
+
+// The micro-op counts (name → count over all layers) charged to `op` by one call.
+inline std::map<std::string, int64_t> ChargedMicroOps(Machine& m, const std::string& op) {
+  const nlohmann::json j = m.Report().Json();
+  EXPECT_EQ(m.Report().OpCalls(op), 1) << op;
+  std::map<std::string, int64_t> counts;
+  if (!j["byOp"].contains(op)) return counts;
+  for (auto& [name, k] : j["byOp"][op]["microOps"].items()) counts[name] = k.get<int64_t>();
+  return counts;
 }
 
 }  // namespace zephyr::bitserial::testutil

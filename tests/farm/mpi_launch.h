@@ -40,16 +40,26 @@ inline Launch RunCommand(const std::string& command) {
   return result;
 }
 
-// `mpirun -np ranks [env...] zephyr args` with the flags a 2-core test machine needs.
-// `timeout` guards against a test hanging on a stuck job.
-inline Launch RunMpi(int ranks, const std::string& args, const std::string& env = "") {
-  std::string command = "timeout -k 5 120 mpirun --oversubscribe --allow-run-as-root -np " +
-                        std::to_string(ranks) + " " + env + " " + ZephyrPath() + " " + args;
-  return RunCommand(command);
+// Runs `command` under `timeout`: a command still running after `seconds` is killed, and
+// the output says so (status 124, or 137 after -k).
+inline Launch RunWithTimeout(const std::string& command, int seconds) {
+  Launch r = RunCommand("timeout -k 5 " + std::to_string(seconds) + " " + command);
+  if (r.status == 124 || r.status == 137)
+    r.output += "\n[test] killed: not finished within " + std::to_string(seconds) + " s: " + command;
+  return r;
+}
+
+// `mpirun -np ranks [env...] zephyr args` with the flags a 2-core test machine needs,
+// killed after `seconds` (a stuck job fails the test with a message instead of hanging it).
+inline Launch RunMpi(int ranks, const std::string& args, const std::string& env = "",
+                     int seconds = 120) {
+  return RunWithTimeout("mpirun --oversubscribe --allow-run-as-root -np " + std::to_string(ranks) +
+                            " " + env + " " + ZephyrPath() + " " + args,
+                        seconds);
 }
 
 inline Launch RunZephyrProcess(const std::string& args) {
-  return RunCommand("timeout -k 5 120 " + ZephyrPath() + " " + args);
+  return RunWithTimeout(ZephyrPath() + " " + args, 120);
 }
 
 // A fresh directory per test under the system temp dir.

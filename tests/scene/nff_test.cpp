@@ -1,6 +1,7 @@
 // Tests for the NFF reader, its error reports and the scene generators.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 
 #include "fixed/check.h"
@@ -170,6 +171,22 @@ TEST(SceneGen, SphereflakeHasNinePowerCounts) {
   EXPECT_EQ(GenerateSphereflake(0).objects.size(), 1u + 1);
   EXPECT_EQ(GenerateSphereflake(1).objects.size(), 1u + 1 + 9);
   EXPECT_EQ(GenerateSphereflake(2).objects.size(), 1u + 1 + 9 + 81);
+  // SPD balls: each child has a third of its parent's radius and touches it; six sit on the
+  // equator, three at 54.74° above it.
+  const Scene s = GenerateSphereflake(1);
+  const Sphere& parent = std::get<Sphere>(s.objects[1].shape);
+  EXPECT_EQ(parent.radius, 0.5);
+  int above = 0;
+  for (size_t i = 2; i < s.objects.size(); ++i) {
+    const Sphere& c = std::get<Sphere>(s.objects[i].shape);
+    EXPECT_NEAR(c.radius, parent.radius / 3, 1e-15) << i;
+    EXPECT_NEAR(Length(c.center - parent.center), parent.radius + c.radius, 1e-12) << i;
+    const double elevation = std::asin((c.center.z - parent.center.z) / (parent.radius + c.radius));
+    if (std::abs(elevation) < 1e-12) continue;
+    EXPECT_NEAR(elevation * 180 / M_PI, 54.7356103172, 1e-6) << i;
+    ++above;
+  }
+  EXPECT_EQ(above, 3);
   EXPECT_THROW(GenerateSphereflake(7), UserError);
 }
 

@@ -1,5 +1,9 @@
 // Our sequential tracer against an independent renderer: POV-Ray 3.7 renders the exported
-// scene, and the two images must agree to PSNR >= 30 dB (issue 4).
+// scene, and the two images must agree (issue 4). Each threshold sits just under what the
+// scene measures today (issue 17, 2026-11-29, POV-Ray 3.7 from Debian): random spheres with
+// glass and mirrors 41.47 dB (edges and refraction differ slightly); the sphereflake and the
+// transformed showcase are identical pixel for pixel (inf), where one 8-bit level off in one
+// channel of one pixel would already give 92.6 dB — so a shading slip cannot hide below them.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -45,21 +49,21 @@ TEST(TracePov, RandomSpheresWithGlassAndMirrorsMatchPovray) {
   ASSERT_GT(mirror, 0);
   const double psnr = CompareWithPovray(s, "spheres");
   RecordProperty("psnr_db", std::to_string(psnr));
-  EXPECT_GE(psnr, 30);
+  EXPECT_GE(psnr, 41);
 }
 
 TEST(TracePov, SphereflakeMatchesPovray) {
   if (!HavePovray()) GTEST_SKIP() << "povray is not installed";
   const double psnr = CompareWithPovray(GenerateSphereflake(2, 96, 96), "flake");
   RecordProperty("psnr_db", std::to_string(psnr));
-  EXPECT_GE(psnr, 30);
+  EXPECT_GE(psnr, 90);
 }
 
 TEST(TracePov, TransformedPrimitivesMatchPovray) {
   if (!HavePovray()) GTEST_SKIP() << "povray is not installed";
   const double psnr = CompareWithPovray(GenerateTransformedShowcase(96, 96), "showcase");
   RecordProperty("psnr_db", std::to_string(psnr));
-  EXPECT_GE(psnr, 30);
+  EXPECT_GE(psnr, 90);
 }
 
 TEST(TracePov, ExportMapsOpacityAndTransforms) {

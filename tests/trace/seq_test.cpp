@@ -125,6 +125,94 @@ TEST(TraceShade, RefractionAndTotalInternalReflection) {
   EXPECT_EQ(steep.rays[int(RayKind::kReflected)], 0u);
 }
 
+// Snell's law on the vectors: for incidence angles 0..89° in several planes and for four
+// index ratios, the refracted direction is unit length, lies in the plane of d and n, goes
+// across the surface (the normal's far side) on the same tangential side as d, and has
+// sinθt = η·sinθi; past the critical angle asin(1/η) there is none (total internal
+// reflection), on both sides of it to 1e-9 rad.
+TEST(TraceShade, RefractObeysSnellsLawOnTheVectors) {
+  const Vec3 n{0, 0, 1};
+  int refracted = 0, reflected = 0;
+  for (double eta : {1 / 1.5, 1 / 1.33, 1.0, 1.33, 1.5}) {
+    for (int deg = 0; deg < 90; deg += 7)
+      for (double phi : {0.0, 1.1, 2.5, 4.0}) {
+        const double th = deg * M_PI / 180;
+        const Vec3 d{std::sin(th) * std::cos(phi), std::sin(th) * std::sin(phi), -std::cos(th)};
+        const std::optional<Vec3> t = Refract(d, n, eta);
+        const std::string what = "eta " + std::to_string(eta) + " angle " + std::to_string(deg);
+        if (eta * std::sin(th) > 1) {
+          EXPECT_FALSE(t) << what;
+          ++reflected;
+          continue;
+        }
+        ASSERT_TRUE(t) << what;
+        ++refracted;
+        EXPECT_NEAR(Length(*t), 1, 1e-12) << what;
+        EXPECT_LT(Dot(*t, n), 0) << what;                            // across the surface
+        EXPECT_NEAR(Dot(*t, Cross(d, n)), 0, 1e-12) << what;         // in the plane of d, n
+        const Vec3 tangentD = d - n * Dot(d, n), tangentT = *t - n * Dot(*t, n);
+        EXPECT_GE(Dot(tangentT, tangentD), 0) << what;               // not bent back
+        EXPECT_NEAR(Length(tangentT), eta * std::sin(th), 1e-12) << what;  // sinθt = η·sinθi
+        EXPECT_NEAR(-Dot(*t, n), std::sqrt(1 - eta * eta * std::sin(th) * std::sin(th)), 1e-12) << what;
+      }
+    if (eta > 1) {  // the critical angle
+      const double critical = std::asin(1 / eta);
+      for (double th : {critical - 1e-9, critical + 1e-9}) {
+        const Vec3 d{std::sin(th), 0, -std::cos(th)};
+        EXPECT_EQ(bool(Refract(d, n, eta)), th < critical) << eta << " at " << th;
+      }
+    }
+  }
+  EXPECT_GT(refracted, 0);
+  EXPECT_GT(reflected, 0);
+}
+
+// The energy split at a glass pane (Kd 0, Ks 0.25, T 0.5, ior 1.5) in a scene with no light:
+// a ray's colour is Ks·(what the reflected ray sees) + T·(what the refracted ray sees). A
+// black sphere catches the reflected ray; the refracted one escapes to the background B.
+// Entering, and leaving below the critical angle asin(1/1.5) = 41.81°: 0.5·B. Leaving past
+// it, the T share goes the reflected way too: 0 with the sphere, (0.25 + 0.5)·B without.
+TEST(TraceShade, RefractionAndTotalInternalReflectionSplitTheEnergy) {
+  auto colour = [](double degrees, bool fromBelow, bool blocker, TraceStats& stats) {
+    Scene s;
+    s.source = "pane";
+    s.background = {0.2, 0.4, 0.8};
+    s.camera = Camera{{0, 0, 1}, {0, 0, 0}, {0, 1, 0}, 40, 0, 3, 3};
+    s.materials = {Material{{1, 1, 1}, 0, 0.25, 1, 0.5, 1.5}, Material{{1, 1, 1}, 0, 0, 0, 0, 1}};
+    Primitive pane;
+    pane.shape = Polygon{{{-10, -10, 0}, {10, -10, 0}, {10, 10, 0}, {-10, 10, 0}}, {}};
+    s.objects.push_back(pane);
+    const double th = degrees * M_PI / 180, z = fromBelow ? -1 : 1;
+    const Vec3 o{0, 0, z}, d{std::sin(th), 0, -z * std::cos(th)};
+    s.camera.from = o, s.camera.at = o + d, s.camera.up = {0, 1, 0};  // shading starts at the eye
+    const Vec3 p = o + d * (1 / std::cos(th)), r{d.x, 0, -d.z};
+    if (blocker) {
+      Primitive ball;
+      ball.shape = Sphere{p + r * 3.0, 1};
+      ball.material = 1;
+      s.objects.push_back(ball);
+    }
+    TraceOptions options;
+    options.depth = 2;
+    const auto tracer = Tracer::Create(s, options);
+    const PrimaryHit hit = tracer->FirstHit({o, d}, stats);
+    EXPECT_EQ(hit.object, 0);
+    return tracer->ShadeFromPrimaryHit(hit, stats);
+  };
+  const Vec3 b{0.2, 0.4, 0.8};
+  for (double deg : {0.0, 30.0, 41.7, 41.9, 60.0, 80.0}) {
+    TraceStats in, out, outOpen;
+    EXPECT_NEAR(Length(colour(deg, false, true, in) - b * 0.5), 0, 1e-12) << "entering at " << deg;
+    EXPECT_EQ(in.rays[int(RayKind::kRefracted)], 1u) << deg;
+    const bool tir = deg > 41.81;
+    EXPECT_NEAR(Length(colour(deg, true, true, out) - b * (tir ? 0.0 : 0.5)), 0, 1e-12)
+        << "leaving at " << deg;
+    EXPECT_EQ(out.rays[int(RayKind::kRefracted)], tir ? 0u : 1u) << deg;
+    EXPECT_EQ(out.rays[int(RayKind::kReflected)], tir ? 2u : 1u) << deg;
+    EXPECT_NEAR(Length(colour(deg, true, false, outOpen) - b * 0.75), 0, 1e-12) << "leaving at " << deg;
+  }
+}
+
 TEST(TraceRender, RegionsAreBitIdenticalToTheFullImage) {
   const Scene s = GenerateRandomSpheres({12, 5, 40, 32});
   const auto tracer = Tracer::Create(s, {});
@@ -142,7 +230,13 @@ TEST(TraceRender, RegionsAreBitIdenticalToTheFullImage) {
     }
   }
   EXPECT_EQ(part.rays[int(RayKind::kPrimary)], 16u * 8);
-  EXPECT_EQ(full.tests[int(ShapeKind::kSphere)] % 12, 0u);  // every ray tests every sphere
+  // Exhaustive: every ray of every kind (primary, shadow, reflected, refracted) tests every
+  // object, so each kind's test count is its object count times all the rays traced.
+  uint64_t rays = 0, objects[kShapeKinds] = {};
+  for (uint64_t r : full.rays) rays += r;
+  for (const Primitive& p : s.objects) ++objects[int(p.Kind())];
+  EXPECT_GT(full.rays[int(RayKind::kShadow)], 0u);
+  for (int k = 0; k < kShapeKinds; ++k) EXPECT_EQ(full.tests[k], objects[k] * rays) << k;
 }
 
 TEST(TraceRender, FloatAndDoubleAgreeOnAnImage) {
