@@ -53,7 +53,7 @@ ZEPHYR := $(BIN)/zephyr
 TESTS  := $(BIN)/zephyr_tests
 
 # ---------------------------------------------------------------------------
-.PHONY: all binaries test run bench charts fuzz fuzz-smoke clean help setup
+.PHONY: all binaries test run bench charts fuzz fuzz-smoke mutants clean help setup
 
 help: ## List the targets
 	@grep -hE '^[a-z][a-zA-Z_-]*:.*## ' Makefile | sed 's/:.*## /\t/' | \
@@ -116,6 +116,11 @@ fuzz-smoke: # a few seconds of fuzzing, part of `make test` (skipped without cla
 	$(Q)if command -v $(FUZZ_CXX) >/dev/null; then $(MAKE) --no-print-directory $(FUZZ_BIN) && \
 	  $(FUZZ_RUN) -max_total_time=5 2>&1 | tail -n 3; test $${PIPESTATUS[0]} -eq 0; \
 	  else echo "fuzz-smoke: $(FUZZ_CXX) not found, skipped"; fi
+
+# Mutation testing (tools/mutants.sh): each mutant of tools/mutants.json in a scratch copy of
+# the committed tree, rebuilt and tested one at a time. MUTANTS="id ..." runs some only.
+mutants: setup ## Apply each mutant of tools/mutants.json in a scratch copy, rebuild, test; print the score
+	$(Q)bash tools/mutants.sh $(MUTANTS)
 
 clean: ## Remove build/ and out/
 	$(Q)rm -rf $(BUILD) out
