@@ -32,49 +32,88 @@ HWY_INLINE void FullAdd(V x, V y, V& carry, V& sum) {
 // Bitwise mux: m ? a : b, written with And/AndNot (HIGHWAY.md: no IfVecThenElse on planes).
 HWY_INLINE V Mux(V m, V a, V b) { return hn::Or(hn::And(m, a), hn::AndNot(m, b)); }
 
-// kAddStrip vectors of PEs side by side: each plane is read as one longer run, which the
-// hardware prefetchers follow better when an add streams ~100 planes from L2/L3 (18
-// layers: 32-bit add 48 -> 28 us). Planes of a few layers stay in cache, where one vector
-// at a time is faster (1 layer: 1.25 vs 1.5 us), hence the threshold.
+// The add runs kAddStrip vectors of PEs side by side (the whole bit loop per strip, the
+// carries in registers): the plane pointers are read once per bit for the strip, and each
+// plane is read as one longer run, which the prefetchers follow when an add streams ~100
+// planes from L2/L3. The argument fields are copied into locals so the compiler keeps them
+// in registers (a store through out[p] could otherwise alias them), and the bit loop is
+// split at ovfFrom so the positions below it carry no overflow test.
 constexpr size_t kAddStrip = 4;
-constexpr size_t kAddStripMinWords = 1024;  // 8 layers of 8192 PEs
 
-template <size_t U>
-HWY_INLINE void AddStrip(const AddArgs& g, size_t w) {
+// One bit position of a strip: sums[u] = a[p] + b[p] + carry[u] for U vectors at w.
+template <size_t U, bool kInvert>
+HWY_INLINE void AddStep(const Word* ap, const Word* bp, Word* op, V* HWY_RESTRICT carry,
+                        V* HWY_RESTRICT sums) {
   const D d;
   const size_t lanes = hn::Lanes(d);
+  HWY_UNROLL(16)
+  for (size_t u = 0; u < U; ++u) {
+    const V x = hn::Load(d, ap + u * lanes);
+    V y = hn::Load(d, bp + u * lanes);
+    if (kInvert) y = hn::Not(y);
+    FullAdd(x, y, carry[u], sums[u]);
+  }
+  if (op) {
+    HWY_UNROLL(16)
+    for (size_t u = 0; u < U; ++u) hn::Store(sums[u], d, op + u * lanes);
+  }
+}
+
+template <size_t U, bool kInvert, bool kOvf>
+HWY_NOINLINE void AddStrips(const AddArgs& g, size_t begin, size_t end) {
+  const D d;
+  const size_t lanes = hn::Lanes(d);
+  const Word* const* const A = g.a;
+  const Word* const* const B = g.b;
+  Word* const* const O = g.out;
+  const int n = g.n;
+  const int ovfFrom = kOvf ? std::min(std::max(g.ovfFrom, 0), n) : n;
+  const bool ovfSigned = g.ovfSigned;
+  Word* const ovfPlane = g.ovf;
+  const Word* const act = g.act;
   const V init = g.carryIn ? hn::Set(d, ~uint64_t{0}) : hn::Zero(d);
-  V carry[U], ref[U], ovf[U];
-  for (size_t u = 0; u < U; ++u) carry[u] = init, ref[u] = hn::Zero(d), ovf[u] = hn::Zero(d);
-  for (int p = 0; p < g.n; ++p) {
-    for (size_t u = 0; u < U; ++u) {
-      const size_t o = w + u * lanes;
-      const V x = hn::Load(d, g.a[p] + o);
-      V y = hn::Load(d, g.b[p] + o);
-      if (g.invertB) y = hn::Not(y);
-      V sum;
-      FullAdd(x, y, carry[u], sum);
-      if (g.out[p]) hn::Store(sum, d, g.out[p] + o);
-      if (g.ovf && p >= g.ovfFrom) {
-        if (p == g.ovfFrom && g.ovfSigned) ref[u] = sum;
-        ovf[u] = hn::Or(ovf[u], hn::Xor(sum, ref[u]));
+  for (size_t w = begin; w + U * lanes <= end; w += U * lanes) {
+    V carry[U], sum[U];
+    HWY_UNROLL(16)
+    for (size_t u = 0; u < U; ++u) carry[u] = init;
+    for (int p = 0; p < ovfFrom; ++p)
+      AddStep<U, kInvert>(A[p] + w, B[p] + w, O[p] ? O[p] + w : nullptr, carry, sum);
+    if (kOvf && ovfFrom < n) {
+      V ref[U], ovf[U];
+      AddStep<U, kInvert>(A[ovfFrom] + w, B[ovfFrom] + w, O[ovfFrom] ? O[ovfFrom] + w : nullptr,
+                          carry, sum);
+      HWY_UNROLL(16)
+      for (size_t u = 0; u < U; ++u) {
+        ref[u] = ovfSigned ? sum[u] : hn::Zero(d);
+        ovf[u] = hn::Xor(sum[u], ref[u]);
+      }
+      for (int p = ovfFrom + 1; p < n; ++p) {
+        AddStep<U, kInvert>(A[p] + w, B[p] + w, O[p] ? O[p] + w : nullptr, carry, sum);
+        HWY_UNROLL(16)
+        for (size_t u = 0; u < U; ++u) ovf[u] = hn::Or(ovf[u], hn::Xor(sum[u], ref[u]));
+      }
+      HWY_UNROLL(16)
+      for (size_t u = 0; u < U; ++u) {
+        const size_t o = w + u * lanes;
+        const V old = hn::Load(d, ovfPlane + o);
+        hn::Store(hn::OrAnd(old, ovf[u], hn::Load(d, act + o)), d, ovfPlane + o);
       }
     }
   }
-  if (g.ovf)
-    for (size_t u = 0; u < U; ++u) {
-      const size_t o = w + u * lanes;
-      const V old = hn::Load(d, g.ovf + o);
-      hn::Store(hn::OrAnd(old, ovf[u], hn::Load(d, g.act + o)), d, g.ovf + o);
-    }
+}
+
+template <bool kInvert, bool kOvf>
+void AddRange(const AddArgs& g, size_t begin, size_t end) {
+  const size_t strip = kAddStrip * hn::Lanes(D());
+  const size_t mid = begin + (end - begin) / strip * strip;
+  AddStrips<kAddStrip, kInvert, kOvf>(g, begin, mid);
+  AddStrips<1, kInvert, kOvf>(g, mid, end);
 }
 
 void Add(const AddArgs& g, size_t words) {
-  const size_t lanes = hn::Lanes(D());
-  size_t w = 0;
-  if (words >= kAddStripMinWords)
-    for (; w + kAddStrip * lanes <= words; w += kAddStrip * lanes) AddStrip<kAddStrip>(g, w);
-  for (; w < words; w += lanes) AddStrip<1>(g, w);
+  const bool ovf = g.ovf != nullptr;
+  if (g.invertB) ovf ? AddRange<true, true>(g, 0, words) : AddRange<true, false>(g, 0, words);
+  else ovf ? AddRange<false, true>(g, 0, words) : AddRange<false, false>(g, 0, words);
 }
 
 // One vector of PEs of roundFit; src(i) gives exact bit lo + i (i < g.k), carry the round bit.

@@ -232,6 +232,14 @@ void MulByMulti(const Multi& a, const Multi& b, Multi& out, Policy p) {
 
 // ---- Multi ------------------------------------------------------------------------------------
 
+Multi::Multi(Machine& machine, fixed::Format format, std::string name, Uninitialised)
+    : machine_(&machine), format_(format) {
+  if (!format.IsValid())
+    throw UserError(fmt::format("multi '{}': invalid format {}", name, format.Name()));
+  alloc_ = machine.Memory().Allocate(name, format.Width(), std::nullopt);
+  planes_ = machine.AcquirePlanes(format.Width());
+}
+
 Multi::Multi(Machine& machine, fixed::Format format, std::string name, std::optional<Space> space)
     : machine_(&machine), format_(format) {
   if (!format.IsValid())
@@ -241,7 +249,8 @@ Multi::Multi(Machine& machine, fixed::Format format, std::string name, std::opti
   std::memset(planes_, 0, sizeof(Word) * format.Width() * machine.WordsPerPlane());
 }
 
-Multi::Multi(const Multi& o) : Multi(o.GetMachine(), o.format_, o.alloc_.name + "'") {
+Multi::Multi(const Multi& o)
+    : Multi(o.GetMachine(), o.format_, o.alloc_.name + "'", Uninitialised{}) {
   machine_->Charge("copy", CopyCost(o.AsOperand(), AsOperand()));
   std::memcpy(planes_, o.planes_, sizeof(Word) * Width() * machine_->WordsPerPlane());
 }
@@ -369,7 +378,7 @@ std::vector<int64_t> Multi::ReadRaw() const {
 
 Multi Add(const Multi& a, const Multi& b, Format out, Policy p) {
   CheckSameMachine(a, b);
-  Multi r(a.GetMachine(), out, "add");
+  Multi r(a.GetMachine(), out, "add", Multi::Uninitialised{});
   a.GetMachine().Charge("add", AddCost(a.AsOperand(), b.AsOperand(), r.AsOperand(), p));
   AddInto(a, b, false, r, p);
   return r;
@@ -377,7 +386,7 @@ Multi Add(const Multi& a, const Multi& b, Format out, Policy p) {
 
 Multi Sub(const Multi& a, const Multi& b, Format out, Policy p) {
   CheckSameMachine(a, b);
-  Multi r(a.GetMachine(), out, "sub");
+  Multi r(a.GetMachine(), out, "sub", Multi::Uninitialised{});
   a.GetMachine().Charge("sub", SubCost(a.AsOperand(), b.AsOperand(), r.AsOperand(), p));
   AddInto(a, b, true, r, p);
   return r;
@@ -385,7 +394,7 @@ Multi Sub(const Multi& a, const Multi& b, Format out, Policy p) {
 
 Multi Neg(const Multi& a, Format out, Policy p) {
   Machine& m = a.GetMachine();
-  Multi r(m, out, "neg");
+  Multi r(m, out, "neg", Multi::Uninitialised{});
   m.Charge("neg", NegCost(a.AsOperand(), r.AsOperand(), p));
   const Format e = NegFormat(a.Format());
   Scratch exact(m, e.Width());
@@ -396,7 +405,7 @@ Multi Neg(const Multi& a, Format out, Policy p) {
 
 Multi Abs(const Multi& a, Format out, Policy p) {
   Machine& m = a.GetMachine();
-  Multi r(m, out, "abs");
+  Multi r(m, out, "abs", Multi::Uninitialised{});
   m.Charge("abs", AbsCost(a.AsOperand(), r.AsOperand(), p));
   const Format e = AbsFormat(a.Format());
   if (!a.Format().isSigned) {
@@ -423,7 +432,7 @@ Multi Abs(const Multi& a, Format out, Policy p) {
 static Multi MinMax(const Multi& a, const Multi& b, Format out, Policy p, bool isMax) {
   CheckSameMachine(a, b);
   Machine& m = a.GetMachine();
-  Multi r(m, out, isMax ? "max" : "min");
+  Multi r(m, out, isMax ? "max" : "min", Multi::Uninitialised{});
   m.Charge(isMax ? "max" : "min", MinMaxCost(a.AsOperand(), b.AsOperand(), r.AsOperand(), p));
   Scratch lt(m, 1);
   LessPlane(a, b, lt.p);
@@ -441,7 +450,7 @@ Multi Max(const Multi& a, const Multi& b, Format out, Policy p) { return MinMax(
 Multi Mul(const Multi& a, const Multi& b, Format out, Policy p) {
   CheckSameMachine(a, b);
   Machine& m = a.GetMachine();
-  Multi r(m, out, "mul");
+  Multi r(m, out, "mul", Multi::Uninitialised{});
   m.Charge("mul", MulCost(a.AsOperand(), b.AsOperand(), r.AsOperand(), p));
   MulByMulti(a, b, r, p);
   return r;
@@ -449,7 +458,7 @@ Multi Mul(const Multi& a, const Multi& b, Format out, Policy p) {
 
 Multi Mul(const Multi& a, const Uni& b, Format out, Policy p) {
   Machine& m = a.GetMachine();
-  Multi r(m, out, "mulUni");
+  Multi r(m, out, "mulUni", Multi::Uninitialised{});
   m.Charge("mulUni", MulUniCost(a.AsOperand(), b.value, r.AsOperand(), p));
   std::vector<const Word*> rows;
   std::vector<int> shifts;
@@ -467,7 +476,7 @@ Multi Mul(const Multi& a, const Uni& b, Format out, Policy p) {
 
 Multi Square(const Multi& a, Format out, Policy p) {
   Machine& m = a.GetMachine();
-  Multi r(m, out, "square");
+  Multi r(m, out, "square", Multi::Uninitialised{});
   m.Charge("square", MulCost(a.AsOperand(), a.AsOperand(), r.AsOperand(), p));
   MulByMulti(a, a, r, p);
   return r;
@@ -501,7 +510,7 @@ void MagnitudeInto(const Multi& x, Word* base) {
 Multi Div(const Multi& a, const Multi& b, Format out, Policy p) {
   CheckSameMachine(a, b);
   Machine& m = a.GetMachine();
-  Multi r(m, out, "div");
+  Multi r(m, out, "div", Multi::Uninitialised{});
   m.Charge("div", DivCost(a.AsOperand(), b.AsOperand(), r.AsOperand(), p));
   const size_t words = m.WordsPerPlane();
   const PlaneKernels& k = m.Kernels();
@@ -629,7 +638,7 @@ Multi Sqrt(const Multi& a, Format out, Policy p) {
 
 Multi Shift(const Multi& a, int k, Format out, Policy p) {
   Machine& m = a.GetMachine();
-  Multi r(m, out, "shift");
+  Multi r(m, out, "shift", Multi::Uninitialised{});
   m.Charge(k == 0 ? "convert" : "shift", ShiftCost(a.AsOperand(), k, r.AsOperand(), p));
   RoundFitInto(m, a.Plane(0), a.Width(), a.Format().isSigned, a.Format().fracBits - k, r, p);
   return r;
@@ -641,7 +650,7 @@ Multi Select(const Multi& mask, const Multi& a, const Multi& b, Format out, Poli
   CheckSameMachine(a, b);
   CheckBool(mask, "Select");
   Machine& m = a.GetMachine();
-  Multi r(m, out, "select");
+  Multi r(m, out, "select", Multi::Uninitialised{});
   m.Charge("select", SelectCost(mask.AsOperand(), a.AsOperand(), b.AsOperand(), r.AsOperand(), p));
   const Format u = UnionFormat(a.Format(), b.Format());
   Scratch exact(m, u.Width());
@@ -651,7 +660,7 @@ Multi Select(const Multi& mask, const Multi& a, const Multi& b, Format out, Poli
 }
 
 Multi Broadcast(Machine& m, const fixed::Fixed& value) {
-  Multi r(m, value.format, "uni");
+  Multi r(m, value.format, "uni", Multi::Uninitialised{});
   m.Charge("broadcast", BroadcastCost(r.AsOperand()));
   for (int i = 0; i < r.Width(); ++i)
     std::memcpy(r.Plane(i), value.Bit(i) ? m.OnesPlane() : m.ZeroPlane(),
@@ -666,7 +675,7 @@ Format BoolFormat() { return Format::Unsigned(1, 0); }
 Multi Less(const Multi& a, const Multi& b) {
   CheckSameMachine(a, b);
   Machine& m = a.GetMachine();
-  Multi r(m, BoolFormat(), "less");
+  Multi r(m, BoolFormat(), "less", Multi::Uninitialised{});
   m.Charge("compare", CompareCost(a.AsOperand(), b.AsOperand(), r.GetSpace()));
   LessPlane(a, b, r.Plane(0));
   return r;
@@ -675,7 +684,7 @@ Multi Less(const Multi& a, const Multi& b) {
 Multi LessEqual(const Multi& a, const Multi& b) {
   CheckSameMachine(a, b);
   Machine& m = a.GetMachine();
-  Multi r(m, BoolFormat(), "lessEqual");
+  Multi r(m, BoolFormat(), "lessEqual", Multi::Uninitialised{});
   m.Charge("compare", CompareCost(a.AsOperand(), b.AsOperand(), r.GetSpace()));
   LessPlane(b, a, r.Plane(0));
   m.Kernels().logic(LogicOp::Not, r.Plane(0), nullptr, r.Plane(0), m.WordsPerPlane());
@@ -685,7 +694,7 @@ Multi LessEqual(const Multi& a, const Multi& b) {
 Multi Equal(const Multi& a, const Multi& b) {
   CheckSameMachine(a, b);
   Machine& m = a.GetMachine();
-  Multi r(m, BoolFormat(), "equal");
+  Multi r(m, BoolFormat(), "equal", Multi::Uninitialised{});
   m.Charge("compare", CompareCost(a.AsOperand(), b.AsOperand(), r.GetSpace()));
   const Format u = UnionFormat(a.Format(), b.Format());
   auto& pa = MachineInternals::PointersA(m);
@@ -703,7 +712,7 @@ static Multi LogicOf(LogicOp op, const Multi& a, const Multi* b, const char* nam
   CheckBool(a, name);
   if (b) CheckBool(*b, name), CheckSameMachine(a, *b);
   Machine& m = a.GetMachine();
-  Multi r(m, BoolFormat(), name);
+  Multi r(m, BoolFormat(), name, Multi::Uninitialised{});
   m.Charge("logic", LogicCost(a.AsOperand(), b != nullptr, r.GetSpace()));
   m.Kernels().logic(op, a.Plane(0), b ? b->Plane(0) : nullptr, r.Plane(0), m.WordsPerPlane());
   return r;
@@ -834,7 +843,7 @@ Multi MeshShift(const Multi& a, int axis, int distance) {
   if (axis < 0 || axis >= static_cast<int>(shape.extent.size()))
     throw UserError(fmt::format("mesh shift along axis {}: the {} mesh has {} axes", axis,
                                 shape.Name(), shape.extent.size()));
-  Multi r(m, a.Format(), "meshShift");
+  Multi r(m, a.Format(), "meshShift", Multi::Uninitialised{});
   m.Charge("meshShift", MeshShiftCost(a.AsOperand(), distance));
   int64_t stride = 1;
   for (int i = 0; i < axis; ++i) stride *= shape.extent[i];

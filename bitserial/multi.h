@@ -36,6 +36,10 @@ class Multi {
   // `space` is given); its bits start at zero.
   Multi(Machine& machine, fixed::Format format, std::string name = "multi",
         std::optional<Space> space = std::nullopt);
+  // An operation's result, whose kernel writes every bit of every PE: allocated like the
+  // above but not zero-filled first (the fill cost as much as a 32-bit add's kernel).
+  struct Uninitialised {};
+  Multi(Machine& machine, fixed::Format format, std::string name, Uninitialised);
   Multi(const Multi& other);  // a copy (charged)
   Multi(Multi&& other) noexcept;
   // Assignment writes the active PEs only (converting with the default policy if the
