@@ -31,7 +31,11 @@ DEPCFLAGS = $(shell pkg-config --cflags libhwy libpng ompi-c fmt 2>/dev/null)
 DEPLIBS   = $(shell pkg-config --libs libhwy libpng ompi-c fmt 2>/dev/null)
 CXXFLAGS ?= $(OPT) -g
 ALL_CXXFLAGS = -std=c++20 -Wall -Wextra -Wno-unused-parameter -I. $(DEPCFLAGS) $(CXXFLAGS)
-LDLIBS_ALL   = $(DEPLIBS) -lpthread
+LDLIBS_ALL   = $(DEPLIBS) -fopenmp -lpthread
+# OpenMP (GCC's libgomp) in the files that use it: layer blocks and the host recompute run
+# on every core (bitserial/blocks.h). Other files are compiled without it.
+OPENMP_SRCS := bitserial/blocks.cpp
+$(OPENMP_SRCS:%.cpp=$(BUILD)/obj/%.o): ALL_CXXFLAGS += -fopenmp
 
 # Every .cpp in the library rooms is part of the engine; mains live apart.
 # ROOMS / TEST_GLOB narrow a build to part of the tree (e.g. while one room is being

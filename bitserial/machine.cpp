@@ -15,16 +15,29 @@ int LayersFor(const MachineProfile& p, int64_t virtualPes) {
   int64_t v = virtualPes == 0 ? p.physicalPes : virtualPes;
   return static_cast<int>((v + p.physicalPes - 1) / p.physicalPes);
 }
+
+LayerBlock CheckBlock(LayerBlock b, int layers) {
+  if (b.count == 0 && b.first == 0) return {0, layers};
+  if (b.count == 0) b.count = layers - b.first;
+  if (b.first < 0 || b.count < 1 || b.first + b.count > layers)
+    throw UserError(fmt::format("layer block {}..{} is outside the machine's {} layer(s)",
+                                b.first, b.first + b.count - 1, layers));
+  return b;
+}
 }  // namespace
 
-Machine::Machine(MachineProfile profile, int64_t virtualPes, int shapeIndex)
+Machine::Machine(MachineProfile profile, int64_t virtualPes, int shapeIndex, LayerBlock block)
     : profile_(std::move(profile)),
-      virtualPes_(virtualPes == 0 ? profile_.physicalPes : virtualPes),
-      layers_(LayersFor(profile_, virtualPes)),
+      modelledPes_(virtualPes == 0 ? profile_.physicalPes : virtualPes),
+      modelledLayers_(LayersFor(profile_, virtualPes)),
+      firstLayer_(CheckBlock(block, modelledLayers_).first),
+      layers_(CheckBlock(block, modelledLayers_).count),
+      firstPe_(int64_t{firstLayer_} * profile_.physicalPes),
+      virtualPes_(std::min<int64_t>(modelledPes_ - firstPe_, int64_t{layers_} * profile_.physicalPes)),
       wordsPerLayer_(profile_.physicalPes / 64),
       words_(layers_ * wordsPerLayer_),
-      memory_(profile_.internalBitsPerPe, profile_.externalBitsPerPe, layers_),
-      report_(&profile_, layers_),
+      memory_(profile_.internalBitsPerPe, profile_.externalBitsPerPe, modelledLayers_),
+      report_(&profile_, modelledLayers_),
       kernels_(&bitserial::Kernels()) {
   if (shapeIndex < 0 || shapeIndex >= static_cast<int>(profile_.shapes.size()))
     throw UserError(fmt::format("profile '{}' has {} mesh shape(s); shape {} does not exist",

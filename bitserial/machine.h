@@ -7,6 +7,11 @@
 // v % physicalPes, i.e. simply bit v of a plane. Planes come from a pool owned by the
 // machine and are reused, so a program's steady state allocates nothing per operation;
 // the host holds only planes of variables that exist.
+//
+// A machine may also hold only a block of another machine's layers (LayerBlock): it models
+// the whole machine (its PE memory is split over every layer, its report charges every
+// layer) but stores and computes only its own layers, so a program without reductions runs
+// block by block, each block's planes staying in cache (bitserial/blocks.h).
 #pragma once
 
 #include <hwy/aligned_allocator.h>
@@ -25,18 +30,35 @@
 
 namespace zephyr::bitserial {
 
+// Layers [first, first + count) of a machine (count >= 1; count = 0 means up to the last).
+struct LayerBlock {
+  int first = 0;
+  int count = 0;
+};
+
 class Machine {
  public:
-  // virtualPes = 0 means one per physical PE; shapeIndex picks profile.shapes[i].
-  explicit Machine(MachineProfile profile, int64_t virtualPes = 0, int shapeIndex = 0);
+  // virtualPes = 0 means one per physical PE; shapeIndex picks profile.shapes[i]. With a
+  // block, the machine holds only those layers of the virtualPes-PE machine (UserError if
+  // the block is outside it).
+  explicit Machine(MachineProfile profile, int64_t virtualPes = 0, int shapeIndex = 0,
+                   LayerBlock block = {});
   ~Machine();
   Machine(const Machine&) = delete;
   Machine& operator=(const Machine&) = delete;
 
   const MachineProfile& Profile() const { return profile_; }
   const MeshShape& Shape() const { return shape_; }
+  // The virtual PEs and layers this machine holds (a block's own), the first one's index
+  // in the whole machine, and the whole machine's (modelled) PEs and layers, by which the
+  // memory is split and the report multiplies.
   int64_t VirtualPes() const { return virtualPes_; }
   int Layers() const { return layers_; }
+  int64_t FirstPe() const { return firstPe_; }
+  int FirstLayer() const { return firstLayer_; }
+  int64_t ModelledPes() const { return modelledPes_; }
+  int ModelledLayers() const { return modelledLayers_; }
+  bool IsBlock() const { return layers_ != modelledLayers_; }
   size_t WordsPerLayer() const { return wordsPerLayer_; }
   size_t WordsPerPlane() const { return words_; }
   PeMemory& Memory() { return memory_; }
@@ -86,8 +108,12 @@ class Machine {
 
   MachineProfile profile_;
   MeshShape shape_;
-  int64_t virtualPes_;
+  int64_t modelledPes_;
+  int modelledLayers_;
+  int firstLayer_;
   int layers_;
+  int64_t firstPe_;
+  int64_t virtualPes_;
   size_t wordsPerLayer_;
   size_t words_;
   PeMemory memory_;

@@ -757,6 +757,16 @@ WhereScope::~WhereScope() {
 // ---- reductions -----------------------------------------------------------------------------
 
 namespace {
+// A reduction combines every layer: a layer block holds only some (bitserial/blocks.h).
+void CheckWhole(const Machine& m, const char* what) {
+  if (m.IsBlock())
+    throw UserError(fmt::format("{} reduces over every virtual-PE layer; a machine holding only "
+                                "layers {}..{} of {} cannot run it (run reductions on the whole "
+                                "machine, not in layer blocks)",
+                                what, m.FirstLayer(), m.FirstLayer() + m.Layers() - 1,
+                                m.ModelledLayers()));
+}
+
 bool AnyActive(const Machine& m, const Word* plane, bool complement) {
   const Word* act = m.Activity();
   for (size_t w = 0; w < m.WordsPerPlane(); ++w)
@@ -766,6 +776,7 @@ bool AnyActive(const Machine& m, const Word* plane, bool complement) {
 
 fixed::Fixed Bitwise(const Multi& a, ReduceKind kind) {
   Machine& m = a.GetMachine();
+  CheckWhole(m, ReduceName(kind));
   m.Charge(ReduceName(kind), ReduceCost(kind, a.AsOperand()));
   fixed::BigInt bits = 0;
   for (int i = 0; i < a.Width(); ++i) {
@@ -784,6 +795,7 @@ fixed::Fixed Bitwise(const Multi& a, ReduceKind kind) {
 
 fixed::Fixed Extreme(const Multi& a, bool isMax) {
   Machine& m = a.GetMachine();
+  CheckWhole(m, ReduceName(isMax ? ReduceKind::Max : ReduceKind::Min));
   m.Charge(ReduceName(isMax ? ReduceKind::Max : ReduceKind::Min),
            ReduceCost(isMax ? ReduceKind::Max : ReduceKind::Min, a.AsOperand()));
   const Format& f = a.Format();
@@ -817,6 +829,7 @@ bool Any(const Multi& mask) {
 
 fixed::Fixed ReduceSum(const Multi& a) {
   Machine& m = a.GetMachine();
+  CheckWhole(m, "reduceSum");
   m.Charge("reduceSum", ReduceCost(ReduceKind::Sum, a.AsOperand()));
   fixed::BigInt sum = 0;
   for (int i = 0; i < a.Width(); ++i) {
@@ -827,7 +840,7 @@ fixed::Fixed ReduceSum(const Multi& a) {
     else sum += term;
   }
   int extra = 0;
-  while ((int64_t{1} << extra) < m.VirtualPes()) ++extra;
+  while ((int64_t{1} << extra) < m.ModelledPes()) ++extra;
   Format f{a.Format().isSigned, a.Format().intBits + extra, a.Format().fracBits};
   return fixed::Fixed{f, sum};
 }

@@ -5,7 +5,7 @@
 namespace zephyr::bitserial {
 
 void CycleReport::Charge(const std::string& op, const MicroOpCounts& counts) {
-  auto cls = counts.ByClass(*profile_);
+  auto cls = counts.ByClass(profile_);
   OpStats& s = ops_[op];
   s.calls += 1;
   s.counts += counts;
@@ -18,6 +18,15 @@ void CycleReport::Charge(const std::string& op, const MicroOpCounts& counts) {
 void CycleReport::Clear() {
   byClass_ = {};
   ops_.clear();
+}
+
+bool CycleReport::SameCharges(const CycleReport& o) const {
+  if (layers_ != o.layers_ || byClass_ != o.byClass_ || ops_.size() != o.ops_.size()) return false;
+  for (auto a = ops_.begin(), b = o.ops_.begin(); a != ops_.end(); ++a, ++b)
+    if (a->first != b->first || a->second.calls != b->second.calls ||
+        a->second.counts.n != b->second.counts.n || a->second.byClass != b->second.byClass)
+      return false;
+  return true;
 }
 
 double CycleReport::LayerCycles() const {
@@ -42,8 +51,8 @@ int64_t CycleReport::OpCalls(const std::string& op) const {
 nlohmann::json CycleReport::Json() const {
   using nlohmann::json;
   json j;
-  j["profile"] = profile_->name;
-  j["clockHz"] = profile_->clockHz;
+  j["profile"] = profile_.name;
+  j["clockHz"] = profile_.clockHz;
   j["layers"] = layers_;
   j["totalCycles"] = TotalCycles();
   j["modelledSeconds"] = ModelledSeconds();
@@ -78,9 +87,9 @@ nlohmann::json CycleReport::Json() const {
 
 std::string CycleReport::Table() const {
   std::string s = fmt::format("cycle report — profile {}, {} virtual-PE layer{}, {:.0f} cycles = "
-                              "{:.6g} s at {:g} Hz\n", profile_->name, layers_,
+                              "{:.6g} s at {:g} Hz\n", profile_.name, layers_,
                               layers_ == 1 ? "" : "s", TotalCycles(), ModelledSeconds(),
-                              profile_->clockHz);
+                              profile_.clockHz);
   s += "  by class:\n";
   for (int i = 0; i < kCycleClassCount; ++i)
     s += fmt::format("    {:<16} {:>14.0f}\n", CycleClassName(static_cast<CycleClass>(i)),

@@ -17,11 +17,15 @@ namespace zephyr::bitserial {
 
 class CycleReport {
  public:
-  CycleReport(const MachineProfile* profile, int layers) : profile_(profile), layers_(layers) {}
+  // Keeps its own copy of the profile, so a report outlives its machine (a layer block's
+  // report is the whole machine's, bitserial/blocks.h).
+  CycleReport(const MachineProfile* profile, int layers) : profile_(*profile), layers_(layers) {}
 
   // Charges one call of `op` whose per-layer micro-op counts are `counts`.
   void Charge(const std::string& op, const MicroOpCounts& counts);
   void Clear();
+  // The same calls and micro-op counts of every op (the same instruction stream).
+  bool SameCharges(const CycleReport& other) const;
 
   int Layers() const { return layers_; }
   double LayerCycles() const;  // one layer's instruction stream
@@ -30,7 +34,7 @@ class CycleReport {
   // Total cycles charged to `op` over all layers (0 if never charged) and its call count.
   double OpCycles(const std::string& op) const;
   int64_t OpCalls(const std::string& op) const;
-  double ModelledSeconds() const { return TotalCycles() / profile_->clockHz; }
+  double ModelledSeconds() const { return TotalCycles() / profile_.clockHz; }
 
   // {"profile", "clockHz", "layers", "totalCycles", "modelledSeconds", "byClass": {...},
   //  "byLayer": [...], "byOp": {"add": {"calls", "cycles", "byClass", "microOps"}}}
@@ -43,7 +47,7 @@ class CycleReport {
     MicroOpCounts counts;
     std::array<double, kCycleClassCount> byClass{};
   };
-  const MachineProfile* profile_;
+  MachineProfile profile_;
   int layers_;
   std::array<double, kCycleClassCount> byClass_{};  // per layer
   std::map<std::string, OpStats> ops_;              // per layer

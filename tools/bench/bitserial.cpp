@@ -1,6 +1,8 @@
 // bench_bitserial: host speed of the bit-serial engine (issue 3's targets) against a naive
 // emulator kept only here (one byte per PE bit, plain loops, as PIMeval stores one bool per
-// bit). Prints medians of repeats on one core; not a test.
+// bit), then host time per modelled cycle against the number of virtual-PE layers, op by op
+// and in layer blocks on 1 thread and on every core (issue 14). Prints medians of repeats;
+// not a test.
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -9,6 +11,7 @@
 #include <random>
 #include <vector>
 
+#include "bitserial/blocks.h"
 #include "bitserial/multi.h"
 
 using namespace zephyr;
@@ -66,10 +69,64 @@ NaiveMulti NaiveFrom(const Multi& m, int pes) {
   return n;
 }
 
+// A small per-PE program in the shape of a ray test (multiplies, adds, a square root, a
+// compare and a where), narrow enough for 2048 layers' 129 bits per virtual PE.
+void LayerProgram(Machine& m) {
+  const fixed::Format f = fixed::Format::Signed(3, 8), u = fixed::Format::Unsigned(2, 8);
+  std::vector<int64_t> rx(m.VirtualPes()), ry(m.VirtualPes());
+  for (int64_t i = 0; i < m.VirtualPes(); ++i) {
+    const int64_t pe = m.FirstPe() + i;  // the same data in every blocking
+    rx[i] = (pe * 2654435761) % 4096 - 2048;
+    ry[i] = (pe * 40503) % 4096 - 2048;
+  }
+  Multi x(m, f, "x"), y(m, f, "y");
+  x.LoadRaw(rx);
+  y.LoadRaw(ry);
+  Multi best = Broadcast(m, fixed::Fixed{f, 0});
+  for (int k = 0; k < 4; ++k) {
+    Multi p = Mul(x, y, f);
+    Multi s = Add(p, Mul(x, Uni{fixed::FromDouble(0.75 + k, f)}, f), f);
+    Multi r = Sqrt(s, u);
+    Multi closer = Convert(r, f) < best;
+    Where(closer, [&] { best = Convert(r, f); });
+  }
+  (void)best.ReadRaw();
+}
+
+void LayerSweep() {
+  fmt::print("\nhost time per modelled cycle against layers (a ray-test-like program; medians of 3;\n"
+             "op by op = each op over every layer; blocks of {} layers on 1 thread and on {}):\n",
+             DefaultBlockLayers(), HardwareThreads());
+  fmt::print("{:>7} {:>14} {:>14} {:>14} {:>14} {:>9}\n", "layers", "cycles", "op-by-op ns/c",
+             "blocks 1t ns/c", "blocks Nt ns/c", "Nt/1t");
+  const MachineProfile profile = Profile("wavetracer");
+  for (int layers : {18, 64, 254, 1024, 2048}) {
+    const int64_t pes = int64_t{layers} * profile.physicalPes;
+    double cycles = 0;
+    double opByOp = 0;
+    if (layers <= 254) {  // op by op holds every layer's planes at once
+      opByOp = MedianSeconds(3, [&] {
+        Machine m(profile, pes);
+        LayerProgram(m);
+        cycles = m.Report().TotalCycles();
+      });
+    }
+    auto blocked = [&](int threads) {
+      return MedianSeconds(3, [&] {
+        cycles = RunLayerBlocks(profile, pes, {.threads = threads}, LayerProgram).report.TotalCycles();
+      });
+    };
+    const double one = blocked(1), all = blocked(0);
+    fmt::print("{:>7} {:>14.4g} {:>14} {:>14.3f} {:>14.3f} {:>9.2f}\n", layers, cycles,
+               opByOp > 0 ? fmt::format("{:.3f}", opByOp / cycles * 1e9) : std::string("-"),
+               one / cycles * 1e9, all / cycles * 1e9, one / all);
+  }
+}
+
 int main() {
   std::mt19937_64 rng(1);
   const fixed::Format f32 = fixed::Format::Signed(31, 0), f16 = fixed::Format::Signed(15, 0);
-  fmt::print("bitserial engine, one core, Highway target {}\n", Kernels().target);
+  fmt::print("bitserial engine, Highway target {}; single ops on one core\n", Kernels().target);
 
   for (int64_t pes : {int64_t{8192}, int64_t{384 * 384}}) {
     Machine m(Profile("wavetracer"), pes);
@@ -132,5 +189,6 @@ int main() {
                  same ? "" : "  [MISMATCH]");
     }
   }
+  LayerSweep();
   return 0;
 }
