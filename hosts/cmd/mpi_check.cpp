@@ -18,6 +18,7 @@
 #include "hosts/cmd/command.h"
 #include "hosts/farm/farm.h"
 #include "hosts/farm/checkpoint.h"
+#include "hosts/io/output_file.h"
 
 namespace zephyr {
 namespace {
@@ -142,20 +143,17 @@ class PatternWork : public FrameWork {
 };
 
 void WritePfm(const std::string& path, int width, int height, std::span<const std::byte> rgb) {
-  std::ofstream out(path, std::ios::binary);
-  if (!out) throw UserError("cannot write " + path);
-  out << "PF\n" << width << ' ' << height << "\n-1.0\n";  // little-endian, rows bottom-up
+  std::string bytes = "PF\n" + std::to_string(width) + ' ' + std::to_string(height) +
+                      "\n-1.0\n";  // little-endian, rows bottom-up
   const std::size_t row = std::size_t(width) * 12;
   for (int y = height - 1; y >= 0; --y)
-    out.write(reinterpret_cast<const char*>(rgb.data() + y * row), std::streamsize(row));
-  if (!out) throw UserError("cannot write " + path);
+    bytes.append(reinterpret_cast<const char*>(rgb.data() + y * row), row);
+  WriteOutputFile(path, "PFM image", bytes);
 }
 
 void WriteJson(const std::string& path, const nlohmann::json& j) {
   if (path.empty()) return;
-  std::ofstream out(path);
-  out << j.dump(2) << '\n';
-  if (!out) throw UserError("cannot write " + path);
+  WriteOutputFile(path, "report", j.dump(2) + '\n');
 }
 
 struct CheckArgs {
@@ -225,6 +223,7 @@ void RunCheck(CheckArgs& a) {
   if (!result) return;  // a child
   WritePfm(a.out, o.width, o.height, result->image);
   WriteJson(a.report, result->report);
+  RemoveCheckpoint(result->checkpointPath);  // only now: the outputs are on disk
 }
 
 CommandRegistration reg("mpi-check", [](CLI::App& program) {

@@ -28,6 +28,7 @@
 #include "fixed/check.h"
 #include "fixed/format.h"
 #include "fixed/reference.h"
+#include "hosts/io/output_file.h"
 #include "hosts/cmd/command.h"
 #include "hosts/scene/geometry.h"
 #include "hosts/trace/exact.h"
@@ -185,15 +186,22 @@ FanResult RunFan(const StudyFormat& f, Form form, double distance, int rays) {
   return r;
 }
 
-std::FILE* OpenCsv(const std::string& path) {
-  std::FILE* f = path == "-" ? stdout : std::fopen(path.c_str(), "w");
-  if (!f) throw UserError(path + ": cannot create the CSV file");
-  return f;
-}
-void CloseCsv(std::FILE* f, const std::string& path) {
-  if (f == stdout ? std::fflush(f) != 0 : std::fclose(f) != 0)
-    throw UserError(path + ": cannot write the CSV file");
-}
+// A CSV on standard output ("-") or written atomically to a file (hosts/io/output_file.h);
+// the file's temporary is created up front, so a bad path fails before the study runs.
+class CsvOut {
+ public:
+  explicit CsvOut(const std::string& path) {
+    if (path != "-") file_.emplace(path, "CSV file");
+  }
+  std::FILE* Stream() const { return file_ ? file_->Stream() : stdout; }
+  void Commit() {
+    if (file_) return file_->Commit();
+    if (std::fflush(stdout) != 0) throw UserError("cannot write the CSV to standard output");
+  }
+
+ private:
+  std::optional<OutputFile> file_;
+};
 
 std::vector<StudyFormat> ParseFormats(const std::vector<std::string>& names) {
   std::vector<StudyFormat> formats;
@@ -208,7 +216,8 @@ void RunDistance(const std::string& out, const std::vector<std::string>& formatN
   if (maxLog2 < 1 || maxLog2 > 60) throw UserError("stability distance: --max-log2 must be in 1..60");
   if (stepsPerOctave < 1) throw UserError("stability distance: --steps must be at least 1");
   const std::vector<StudyFormat> formats = ParseFormats(formatNames);
-  std::FILE* f = OpenCsv(out);
+  CsvOut csv(out);
+  std::FILE* f = csv.Stream();
   std::fprintf(f, "distance,form,format,rays,wrong_hit_pct,flagged_pct,silent_wrong_pct,"
                   "t_relerr_max,t_relerr_median\n");
   for (int k = stepsPerOctave; k <= maxLog2 * stepsPerOctave; ++k) {
@@ -223,7 +232,7 @@ void RunDistance(const std::string& out, const std::vector<std::string>& formatN
       }
     }
   }
-  CloseCsv(f, out);
+  csv.Commit();
 }
 
 // overflow: for fixed formats s<I>.<F>, I = 2..maxIntBits, the largest distance (in
@@ -234,7 +243,8 @@ void RunOverflow(const std::string& out, int fracBits, int maxIntBits, int rays)
   if (fracBits < 4 || fracBits > 64) throw UserError("stability overflow: --frac-bits must be in 4..64");
   if (maxIntBits < 2 || maxIntBits + fracBits + 1 > fixed::kMaxWidth)
     throw UserError("stability overflow: --max-int-bits must be at least 2 and fit 128 bits");
-  std::FILE* f = OpenCsv(out);
+  CsvOut csv(out);
+  std::FILE* f = csv.Stream();
   std::fprintf(f, "int_bits,frac_bits,form,max_extent_unflagged,max_extent_correct\n");
   constexpr int kSteps = 4;
   for (int intBits = 2; intBits <= maxIntBits; ++intBits) {
@@ -256,7 +266,7 @@ void RunOverflow(const std::string& out, int fracBits, int maxIntBits, int rays)
                    correct);
     }
   }
-  CloseCsv(f, out);
+  csv.Commit();
 }
 
 CommandRegistration reg("stability", [](CLI::App& program) {

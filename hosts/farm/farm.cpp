@@ -271,6 +271,7 @@ class Parent {
   std::vector<int> skipped_, lost_;
   int resumed_ = 0, ignoredMessages_ = 0;
   int checkpointed_ = 0;  // frames in the checkpoint file (degenerate ones never are)
+  std::vector<int> checkpointBad_;  // --resume: frames whose records were damaged
   double distributionSeconds_ = 0, distributionCpuSeconds_ = 0;
 };
 
@@ -282,21 +283,38 @@ void Parent::OpenCheckpoint() {
   CheckpointKey key{job_.imageWidth, job_.imageHeight, job_.frameSize,
                     std::uint32_t(job_.bytesPerPixel), JobHash(job_.method + '\n' + job_.setup)};
   if (!options_.resume) {
+    if (::access(options_.checkpointPath.c_str(), F_OK) == 0)
+      std::fprintf(stderr,
+                   "zephyr: note: replacing the checkpoint %s of an earlier run (--resume "
+                   "would keep its frames)\n",
+                   options_.checkpointPath.c_str());
     checkpoint_.emplace(FrameCheckpoint::Create(options_.checkpointPath, key));
     return;
   }
   checkpoint_.emplace(FrameCheckpoint::Resume(options_.checkpointPath, key));
+  std::vector<int> bad = checkpoint_->Damage().badFrames;
   for (const auto& [id, pixels] : checkpoint_->Frames()) {
     if (id < 0 || id >= grid_.Count() ||
-        pixels.size() != grid_.At(id).PixelCount() * job_.bytesPerPixel)
-      throw UserError(options_.checkpointPath + ": frame " + std::to_string(id) +
-                      " does not fit this job");
+        pixels.size() != grid_.At(id).PixelCount() * job_.bytesPerPixel) {
+      bad.push_back(id);  // intact checksums, but not a frame of this job: render it again
+      continue;
+    }
     PasteFrame(grid_.At(id), pixels, image_, job_.imageWidth, job_.bytesPerPixel);
     done_[id] = true;
     ++doneCount_;
     ++resumed_;
     ++checkpointed_;
   }
+  checkpointBad_ = bad;
+  const CheckpointDamage& damage = checkpoint_->Damage();
+  if (damage.Any() || !bad.empty())
+    std::fprintf(stderr,
+                 "zephyr: warning: checkpoint %s: %d intact frames kept; %zu bad record(s)%s%s, "
+                 "%zu unreadable bytes in %d place(s) skipped; every missing frame is rendered "
+                 "again\n",
+                 options_.checkpointPath.c_str(), resumed_, bad.size(),
+                 bad.empty() ? "" : " for frames ", FrameList(bad).c_str(), damage.unreadableBytes,
+                 damage.unreadableRegions);
 }
 
 void Parent::Dispatch(ChildState& child) {
@@ -357,7 +375,11 @@ void Parent::Handle(ReceivedMessage& m) {
         auto pixels = std::span(m.payload).subspan(kRectBytes);
         PasteFrame(frame, pixels, image_, job_.imageWidth, job_.bytesPerPixel);
         if (checkpoint_) {
-          checkpoint_->Append(id, pixels);
+          try {
+            checkpoint_->Append(id, pixels);
+          } catch (const UserError& e) {
+            Abandon(e.what());  // e.g. a full disk: the frames already written stay
+          }
           ++checkpointed_;
         }
         done_[id] = true;
@@ -530,8 +552,9 @@ FramedResult Parent::Run() {
   distributionCpuSeconds_ = CpuSeconds() - cpuStart;
   StopAll();
   CollectStats();
-  if (checkpoint_) checkpoint_->Remove();  // the caller writes the image next
-  return {std::move(image_), Report()};
+  // The checkpoint stays: it is the only copy of the frames until the caller's outputs are
+  // written (FramedResult::checkpointPath).
+  return {std::move(image_), Report(), checkpoint_ ? checkpoint_->Path() : std::string()};
 }
 
 nlohmann::json Parent::Report() const {
@@ -571,6 +594,7 @@ nlohmann::json Parent::Report() const {
         {"skipped", skipped_.size()},
         {"skippedIds", skipped_},
         {"resumed", resumed_},
+        {"checkpointDamaged", checkpointBad_},
         {"lost", lost_}}},
       {"traffic", {{"parentToChildren", sent_.ToJson()}, {"childrenToParent", received_.ToJson()}}},
       {"ignoredMessages", ignoredMessages_},

@@ -70,6 +70,9 @@ struct FramedOptions {
 struct FramedResult {
   std::vector<std::byte> image;  // imageWidth × imageHeight × bytesPerPixel, row-major
   nlohmann::json report;         // see docs/distributed.md, "Accounting"
+  // The checkpoint holding every frame ("" = none). It is left on disk: the caller deletes
+  // it (RemoveCheckpoint) only once its outputs are safely written.
+  std::string checkpointPath;
 };
 
 // The whole method: starts MPI (≥ 2 ranks or UserError); on a child serves frames and
@@ -87,7 +90,8 @@ MpiSession& StartFramedMethod(const std::string& method);
 // The child loop (ranks ≥ 1): returns when the parent says stop, or after reporting a failure.
 void ServeFrames(const FrameWorkFactory& factory);
 // The parent (rank 0). Throws UserError when the job cannot finish (all children lost,
-// a malformed message, a child's failure); finished frames stay in the checkpoint.
+// a malformed message, a child's failure, a checkpoint that cannot be written); finished
+// frames stay in the checkpoint, which is never deleted here.
 FramedResult RenderFrames(const FramedJob& job, const FramedOptions& options);
 
 }  // namespace zephyr

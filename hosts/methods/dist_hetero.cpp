@@ -15,6 +15,8 @@
 #include "hosts/methods/hetero_entry.h"
 
 #include <CLI/CLI.hpp>
+#include <sys/stat.h>
+
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -25,6 +27,7 @@
 #include "fixed/check.h"
 #include "hosts/farm/farm.h"
 #include "hosts/farm/checkpoint.h"
+#include "hosts/io/output_file.h"
 #include "hosts/scene/nff.h"
 #include "hosts/methods/render.h"
 #include "hosts/methods/phases.h"
@@ -243,6 +246,7 @@ void RenderDist(const Scene& scene, const RenderOptions& options, RenderOutput& 
   out.image = Image(c.width, c.height);
   CopyImage(result->image, out.image);
   out.report["distributed"] = result->report;
+  if (!result->checkpointPath.empty()) out.removeWhenWritten.push_back(result->checkpointPath);
 }
 
 void RenderHetero(const Scene& scene, const RenderOptions& options, RenderOutput& out) {
@@ -299,6 +303,47 @@ void RenderHetero(const Scene& scene, const RenderOptions& options, RenderOutput
   CopyImage(result->image, out.image);
   out.report["simd"] = pass.Json();
   out.report["distributed"] = result->report;
+  if (!result->checkpointPath.empty()) out.removeWhenWritten.push_back(result->checkpointPath);
+  out.primary.clear();  // the parent holds the whole matrix: --dump-primary as for simd
+  if (!options.dumpPrimary.empty())
+    for (size_t i = 0; i < pass.matrix.hits.size(); ++i)
+      out.primary.push_back({pass.matrix.hits[i], pass.matrix.flags[i]});
+}
+
+// Before any work (RenderCheckOptions): the farm's flags, and the checkpoint OUT.frames,
+// which must be no other input or output; --resume needs it to exist.
+void CheckFarmOptions(const RenderOptions& o) {
+  FrameSize(o);
+  const FramedOptions f = FarmOptions(o);
+  if (f.resume && o.out.empty())
+    throw UserError("--resume needs --out: the frames it resumes are kept in OUT.frames");
+  if (f.checkpointPath.empty()) return;
+  for (const auto& [what, path] : {std::pair{"the scene", &o.scenePath},
+                                   std::pair{"--report", &o.report},
+                                   std::pair{"--dump-primary", &o.dumpPrimary}})
+    if (!path->empty() && SameFile(*path, f.checkpointPath))
+      throw UserError(std::string(what) + " " + *path + " is the checkpoint of --out " + o.out +
+                      " (" + f.checkpointPath + "); choose another name");
+  struct stat s;
+  const bool exists = ::stat(f.checkpointPath.c_str(), &s) == 0;
+  if (exists && !S_ISREG(s.st_mode))
+    throw UserError(f.checkpointPath + " (the checkpoint of --out " + o.out +
+                    ") exists and is not a regular file");
+  if (f.resume && !exists)
+    throw UserError("nothing to resume: no checkpoint " + f.checkpointPath +
+                    " (it is written by a run with the same --out)");
+}
+
+void CheckDistOptions(const RenderOptions& o) {
+  CheckFarmOptions(o);
+  if (!o.dumpPrimary.empty())
+    throw UserError("--dump-primary: --method dist has no primary hits at the parent (its "
+                    "children trace whole frames); --method seq gives the same image and dumps them");
+}
+
+void CheckHeteroOptions(const RenderOptions& o) {
+  CheckFarmOptions(o);
+  simd::SimdOptionsFrom(o);  // --frac-bits, --uncertain, ... before the SIMD pass
 }
 
 // Before the scene is read: children (ranks >= 1) serve frames from the setup the parent
@@ -314,12 +359,12 @@ RenderMethodRegistration distReg(
     "dist",
     "distributed: under mpirun, children trace whole F×F frames handed out on demand "
     "(bit-identical to seq)",
-    RenderDist, ServeAsChild);
+    RenderDist, ServeAsChild, CheckDistOptions);
 RenderMethodRegistration heteroReg(
     "hetero",
     "heterogeneous: the SIMD primary pass at the parent, children shade the frames with a hit "
     "(under mpirun; bit-identical to simd)",
-    RenderHetero, ServeAsChild);
+    RenderHetero, ServeAsChild, CheckHeteroOptions);
 
 RenderFlagRegistration flags([](CLI::App& cmd, RenderOptions& o) {
   cmd.add_option("--frame", o.extra["frame"], "dist/hetero: frame size F (F×F frames; default 64)");

@@ -8,6 +8,7 @@
 
 #include "fixed/check.h"
 #include "hosts/cmd/command.h"
+#include "hosts/io/output_file.h"
 #include "hosts/scene/nff.h"
 #include "hosts/methods/phases.h"
 #include "hosts/testbed/testbed.h"
@@ -19,6 +20,7 @@ struct MethodEntry {
   std::string description;
   RenderMethod run;
   RenderServeInstead serveInstead;
+  RenderCheckOptions checkOptions;
 };
 std::map<std::string, MethodEntry>& Methods() {
   static std::map<std::string, MethodEntry> methods;
@@ -28,9 +30,11 @@ std::map<std::string, MethodEntry>& Methods() {
 
 RenderMethodRegistration::RenderMethodRegistration(std::string name, std::string description,
                                                    RenderMethod method,
-                                                   RenderServeInstead serveInstead) {
-  Methods().emplace(std::move(name), MethodEntry{std::move(description), std::move(method),
-                                                 std::move(serveInstead)});
+                                                   RenderServeInstead serveInstead,
+                                                   RenderCheckOptions checkOptions) {
+  Methods().emplace(std::move(name),
+                    MethodEntry{std::move(description), std::move(method), std::move(serveInstead),
+                                std::move(checkOptions)});
 }
 
 namespace {
@@ -54,8 +58,8 @@ std::vector<std::string> RenderMethodNames() {
 void WritePrimaryCsv(const std::string& path, int width, int height,
                      const std::vector<PrimarySample>& primary) {
   ZEPHYR_CHECK_EQ(primary.size(), size_t(width) * height);
-  std::FILE* f = std::fopen(path.c_str(), "w");
-  if (!f) throw UserError(path + ": cannot create the --dump-primary file");
+  OutputFile file(path, "--dump-primary file");
+  std::FILE* f = file.Stream();
   std::fprintf(f, "x,y,dx,dy,dz,object,t,flags\n");
   for (int y = 0; y < height; ++y) {
     for (int x = 0; x < width; ++x) {
@@ -65,7 +69,25 @@ void WritePrimaryCsv(const std::string& path, int width, int height,
                    s.hit.object >= 0 ? s.hit.t : 0.0, s.flags);
     }
   }
-  if (std::fclose(f) != 0) throw UserError(path + ": cannot write the --dump-primary file");
+  file.Commit();
+}
+
+void CheckRenderOutputs(const RenderOptions& options) {
+  std::vector<std::pair<std::string, std::string>> outputs;  // flag, path
+  for (const auto& [flag, path] : {std::pair{"--out", &options.out},
+                                   std::pair{"--dump-primary", &options.dumpPrimary},
+                                   std::pair{"--report", &options.report}})
+    if (!path->empty()) outputs.emplace_back(flag, *path);
+  for (std::size_t i = 0; i < outputs.size(); ++i) {
+    const auto& [flag, path] = outputs[i];
+    if (!options.scenePath.empty() && SameFile(path, options.scenePath))
+      throw UserError(flag + " " + path + ": is the scene file being rendered; choose another name");
+    for (std::size_t j = 0; j < i; ++j)
+      if (SameFile(path, outputs[j].second))
+        throw UserError(outputs[j].first + " and " + flag + " name the same file (" + path +
+                        "); give each output its own name");
+    CheckOutputPath(flag, path);
+  }
 }
 
 RenderOutput RunRender(const RenderOptions& options) {
@@ -77,6 +99,10 @@ RenderOutput RunRender(const RenderOptions& options) {
   }
   RenderOutput out;
   if (it->second.serveInstead && it->second.serveInstead(options)) return out;
+  // Every output and flag is checked before the scene is read: nothing is computed for an
+  // output that could not be written.
+  CheckRenderOutputs(options);
+  if (it->second.checkOptions) it->second.checkOptions(options);
   out.report["method"] = options.method;
   Scene scene;
   {
@@ -96,21 +122,29 @@ RenderOutput RunRender(const RenderOptions& options) {
   }
   testbed::AddModelledTime(options, scene, out);  // --testbed: modelled 1992 seconds
   ZEPHYR_CHECK(out.image.width == c.width && out.image.height == c.height);
-  if (!options.out.empty()) {
-    PhaseTimer timer(out.report, "write_png");
-    WritePng(options.out, out.image);
+  try {
+    if (!options.out.empty()) {
+      PhaseTimer timer(out.report, "write_png");
+      WritePng(options.out, out.image);
+    }
+    if (!options.dumpPrimary.empty()) {
+      if (out.primary.size() != size_t(c.width) * c.height)
+        throw UserError("--dump-primary: method '" + options.method + "' does not produce primary hits");
+      PhaseTimer timer(out.report, "dump_primary");
+      WritePrimaryCsv(options.dumpPrimary, c.width, c.height, out.primary);
+    }
+    if (!options.report.empty())
+      WriteOutputFile(options.report, "report", out.report.dump(2) + "\n");
+  } catch (const UserError& e) {
+    if (out.removeWhenWritten.empty()) throw;
+    // The rendered frames are still on disk: say so, and how to finish without re-rendering.
+    std::string kept;
+    for (const std::string& path : out.removeWhenWritten) kept += (kept.empty() ? "" : ", ") + path;
+    throw UserError(std::string(e.what()) + "; every rendered frame is kept in " + kept +
+                    " — rerun with --resume to write the outputs without rendering them again");
   }
-  if (!options.dumpPrimary.empty()) {
-    if (out.primary.size() != size_t(c.width) * c.height)
-      throw UserError("--dump-primary: method '" + options.method + "' does not produce primary hits");
-    PhaseTimer timer(out.report, "dump_primary");
-    WritePrimaryCsv(options.dumpPrimary, c.width, c.height, out.primary);
-  }
-  if (!options.report.empty()) {
-    std::ofstream f(options.report);
-    f << out.report.dump(2) << "\n";
-    if (!f.flush()) throw UserError(options.report + ": cannot write the report");
-  }
+  // Only now, with every output on disk, is the checkpoint no longer needed.
+  for (const std::string& path : out.removeWhenWritten) std::remove(path.c_str());
   return out;
 }
 
@@ -159,9 +193,10 @@ CommandRegistration reg("render", [](CLI::App& program) {
   cmd->add_option("--method", o->method, "Method: " + methods)->capture_default_str();
   cmd->add_option("--scene", o->scenePath, "NFF scene file");
   cmd->add_option("scene", *positional, "NFF scene file (same as --scene)");
-  cmd->add_option("--out", o->out, "Output PNG");
-  cmd->add_option("--report", o->report, "JSON report: time per phase, rays, tests");
-  cmd->add_option("--dump-primary", o->dumpPrimary, "CSV of primary hits: x,y,dx,dy,dz,object,t,flags");
+  std::vector<CLI::Option*> outputs = {
+      cmd->add_option("--out", o->out, "Output PNG"),
+      cmd->add_option("--report", o->report, "JSON report: time per phase, rays, tests"),
+      cmd->add_option("--dump-primary", o->dumpPrimary, "CSV of primary hits: x,y,dx,dy,dz,object,t,flags")};
   cmd->add_option("--depth", o->trace.depth, "Ray-tree depth limit (1 = primary rays only)")
       ->capture_default_str();
   cmd->add_option("--precision", *precision, "Host tracer scalar: float or double")->capture_default_str();
@@ -169,8 +204,11 @@ CommandRegistration reg("render", [](CLI::App& program) {
       ->capture_default_str();
   cmd->add_flag("--no-progress", *noProgress, "No progress bar even on a terminal");
   for (const auto& add : FlagAdders()) add(*cmd, *o);
-  cmd->callback([o, positional, precision, sphereTest, noProgress] {
+  cmd->callback([o, positional, precision, sphereTest, noProgress, outputs] {
     RenderOptions options = *o;
+    for (CLI::Option* flag : outputs)  // `--out ''` is a mistake, not "no output"
+      if (flag->count() > 0 && flag->as<std::string>().empty())
+        throw UserError(flag->get_name() + ": empty path (give a file name, or leave the flag out)");
     if (!positional->empty()) {
       if (!options.scenePath.empty() && options.scenePath != *positional)
         throw UserError("render: give the scene once (either --scene or a positional file)");

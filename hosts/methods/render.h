@@ -46,6 +46,9 @@ struct RenderOutput {
   Image image;
   std::vector<PrimarySample> primary;  // filled when options.dumpPrimary is set, row-major
   nlohmann::json report;               // the method adds "phases", counters, its own sections
+  // Files deleted once every output is written (dist/hetero's frame checkpoint); kept when
+  // a write fails, so --resume can finish the job.
+  std::vector<std::string> removeWhenWritten;
 };
 
 using RenderMethod =
@@ -56,9 +59,16 @@ using RenderMethod =
 // on a cluster the file exists only where the parent runs — and writes no outputs.
 using RenderServeInstead = std::function<bool(const RenderOptions& options)>;
 
+// Runs on the process that writes the outputs, after RunRender's own checks of the output
+// paths and before the scene is read or any work starts: the method's check of its own
+// flags and of what it cannot do with the shared ones (e.g. dist has no --dump-primary, its
+// checkpoint must not be another output). Throws UserError.
+using RenderCheckOptions = std::function<void(const RenderOptions& options)>;
+
 struct RenderMethodRegistration {
   RenderMethodRegistration(std::string name, std::string description, RenderMethod method,
-                           RenderServeInstead serveInstead = nullptr);
+                           RenderServeInstead serveInstead = nullptr,
+                           RenderCheckOptions checkOptions = nullptr);
 };
 
 // A method's own flags: `add` puts options on the render command, storing their values in
@@ -70,9 +80,15 @@ struct RenderFlagRegistration {
 // The registered method names, sorted.
 std::vector<std::string> RenderMethodNames();
 
-// Reads the scene and runs the method, then writes --out, --report and --dump-primary.
+// Checks every output path and the method's flags (CheckRenderOutputs, then the method's
+// RenderCheckOptions), reads the scene and runs the method, then writes --out, --dump-primary
+// and --report, each atomically, and only then deletes RenderOutput::removeWhenWritten.
 // Returns the output too (tests use it).
 RenderOutput RunRender(const RenderOptions& options);
+
+// Refuses, before any work: an output path that cannot be written (CheckOutputPath), an
+// output that is the scene file, two outputs naming the same file. UserError.
+void CheckRenderOutputs(const RenderOptions& options);
 
 // Writes the --dump-primary CSV: header `x,y,dx,dy,dz,object,t,flags`, one row per pixel.
 void WritePrimaryCsv(const std::string& path, int width, int height,

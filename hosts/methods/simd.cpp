@@ -14,25 +14,35 @@ namespace zephyr::simd {
 
 namespace {
 
-int IntFlag(const RenderOptions& o, const std::string& name, int fallback) {
+// A width flag: unset = `fallback` (the planner chooses); else a whole number >= minimum.
+int WidthFlag(const RenderOptions& o, const std::string& name, int fallback, int minimum,
+              const char* unit) {
   auto it = o.extra.find(name);
   if (it == o.extra.end() || it->second.empty()) return fallback;
+  int v = -1;
   try {
     size_t used = 0;
-    const int v = std::stoi(it->second, &used);
-    if (used == it->second.size() && v >= 0) return v;
+    v = std::stoi(it->second, &used);
+    if (used != it->second.size()) v = -1;
   } catch (const std::exception&) {
+    v = -1;
   }
-  throw UserError("--" + name + ": expected a non-negative integer, got '" + it->second + "'");
+  if (v < 0)
+    throw UserError("--" + name + ": expected a whole number of bits, got '" + it->second + "'");
+  if (v < minimum)
+    throw UserError("--" + name + " " + it->second + ": the SIMD pass needs at least " +
+                    std::to_string(minimum) + " " + unit +
+                    " (the narrowest width its error bounds are tested at, docs/simd.md)");
+  return v;
 }
 
 }  // namespace
 
 SimdOptions SimdOptionsFrom(const RenderOptions& o) {
   SimdOptions s;
-  s.formats.fracBits = IntFlag(o, "frac-bits", -1);
-  s.formats.dirFracBits = IntFlag(o, "dir-frac-bits", -1);
-  s.formats.intBits = IntFlag(o, "int-bits", -1);
+  s.formats.fracBits = WidthFlag(o, "frac-bits", -1, kMinFracBits, "fraction bits");
+  s.formats.dirFracBits = WidthFlag(o, "dir-frac-bits", -1, kMinFracBits, "direction fraction bits");
+  s.formats.intBits = WidthFlag(o, "int-bits", -1, kMinIntBits, "integer bits");
   if (auto it = o.extra.find("uncertain"); it != o.extra.end() && !it->second.empty())
     s.uncertain = ParseUncertainPolicy(it->second);
   if (auto it = o.extra.find("machine"); it != o.extra.end() && !it->second.empty())
@@ -76,7 +86,8 @@ void RenderSimd(const Scene& scene, const RenderOptions& options, RenderOutput& 
 RenderMethodRegistration reg("simd",
                              "SIMD/sequential: primary rays on the emulated array in fixed point, "
                              "secondary rays on the host",
-                             RenderSimd);
+                             RenderSimd, nullptr,
+                             [](const RenderOptions& o) { SimdOptionsFrom(o); });
 
 RenderFlagRegistration flags([](CLI::App& cmd, RenderOptions& o) {
   cmd.add_option("--frac-bits", o.extra["frac-bits"],

@@ -9,6 +9,7 @@
 
 #include "fixed/check.h"
 #include "hosts/cmd/command.h"
+#include "hosts/io/output_file.h"
 #include "hosts/scene/nff.h"
 
 namespace zephyr {
@@ -192,9 +193,7 @@ void WriteSceneTo(const Scene& scene, const std::string& out) {
     std::fwrite(text.data(), 1, text.size(), stdout);
     return;
   }
-  std::ofstream f(out, std::ios::binary);
-  f << text;
-  if (!f.flush()) throw UserError(out + ": cannot write the scene file");
+  WriteOutputFile(out, "scene file", text);
 }
 
 void ParseSize(const std::string& size, int& w, int& h) {

@@ -8,6 +8,7 @@
 
 #include "fixed/check.h"
 #include "hosts/cmd/command.h"
+#include "hosts/io/output_file.h"
 #include "hosts/scene/nff.h"
 
 namespace zephyr {
@@ -119,9 +120,7 @@ CommandRegistration reg("export-pov", [](CLI::App& program) {
     if (out->empty()) {
       std::fwrite(text.data(), 1, text.size(), stdout);
     } else {
-      std::ofstream f(*out);
-      f << text;
-      if (!f.flush()) throw UserError(*out + ": cannot write the POV-Ray file");
+      WriteOutputFile(*out, "POV-Ray file", text);
       std::fprintf(stderr, "render it with: %s\n",
                    PovrayCommand(*out, "out.png", s.camera.width, s.camera.height).c_str());
     }

@@ -63,7 +63,8 @@ struct PrimaryPass {
 inline constexpr int kRefineExtraBits = 8;
 
 // The simd flags of a render command (--frac-bits, --dir-frac-bits, --int-bits,
-// --uncertain, --machine) from RenderOptions::extra; UserError on a bad value.
+// --uncertain, --machine) from RenderOptions::extra; UserError on a bad value or a width
+// below kMinFracBits / kMinIntBits (the message says the minimum).
 SimdOptions SimdOptionsFrom(const RenderOptions& options);
 
 // The array part of the method: every primary ray's first hit, with the uncertain pixels

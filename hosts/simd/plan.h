@@ -28,6 +28,15 @@ enum class UncertainPolicy { kRecompute, kKeep, kFail, kRefine };
 UncertainPolicy ParseUncertainPolicy(const std::string& name);  // recompute|refine|keep|fail
 const char* UncertainPolicyName(UncertainPolicy p);
 
+// The narrowest widths a user may ask for (--frac-bits, --dir-frac-bits, --int-bits): the
+// narrowest at which the pass's error bounds are tested (docs/simd.md, "Error bounds":
+// RecomputeRepairsEveryPixelAtLowWidths from 4 fraction bits; SimdPrimary's overflow case
+// with 2 integer bits). Narrower ones are refused by SimdOptionsFrom. Between these and the
+// planner's choice most pixels are uncertain; they are flagged, counted in the report and
+// recomputed unless --uncertain keep.
+constexpr int kMinFracBits = 4;
+constexpr int kMinIntBits = 2;
+
 // User overrides of the planner (negative = the planner chooses).
 struct FormatOverrides {
   int fracBits = -1;     // --frac-bits: fraction bits of lengths, t and directions

@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "fixed/check.h"
+#include "hosts/io/output_file.h"
 
 namespace zephyr {
 
@@ -31,8 +32,7 @@ using File = std::unique_ptr<FILE, FileCloser>;
 }  // namespace
 
 void WritePng(const std::string& path, const Image& image) {
-  File f(std::fopen(path.c_str(), "wb"));
-  if (!f) throw UserError(path + ": cannot create the PNG file");
+  OutputFile f(path, "PNG file");  // `path` is replaced only once every byte is on disk
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
   png_infop info = png ? png_create_info_struct(png) : nullptr;
   if (!info) {
@@ -42,9 +42,9 @@ void WritePng(const std::string& path, const Image& image) {
   std::vector<uint8_t> row(size_t(image.width) * 3);
   if (setjmp(png_jmpbuf(png))) {
     png_destroy_write_struct(&png, &info);
-    throw UserError(path + ": libpng failed while writing");
+    throw UserError(path + ": libpng failed while writing (nothing was written under that name)");
   }
-  png_init_io(png, f.get());
+  png_init_io(png, f.Stream());
   png_set_IHDR(png, info, image.width, image.height, 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
                PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
   png_write_info(png, info);
@@ -59,7 +59,7 @@ void WritePng(const std::string& path, const Image& image) {
   }
   png_write_end(png, nullptr);
   png_destroy_write_struct(&png, &info);
-  if (std::fflush(f.get()) != 0) throw UserError(path + ": cannot write the PNG file");
+  f.Commit();
 }
 
 Image ReadPng(const std::string& path) {

@@ -26,7 +26,9 @@ struct Image {
 
 uint8_t ToByte(double channel);
 
-// 8-bit RGB PNG. Errors (cannot create the file, libpng failure) are UserErrors.
+// 8-bit RGB PNG, written atomically (hosts/io/output_file.h: an existing file of that name
+// stays intact unless the whole new one is on disk). Errors (cannot create the file, a
+// full disk, libpng failure) are UserErrors.
 void WritePng(const std::string& path, const Image& image);
 // Reads an 8-bit (or 16-bit) RGB/RGBA/grey PNG into channels in [0, 1].
 Image ReadPng(const std::string& path);

@@ -1,5 +1,6 @@
 // The frame farm's pieces, in process: frames, the queue, the message header checks, the
-// traffic account and the checkpoint file (torn records, another job's checkpoint).
+// traffic account and the checkpoint file (torn and damaged records each skipped on their
+// own, the file never cut on resume, another job's checkpoint).
 #include <gtest/gtest.h>
 
 #include <cstring>
@@ -118,30 +119,81 @@ TEST(TrafficAccount, CountsPayloadAndEnvelopeByKindAndRoundTripsJson) {
   EXPECT_THROW(TrafficAccount::FromJson(nlohmann::json{{"work", {{"messages", "x"}}}}), UserError);
 }
 
-TEST(FrameCheckpoint, KeepsFramesAndDropsATornRecord) {
+// Record layout (hosts/farm/checkpoint.h): 16-byte head, the pixels, an 8-byte hash; the
+// file starts with a 32-byte header.
+constexpr std::size_t kHeader = 32, kHead = 16, kTail = 8;
+
+std::vector<std::byte> FramePixels(int frame) {  // 4×4 frames of 3 bytes a pixel
+  std::vector<std::byte> p(4 * 4 * 3);
+  for (std::size_t i = 0; i < p.size(); ++i) p[i] = std::byte(frame * 37 + i);
+  return p;
+}
+
+void FlipBit(const std::string& path, std::size_t at) {
+  std::string bytes = testing::ReadFile(path);
+  ASSERT_LT(at, bytes.size());
+  bytes[at] ^= 4;
+  std::ofstream(path, std::ios::binary) << bytes;
+}
+
+TEST(FrameCheckpoint, ATornLastRecordIsSkippedAndNewFramesFollowItWithoutCuttingTheFile) {
   testing::TempDir dir;
   const std::string path = dir / "out.png.frames";
   CheckpointKey key{8, 8, 4, 3, JobHash("scene")};
-  std::vector<std::byte> a(4 * 4 * 3, std::byte{1}), b(4 * 4 * 3, std::byte{2});
   {
     FrameCheckpoint c = FrameCheckpoint::Create(path, key);
-    c.Append(0, a);
-    c.Append(3, b);
+    c.Append(0, FramePixels(0));
+    c.Append(3, FramePixels(3));
   }
   const auto full = std::filesystem::file_size(path);
   std::filesystem::resize_file(path, full - 5);  // the second record torn by a crash
   {
     FrameCheckpoint c = FrameCheckpoint::Resume(path, key);
     ASSERT_EQ(c.Frames().size(), 1u);
-    EXPECT_EQ(c.Frames().at(0), a);
-    EXPECT_GT(c.DroppedBytes(), 0u);
-    c.Append(3, b);  // appended after the cut, not after the torn bytes
+    EXPECT_EQ(c.Frames().at(0), FramePixels(0));
+    EXPECT_EQ(c.Damage().badFrames, std::vector<int>{3});  // its head is whole: frame 3
+    EXPECT_EQ(c.Damage().unreadableBytes, kHead + 48 + kTail - 5);
+    EXPECT_EQ(std::filesystem::file_size(path), full - 5) << "resume must not cut the file";
+    c.Append(3, FramePixels(3));  // rendered again: after the torn bytes, which stay
   }
   FrameCheckpoint c = FrameCheckpoint::Resume(path, key);
   ASSERT_EQ(c.Frames().size(), 2u);
-  EXPECT_EQ(c.Frames().at(3), b);
-  EXPECT_EQ(c.DroppedBytes(), 0u);
-  EXPECT_EQ(std::filesystem::file_size(path), full);
+  EXPECT_EQ(c.Frames().at(3), FramePixels(3));
+  EXPECT_TRUE(c.Damage().badFrames.empty()) << "frame 3 has an intact copy now";
+  EXPECT_EQ(c.Damage().unreadableBytes, kHead + 48 + kTail - 5);
+  EXPECT_EQ(std::filesystem::file_size(path), full - 5 + kHead + 48 + kTail);
+}
+
+// One flipped bit costs exactly the record it is in, wherever it is: the pixels (the frame
+// is named), the head (the frame is unknown, its bytes are skipped) or the hash.
+TEST(FrameCheckpoint, EveryRecordIsCheckedOnItsOwn) {
+  testing::TempDir dir;
+  const std::string path = dir / "out.png.frames";
+  CheckpointKey key{16, 16, 4, 3, JobHash("scene")};
+  const std::size_t record = kHead + 48 + kTail;
+  const struct {
+    std::size_t offset;  // within record 1
+    bool frameKnown;
+  } flips[] = {{kHead + 10, true}, {5, false}, {kHead + 48 + 3, true}, {0, false}};
+  for (const auto& flip : flips) {
+    {
+      FrameCheckpoint c = FrameCheckpoint::Create(path, key);
+      for (int id = 0; id < 16; ++id) c.Append(id, FramePixels(id));
+    }
+    const auto size = std::filesystem::file_size(path);
+    FlipBit(path, kHeader + record + flip.offset);
+    FrameCheckpoint c = FrameCheckpoint::Resume(path, key);
+    EXPECT_EQ(c.Frames().size(), 15u) << "flip at " << flip.offset;
+    EXPECT_EQ(c.Frames().count(1), 0u);
+    for (int id = 0; id < 16; ++id)
+      if (id != 1) {
+        EXPECT_EQ(c.Frames().at(id), FramePixels(id)) << id;
+      }
+    EXPECT_EQ(c.Damage().badFrames, flip.frameKnown ? std::vector<int>{1} : std::vector<int>{});
+    EXPECT_EQ(c.Damage().unreadableBytes, record);
+    EXPECT_EQ(c.Damage().unreadableRegions, 1);
+    EXPECT_EQ(std::filesystem::file_size(path), size);
+  }
 }
 
 TEST(FrameCheckpoint, RefusesAnotherJobsCheckpointAndAMissingOne) {
@@ -156,10 +208,9 @@ TEST(FrameCheckpoint, RefusesAnotherJobsCheckpointAndAMissingOne) {
   other.frameSize = 2;
   EXPECT_THROW(FrameCheckpoint::Resume(path, other), UserError);
   EXPECT_THROW(FrameCheckpoint::Resume(dir / "missing.frames", key), UserError);
-  // A record whose checksum is wrong is dropped as torn.
-  std::string bytes = testing::ReadFile(path);
-  bytes[bytes.size() - 12] ^= 1;
-  std::ofstream(path, std::ios::binary) << bytes;
+  // Create replaces an old checkpoint only with a whole new header.
+  FrameCheckpoint::Create(path, key);
+  EXPECT_EQ(std::filesystem::file_size(path), kHeader);
   EXPECT_EQ(FrameCheckpoint::Resume(path, key).Frames().size(), 0u);
 }
 

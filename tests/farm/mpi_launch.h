@@ -78,6 +78,36 @@ class TempDir {
   std::filesystem::path path_;
 };
 
+// A tmpfs of a few pages mounted on a fresh directory: a real full disk for the
+// fault-injection tests (root only; Mounted() is false elsewhere and the tests skip).
+// tmpfs counts whole 4 KiB pages of file data; empty files and directories cost none.
+class TinyDisk {
+ public:
+  explicit TinyDisk(std::size_t bytes) {
+    mounted_ = ::geteuid() == 0 && Resize(bytes, "");
+  }
+  ~TinyDisk() {
+    if (mounted_) RunCommand("umount " + dir_ / "");
+  }
+  bool Mounted() const { return mounted_; }
+  // Grows or shrinks the disk in place (files stay).
+  bool Resize(std::size_t bytes, const std::string& more = "remount,") {
+    return RunCommand("mount -t tmpfs -o " + more + "size=" + std::to_string(bytes) +
+                      " tmpfs " + dir_ / "")
+               .status == 0;
+  }
+  std::string operator/(const std::string& file) const { return dir_ / file; }
+
+ private:
+  TempDir dir_;
+  bool mounted_ = false;
+};
+
+// Fills `disk` to the last page with a file named `name`.
+inline void FillDisk(const TinyDisk& disk, const std::string& name = "filler") {
+  RunCommand("dd if=/dev/zero of=" + disk / name + " bs=4096 2>/dev/null");
+}
+
 inline std::string ReadFile(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   std::stringstream s;
@@ -87,6 +117,14 @@ inline std::string ReadFile(const std::string& path) {
 
 inline nlohmann::json ReadJson(const std::string& path) {
   return nlohmann::json::parse(ReadFile(path));
+}
+
+// The render tests' scene: 12 random spheres, 40×30 pixels, written into `dir` as s.nff.
+inline std::string SmallSphereScene(const TempDir& dir) {
+  std::string path = dir / "s.nff";
+  auto r = RunZephyrProcess("gen spheres --count 12 --seed 3 --size 40x30 --out " + path);
+  EXPECT_EQ(r.status, 0) << r.output;
+  return path;
 }
 
 // Kills child 1 (SIGKILL, via the test-only fault hook) after `framesBeforeKill` frames of

@@ -23,12 +23,7 @@ using testing::TempDir;
 
 constexpr int kWidth = 40, kHeight = 30;
 
-std::string Scene(const TempDir& dir) {
-  std::string path = dir / "s.nff";
-  auto r = RunZephyrProcess("gen spheres --count 12 --seed 3 --size 40x30 --out " + path);
-  EXPECT_EQ(r.status, 0) << r.output;
-  return path;
-}
+std::string Scene(const TempDir& dir) { return testing::SmallSphereScene(dir); }
 
 std::string Single(const TempDir& dir, const std::string& scene, const std::string& method,
                    const std::string& extra = "") {

@@ -1,0 +1,132 @@
+#include "hosts/io/output_file.h"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <vector>
+
+#include "fixed/check.h"
+
+namespace zephyr {
+
+namespace {
+
+std::string DirectoryOf(const std::string& path) {
+  const std::string dir = std::filesystem::path(path).parent_path().string();
+  return dir.empty() ? "." : dir;
+}
+
+// mkstemp in `path`'s directory; returns the descriptor (or -1 with errno) and the name.
+int MakeTemporary(const std::string& path, std::string& name) {
+  const std::filesystem::path p(path);
+  const std::string pattern =
+      (std::filesystem::path(DirectoryOf(path)) / ("." + p.filename().string() + ".tmp-XXXXXX"))
+          .string();
+  std::vector<char> buffer(pattern.begin(), pattern.end());
+  buffer.push_back('\0');
+  const int fd = ::mkostemp(buffer.data(), O_CLOEXEC);
+  name = buffer.data();
+  return fd;
+}
+
+mode_t CreateMode() {  // what open(…, 0666) would give under the current umask
+  const mode_t mask = ::umask(0);
+  ::umask(mask);
+  return 0666 & ~mask;
+}
+
+}  // namespace
+
+OutputFile::OutputFile(std::string path, std::string what)
+    : path_(std::move(path)), what_(std::move(what)) {
+  if (path_.empty()) throw UserError("cannot write the " + what_ + ": empty path");
+  const int fd = MakeTemporary(path_, temporary_);
+  if (fd < 0)
+    throw UserError(path_ + ": cannot create the " + what_ + " (in " + DirectoryOf(path_) +
+                    "): " + std::strerror(errno));
+  file_ = ::fdopen(fd, "wb");
+  if (!file_) {
+    const int e = errno;
+    ::close(fd);
+    ::unlink(temporary_.c_str());
+    throw UserError(path_ + ": cannot create the " + what_ + ": " + std::strerror(e));
+  }
+}
+
+OutputFile::~OutputFile() {
+  if (file_) std::fclose(file_);
+  if (!committed_ && !temporary_.empty()) ::unlink(temporary_.c_str());
+}
+
+void OutputFile::Commit() {
+  ZEPHYR_CHECK(file_ != nullptr && !committed_);
+  int error = 0;
+  errno = 0;
+  if (std::fflush(file_) != 0 || std::ferror(file_)) error = errno ? errno : EIO;
+  if (!error && ::fchmod(::fileno(file_), CreateMode()) != 0) error = errno;
+  if (!error && ::fsync(::fileno(file_)) != 0) error = errno;
+  if (std::fclose(file_) != 0 && !error) error = errno;
+  file_ = nullptr;
+  if (!error && ::rename(temporary_.c_str(), path_.c_str()) != 0) error = errno;
+  if (error) {
+    ::unlink(temporary_.c_str());
+    throw UserError(path_ + ": cannot write the " + what_ + ": " + std::strerror(error) +
+                    " (nothing was written under that name)");
+  }
+  committed_ = true;
+  // The rename itself is made durable by syncing the directory; a failure here loses
+  // nothing that a crash right now would not.
+  const int dir = ::open(DirectoryOf(path_).c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (dir >= 0) {
+    ::fsync(dir);
+    ::close(dir);
+  }
+}
+
+void WriteOutputFile(const std::string& path, const std::string& what, std::string_view bytes) {
+  OutputFile f(path, what);
+  std::fwrite(bytes.data(), 1, bytes.size(), f.Stream());
+  f.Commit();
+}
+
+void CheckOutputPath(const std::string& flag, const std::string& path) {
+  if (path.empty()) throw UserError(flag + ": empty path (give a file name, or leave the flag out)");
+  struct stat s;
+  if (::stat(path.c_str(), &s) == 0) {
+    if (S_ISDIR(s.st_mode)) throw UserError(flag + " " + path + ": is a directory");
+    if (!S_ISREG(s.st_mode))
+      throw UserError(flag + " " + path +
+                      ": not a regular file (outputs are written to a temporary file and "
+                      "renamed into place)");
+  }
+  const std::string dir = DirectoryOf(path);
+  if (::stat(dir.c_str(), &s) != 0)
+    throw UserError(flag + " " + path + ": directory " + dir + " does not exist");
+  if (!S_ISDIR(s.st_mode)) throw UserError(flag + " " + path + ": " + dir + " is not a directory");
+  std::string probe;
+  const int fd = MakeTemporary(path, probe);
+  if (fd < 0)
+    throw UserError(flag + " " + path + ": cannot create a file in " + dir + ": " +
+                    std::strerror(errno));
+  ::close(fd);
+  ::unlink(probe.c_str());
+}
+
+bool SameFile(const std::string& a, const std::string& b) {
+  struct stat sa, sb;
+  const bool hasA = ::stat(a.c_str(), &sa) == 0, hasB = ::stat(b.c_str(), &sb) == 0;
+  if (hasA && hasB) return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+  if (hasA != hasB) return false;
+  std::error_code ea, eb;
+  const auto ca = std::filesystem::weakly_canonical(std::filesystem::absolute(a), ea);
+  const auto cb = std::filesystem::weakly_canonical(std::filesystem::absolute(b), eb);
+  if (ea || eb) return std::filesystem::absolute(a) == std::filesystem::absolute(b);
+  return ca == cb;
+}
+
+}  // namespace zephyr
