@@ -168,6 +168,8 @@ void RunCheck(CheckArgs& a) {
   PatternOptions& o = a.pattern;
   if (o.mode != "dist" && o.mode != "hetero")
     throw UserError("--mode must be dist or hetero, got '" + o.mode + "'");
+  if (!a.report.empty() && (SameFile(a.report, a.out) || SameFile(a.report, CheckpointPathFor(a.out))))
+    throw UserError("--report " + a.report + ": is the image or its checkpoint; choose another name");
   if (a.local) {
     Pattern pattern(o);
     PatternWork work(o);

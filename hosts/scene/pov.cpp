@@ -115,6 +115,8 @@ CommandRegistration reg("export-pov", [](CLI::App& program) {
   cmd->add_option("--depth", *depth, "Trace depth (POV-Ray max_trace_level)")->capture_default_str();
   cmd->callback([scene, out, depth] {
     if (*depth < 1 || *depth > 64) throw UserError("--depth: expected 1..64");
+    if (!out->empty() && SameFile(*out, *scene))
+      throw UserError("--out " + *out + ": is the scene file being exported; choose another name");
     const Scene s = ReadNffFile(*scene);
     const std::string text = ExportPov(s, *depth);
     if (out->empty()) {
