@@ -44,6 +44,8 @@ Table WaveTracerTable() {
       {"reduceBit", {13, "assumed: a global OR/count tree over 8192 PEs, one cycle per "
                          "level, log2(8192) = 13 levels"}},
       {"broadcastBit", {1, "assumed: the controller puts a host bit on the instruction bus"}},
+      {"floatSubnormals", {1, "assumed: IEEE 754 gradual underflow (the paper does not say "
+                              "how MultiC's multi float underflowed)"}},
       {"hostPlane", {2048, "assumed: SCSI at 5 MB/s moves one 1 KB bit-plane in 204.8 us = "
                            "2048 cycles at 10 MHz"}},
   };
@@ -74,6 +76,8 @@ Table MppTable() {
       {"meshHop", {1, "Batcher 1980: a bit-plane moves one PE per cycle on the mesh"}},
       {"reduceBit", {1, "assumed: the sum-OR tree is pipelined, one plane per cycle"}},
       {"broadcastBit", {1, "assumed: one cycle on the control unit's broadcast path"}},
+      {"floatSubnormals", {0, "assumed: the MPP (1980) predates IEEE 754 (1985) and its "
+                              "gradual underflow; machines of its time flushed to zero"}},
       {"hostPlane", {128, "Batcher 1980: planes enter and leave through the 128-bit-wide S "
                           "register columns, 128 bits per cycle"}},
   };
@@ -139,9 +143,10 @@ MachineProfile ProfileFromTable(const std::string& name, const Table& entries) {
   p.externalBitsPerPe = static_cast<int64_t>(take("externalBitsPerPe", nullptr));
   for (int i = 0; i < kMicroOpCount; ++i)
     p.cost[i] = take(kMicroOpNames[i], &p.note[i]);
+  p.floatSubnormals = take("floatSubnormals", &p.floatNote) != 0;
   for (auto& [key, value] : entries) {
     bool known = key == "clockHz" || key == "physicalPes" || key == "internalBitsPerPe" ||
-                 key == "externalBitsPerPe";
+                 key == "externalBitsPerPe" || key == "floatSubnormals";
     for (int i = 0; i < kMicroOpCount; ++i) known |= key == kMicroOpNames[i];
     if (!known)
       throw UserError(fmt::format("machine profile '{}' has an unknown entry '{}'", name, key));
@@ -184,6 +189,11 @@ void MachineProfile::Override(const std::string& assignment) {
   if (key == "clockHz" && v > 0) { clockHz = v; return; }
   if (key == "internalBitsPerPe") { internalBitsPerPe = static_cast<int64_t>(v); return; }
   if (key == "externalBitsPerPe") { externalBitsPerPe = static_cast<int64_t>(v); return; }
+  if (key == "floatSubnormals") {
+    floatSubnormals = v != 0;
+    floatNote = "overridden at run time";
+    return;
+  }
   for (int i = 0; i < kMicroOpCount; ++i)
     if (key == kMicroOpNames[i]) {
       cost[i] = v;
@@ -192,7 +202,7 @@ void MachineProfile::Override(const std::string& assignment) {
     }
   throw UserError(fmt::format("profile override '{}': unknown entry '{}' (micro-ops: "
                               "readInternal ... hostPlane; or clockHz, internalBitsPerPe, "
-                              "externalBitsPerPe)", assignment, key));
+                              "externalBitsPerPe, floatSubnormals)", assignment, key));
 }
 
 std::string MachineProfile::Table() const {
@@ -201,6 +211,7 @@ std::string MachineProfile::Table() const {
                               internalBitsPerPe, externalBitsPerPe);
   for (int i = 0; i < kMicroOpCount; ++i)
     s += fmt::format("  {:<17} {:>6g}  {}\n", kMicroOpNames[i], cost[i], note[i]);
+  s += fmt::format("  {:<17} {:>6d}  {}\n", "floatSubnormals", floatSubnormals ? 1 : 0, floatNote);
   return s;
 }
 

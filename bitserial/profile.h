@@ -57,6 +57,11 @@ struct MachineProfile {
   int64_t internalBitsPerPe = 0;
   int64_t externalBitsPerPe = 0;
   std::vector<MeshShape> shapes;  // the shapes software may choose; [0] is the default
+  // Whether the machine's native floating point keeps IEEE gradual underflow
+  // (subnormals) or flushes to zero: the default float format of `zephyr cycles --bits`
+  // (bitserial/float.h). Table entry "floatSubnormals" (1 or 0) with its note.
+  bool floatSubnormals = true;
+  std::string floatNote;
   std::array<double, kMicroOpCount> cost{};  // cycles per micro-op
   std::array<std::string, kMicroOpCount> note{};  // "Batcher 1980 ..." or "assumed: ..."
 

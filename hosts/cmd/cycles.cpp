@@ -9,6 +9,7 @@
 #include <functional>
 #include <map>
 
+#include "bitserial/float.h"
 #include "bitserial/multi.h"
 #include "fixed/check.h"
 #include "hosts/cmd/command.h"
@@ -31,7 +32,57 @@ struct CyclesOptions {
   std::string overflow = "wrap";
   std::vector<std::string> overrides;
   bool json = false;
+  std::string floatFormat;  // --float: the float ops' format (default from --bits)
 };
+
+// The float operations (bitserial/float.h) and the name each is charged under.
+const std::map<std::string, std::string>& FloatOps() {
+  static const std::map<std::string, std::string> ops = {
+      {"fadd", "fadd"}, {"fsub", "fsub"}, {"fmul", "fmul"}};
+  return ops;
+}
+
+// --float if given, else the IEEE interchange format of --bits (16, 32 or 64) with
+// subnormals or flush-to-zero as the profile's machine did (floatSubnormals).
+fixed::FloatFormat FloatFormatOf(const CyclesOptions& o, const MachineProfile& profile) {
+  if (!o.floatFormat.empty()) return fixed::FloatFormat::Parse(o.floatFormat);
+  const bool sub = profile.floatSubnormals;
+  if (o.bits == 16) return {5, 10, sub};
+  if (o.bits == 32) return {8, 23, sub};
+  if (o.bits == 64) return {11, 52, sub};
+  throw UserError(fmt::format("--op float operations take --bits 16, 32 or 64 (IEEE binary16/"
+                              "32/64) or --float eXmY, got --bits {}", o.bits));
+}
+
+void RunFloatCycles(const CyclesOptions& o, const MachineProfile& profile) {
+  const fixed::FloatFormat f = FloatFormatOf(o, profile);
+  Machine m(profile);
+  std::optional<Space> space;
+  if (o.external) space = Space::External;
+  MultiFloat a(m, f, "a", space), b(m, f, "b", space);
+  m.Report().Clear();
+  MultiFloat r;
+  if (o.op == "fadd") r = Add(a, b);
+  else if (o.op == "fsub") r = Sub(a, b);
+  else r = Mul(a, b);
+  const CycleReport& rep = m.Report();
+  const double cycles = rep.OpCycles(FloatOps().at(o.op));
+  const double mops = profile.physicalPes * profile.clockHz / cycles / 1e6;
+  if (o.json) {
+    nlohmann::json j = rep.Json();
+    j["op"] = o.op;
+    j["format"] = f.Name();
+    j["cycles"] = cycles;
+    j["mops"] = mops;
+    fmt::print("{}\n", j.dump(2));
+  } else {
+    fmt::print("{} {} on profile {} ({} memory): {} cycles per layer ({:.3g} us at {:g} Hz; "
+               "{:.0f} MOPS on {} PEs)\n", o.op, f.Name(), profile.name,
+               o.external ? "external" : "internal", cycles, cycles / profile.clockHz * 1e6,
+               profile.clockHz, mops, profile.physicalPes);
+    fmt::print("{}", rep.Table());
+  }
+}
 
 void RunCycles(const CyclesOptions& o) {
   MachineProfile profile = Profile(o.profile);
@@ -45,6 +96,7 @@ void RunCycles(const CyclesOptions& o) {
     return o.isUnsigned ? fixed::Format::Unsigned(bits - o.frac, o.frac)
                         : fixed::Format::Signed(bits - 1 - o.frac, o.frac);
   };
+  if (FloatOps().count(o.op)) return RunFloatCycles(o, profile);
   const fixed::Format fa = format(o.bits, "--bits");
   const fixed::Format fb = format(o.bits2 ? o.bits2 : o.bits, "--bits2");
   fixed::Policy policy;
@@ -86,6 +138,7 @@ void RunCycles(const CyclesOptions& o) {
   if (it == ops.end()) {
     std::string known;
     for (auto& [name, v] : ops) known += (known.empty() ? "" : ", ") + name;
+    for (auto& [name, v] : FloatOps()) known += ", " + name;
     throw UserError(fmt::format("--op '{}' is not an operation (known: {})", o.op, known));
   }
   m.Report().Clear();
@@ -114,7 +167,10 @@ CommandRegistration reg("cycles", [](CLI::App& program) {
       "cycles", "Print the machine cycles of one bit-serial operation on one virtual-PE layer");
   cmd->add_option("--profile", opts->profile, "Machine profile (wavetracer, mpp)");
   cmd->add_option("--op", opts->op,
-                  "Operation: add sub neg abs mul mul-uni square div sqrt compare min max select shift");
+                  "Operation: add sub neg abs mul mul-uni square div sqrt compare min max select shift; "
+                  "float: fadd fsub fmul");
+  cmd->add_option("--float", opts->floatFormat,
+                  "Float format of the f* operations, eXmY[ftz] (default: binary16/32/64 by --bits)");
   cmd->add_option("--bits", opts->bits, "Width of the first operand (and of the result)");
   cmd->add_option("--bits2", opts->bits2, "Width of the second operand / the constant (default --bits)");
   cmd->add_option("--frac", opts->frac, "Fraction bits of the operands");

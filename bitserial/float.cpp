@@ -1,0 +1,661 @@
+#include "bitserial/float.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cstring>
+#include <tuple>
+#include <unordered_map>
+
+#include "fixed/check.h"
+
+namespace zephyr::bitserial {
+
+using fixed::FloatFormat;
+
+namespace {
+
+// Where a plane lives, which decides what reading or writing one of its bits costs:
+// PE memory, the accumulator (the MPP's shift register; internal memory on the
+// WaveTracer), a PE flag register (loading it is a flagOp, the ALU reads it for free) or
+// a constant the controller supplies (free).
+enum class Loc : unsigned char { Internal, External, Acc, Flag, Const };
+
+using Planes = std::vector<const Word*>;
+using OutPlanes = std::vector<Word*>;
+
+Planes Slice(const Planes& v, int from, int to) { return Planes(v.begin() + from, v.begin() + to); }
+Planes Concat(std::initializer_list<Planes> parts) {
+  Planes r;
+  for (const Planes& p : parts) r.insert(r.end(), p.begin(), p.end());
+  return r;
+}
+Planes In(const OutPlanes& v) { return Planes(v.begin(), v.end()); }
+
+int CeilLog2(int n) {
+  int k = 0;
+  while ((1 << k) < n) ++k;
+  return k;
+}
+
+// The bit-serial unit: runs passes over planes with the machine's kernels and counts
+// each pass's micro-ops as it goes, so the schedule charged is the one executed. Nothing
+// here branches on data: the counts depend on the format alone.
+class Serial {
+ public:
+  explicit Serial(Machine& m) : m_(m), words_(m.WordsPerPlane()) {
+    loc_[m.ZeroPlane()] = Loc::Const;
+    loc_[m.OnesPlane()] = Loc::Const;
+  }
+  ~Serial() {
+    for (Word* p : owned_) m_.ReleasePlanes(p, 1);
+  }
+  Serial(const Serial&) = delete;
+  Serial& operator=(const Serial&) = delete;
+
+  Machine& M() { return m_; }
+  const MicroOpCounts& Counts() const { return c_; }
+  const Word* Zero() const { return m_.ZeroPlane(); }
+  const Word* Ones() const { return m_.OnesPlane(); }
+  // The n low bits of `value` (two's complement) as constant planes.
+  Planes Const(int64_t value, int n) const {
+    Planes r(n);
+    for (int i = 0; i < n; ++i) r[i] = ((value >> std::min(i, 62)) & 1) ? Ones() : Zero();
+    return r;
+  }
+  Planes Zeros(int n) const { return Planes(n, Zero()); }
+
+  void Place(const Multi& x) {
+    for (int i = 0; i < x.Width(); ++i)
+      loc_[x.Plane(i)] = x.GetSpace() == Space::Internal ? Loc::Internal : Loc::External;
+  }
+  Word* New(Loc loc) {
+    Word* p = m_.AcquirePlanes(1);
+    std::memset(p, 0, sizeof(Word) * words_);
+    owned_.push_back(p);
+    loc_[p] = loc;
+    return p;
+  }
+  OutPlanes New(int n, Loc loc) {
+    OutPlanes r(n);
+    for (auto& p : r) p = New(loc);
+    return r;
+  }
+
+  void Read(const Word* p) {
+    switch (LocOf(p)) {
+      case Loc::Internal: c_.Add(MicroOp::ReadInternal); break;
+      case Loc::External: c_.Add(MicroOp::ReadExternal); break;
+      case Loc::Acc: c_.Add(MicroOp::AccumulatorRead); break;
+      default: break;
+    }
+  }
+  void Write(const Word* p) {
+    switch (LocOf(p)) {
+      case Loc::Internal: c_.Add(MicroOp::WriteInternal); break;
+      case Loc::External: c_.Add(MicroOp::WriteExternal); break;
+      case Loc::Acc: c_.Add(MicroOp::AccumulatorWrite); break;
+      case Loc::Flag: c_.Add(MicroOp::FlagOp); break;
+      case Loc::Const: ZEPHYR_CHECK(false);
+    }
+  }
+
+  // out[i] = bit i of a + (invertB ? ~b : b) + carryIn over out.size() positions; a null
+  // out[i] is not stored (the adder runs past it for a carry or a sign).
+  void Add(const Planes& a, const Planes& b, const OutPlanes& out, bool invertB, bool carryIn) {
+    const int n = static_cast<int>(out.size());
+    ZEPHYR_CHECK(static_cast<int>(a.size()) == n && static_cast<int>(b.size()) == n);
+    c_.Add(MicroOp::FlagOp);  // clear or set the carry
+    for (int i = 0; i < n; ++i) {
+      Read(a[i]), Read(b[i]);
+      c_.Add(MicroOp::AluStep);
+      if (out[i]) Write(out[i]);
+    }
+    AddArgs args{a.data(), b.data(), out.data(), n, invertB, carryIn, 0, false, nullptr, nullptr};
+    m_.Kernels().add(args, words_);
+  }
+
+  // out[i] = mask ? a[i] : b[i], the mask loaded into the PE's mask register. Where
+  // out[i] is b[i] the write is simply gated by the mask and b[i] is not read. The
+  // kernel runs i upwards: an in-place move may read only positions not yet written.
+  void Mux(const Word* mask, const Planes& a, const Planes& b, const OutPlanes& out) {
+    const int n = static_cast<int>(out.size());
+    ZEPHYR_CHECK(static_cast<int>(a.size()) == n && static_cast<int>(b.size()) == n);
+    Read(mask);
+    c_.Add(MicroOp::FlagOp);
+    for (int i = 0; i < n; ++i) {
+      Read(a[i]);
+      if (out[i] != b[i] && a[i] != b[i]) Read(b[i]);
+      c_.Add(MicroOp::AluStep);
+      Write(out[i]);
+    }
+    m_.Kernels().select(mask, a.data(), b.data(), out.data(), n, words_);
+  }
+
+  // A boolean of one or two planes into a new plane at `loc` (or into `into`).
+  const Word* Logic(LogicOp op, const Word* x, const Word* y, Loc loc, Word* into = nullptr) {
+    Read(x);
+    if (y) Read(y);
+    c_.Add(MicroOp::AluStep);
+    Word* o = into ? into : New(loc);
+    Write(o);
+    m_.Kernels().logic(op, x, y, o, words_);
+    return o;
+  }
+  const Word* And(const Word* x, const Word* y, Loc loc = Loc::Flag) { return Logic(LogicOp::And, x, y, loc); }
+  const Word* Or(const Word* x, const Word* y, Loc loc = Loc::Flag) { return Logic(LogicOp::Or, x, y, loc); }
+  const Word* Xor(const Word* x, const Word* y, Loc loc = Loc::Flag) { return Logic(LogicOp::Xor, x, y, loc); }
+  const Word* AndNot(const Word* x, const Word* y, Loc loc = Loc::Flag) { return Logic(LogicOp::AndNot, x, y, loc); }
+  const Word* Not(const Word* x, Loc loc = Loc::Flag) { return Logic(LogicOp::Not, x, nullptr, loc); }
+
+  // 1 where every plane is 0 (none) or 1 (all): one serial OR/AND over the planes.
+  const Word* NoneOf(const Planes& x, Loc loc = Loc::Flag) { return Scan(x, Zero(), loc); }
+  const Word* AllOf(const Planes& x, Loc loc = Loc::Flag) { return Scan(x, Ones(), loc); }
+  const Word* AnyOf(const Planes& x, Loc loc = Loc::Flag) {
+    if (x.empty()) return Zero();
+    const Word* none = Scan(x, Zero(), Loc::Flag);
+    Word* o = New(loc);
+    m_.Kernels().logic(LogicOp::Not, none, nullptr, o, words_);  // the same latch, inverted
+    if (loc != Loc::Flag) Write(o);
+    return o;
+  }
+
+  // Charges reads of planes that a pass takes in besides its counted operands (e.g. the
+  // two sources of an operand selected on the fly).
+  void ChargeReads(const Planes& x) {
+    for (const Word* p : x) Read(p);
+  }
+  // mask ? a : b (or, with b empty, a & ~mask: a gated off where mask) computed as the
+  // operand routing inside the pass that consumes it: nothing is charged here. A gated
+  // plane costs what reading a[i] costs; a selected one is free to read and the consumer
+  // charges the reads of both sources (ChargeReads).
+  Planes Routed(const Word* mask, const Planes& a, const Planes& b) {
+    Planes r(a.size());
+    for (size_t i = 0; i < a.size(); ++i) {
+      Word* o = New(b.empty() ? LocOf(a[i]) : Loc::Flag);
+      if (b.empty()) m_.Kernels().logic(LogicOp::AndNot, a[i], mask, o, words_);
+      else m_.Kernels().select(mask, &a[i], &b[i], &o, 1, words_);
+      r[i] = o;
+    }
+    return r;
+  }
+  // v ^ mask, routed into the pass that consumes it (nothing charged here).
+  Planes XorRouted(const Planes& v, const Word* mask) {
+    Planes r(v.size());
+    for (size_t i = 0; i < v.size(); ++i) {
+      Word* o = New(Loc::Flag);
+      m_.Kernels().logic(LogicOp::Xor, v[i], mask, o, words_);
+      r[i] = o;
+    }
+    return r;
+  }
+  // A serial comparison riding on the pass that produces `a` bit by bit (against a
+  // constant b): only the latch of its sign is charged. out as in Add.
+  void CompareAlong(const Planes& a, const Planes& b, const OutPlanes& out) {
+    c_.Add(MicroOp::FlagOp);
+    AddArgs args{a.data(), b.data(), out.data(), static_cast<int>(out.size()), true, true, 0,
+                 false, nullptr, nullptr};
+    m_.Kernels().add(args, words_);
+  }
+  // The OR of planes that the current pass reads anyway: only the latch is charged.
+  const Word* AnyOfRead(const Planes& x) {
+    Word* o = New(Loc::Flag);
+    Planes ref(x.size(), Zero());
+    m_.Kernels().equal(x.data(), ref.data(), static_cast<int>(x.size()), o, words_);
+    m_.Kernels().logic(LogicOp::Not, o, nullptr, o, words_);
+    c_.Add(MicroOp::FlagOp);
+    return o;
+  }
+  // One serial pass over x that latches both "any bit set" (into a plane at `anyLoc`)
+  // and "all bits set" (a flag).
+  std::pair<const Word*, const Word*> AnyAll(const Planes& x, Loc anyLoc) {
+    for (const Word* p : x) Read(p), c_.Add(MicroOp::AluStep);
+    Word* any = New(anyLoc);
+    Write(any);
+    Planes zero(x.size(), Zero()), ones(x.size(), Ones());
+    m_.Kernels().equal(x.data(), zero.data(), static_cast<int>(x.size()), any, words_);
+    m_.Kernels().logic(LogicOp::Not, any, nullptr, any, words_);
+    Word* all = New(Loc::Flag);
+    Write(all);
+    m_.Kernels().equal(x.data(), ones.data(), static_cast<int>(x.size()), all, words_);
+    return {any, all};
+  }
+  // out = mask ? -v : v in one serial pass (complement after the lowest one).
+  void NegateWhere(const Planes& v, const Word* mask, const OutPlanes& out) {
+    const int n = static_cast<int>(v.size());
+    Read(mask);
+    c_.Add(MicroOp::FlagOp, 2);  // the mask, and the carry
+    for (int i = 0; i < n; ++i) Read(v[i]), c_.Add(MicroOp::AluStep), Write(out[i]);
+    Planes x(n);
+    for (int i = 0; i < n; ++i) {
+      Word* t = New(Loc::Flag);
+      m_.Kernels().logic(LogicOp::Xor, v[i], mask, t, words_);
+      x[i] = t;
+    }
+    Planes xi = Concat({{mask}, x}), zi = Concat({{mask}, Planes(n, Zero())});
+    OutPlanes o = {nullptr};
+    o.insert(o.end(), out.begin(), out.end());
+    AddArgs args{xi.data(), zi.data(), o.data(), n + 1, false, false, 0, false, nullptr, nullptr};
+    m_.Kernels().add(args, words_);
+  }
+  // Where mask: the larger-exponent significand to `big` (memory) and the other to
+  // `small` (the accumulator), both operands' bits read once.
+  void Swap(const Word* mask, const Planes& a, const Planes& b, const OutPlanes& big,
+            const OutPlanes& small) {
+    Read(mask);
+    c_.Add(MicroOp::FlagOp);
+    for (size_t i = 0; i < a.size(); ++i) {
+      Read(a[i]), Read(b[i]);
+      c_.Add(MicroOp::AluStep, 2);
+      Write(big[i]), Write(small[i]);
+    }
+    m_.Kernels().select(mask, b.data(), a.data(), big.data(), static_cast<int>(a.size()), words_);
+    m_.Kernels().select(mask, a.data(), b.data(), small.data(), static_cast<int>(a.size()), words_);
+  }
+
+  // v ^= mask in place (a conditional complement): mask into a register, one pass.
+  void XorWith(const OutPlanes& v, const Word* mask) {
+    Read(mask);
+    c_.Add(MicroOp::FlagOp);
+    for (Word* p : v) {
+      Read(p);
+      c_.Add(MicroOp::AluStep);
+      Write(p);
+      m_.Kernels().logic(LogicOp::Xor, p, mask, p, words_);
+    }
+  }
+
+  // Where mask: v >>= s, the bits that fall off (below position 1) ORed into v[0], the
+  // sticky bit. One stage of a data-dependent shift.
+  void ShiftRightSticky(const OutPlanes& v, const Word* mask, int s) {
+    const int n = static_cast<int>(v.size());
+    Planes lost(v.begin() + 1, v.begin() + std::min(s + 1, n));
+    const Word* any = AnyOf(lost);
+    const Word* gone = And(mask, any);
+    Logic(LogicOp::Or, v[0], gone, Loc::Acc, v[0]);
+    Planes src(n - 1), self(n - 1);
+    OutPlanes dst(n - 1);
+    for (int i = 1; i < n; ++i) {
+      src[i - 1] = i + s < n ? v[i + s] : Zero();
+      self[i - 1] = dst[i - 1] = v[i];
+    }
+    Mux(mask, src, self, dst);
+  }
+
+  // Where mask: v <<= s (zeros enter at the bottom); run from the top down.
+  void ShiftLeft(const OutPlanes& v, const Word* mask, int s) {
+    const int n = static_cast<int>(v.size());
+    Planes src(n), self(n);
+    OutPlanes dst(n);
+    for (int j = 0; j < n; ++j) {
+      const int i = n - 1 - j;
+      src[j] = i - s >= 0 ? v[i - s] : Zero();
+      self[j] = dst[j] = v[i];
+    }
+    Mux(mask, src, self, dst);
+  }
+
+  // Moves the leading one of v to the top position, `stages` binary stages from the
+  // largest: stage k shifts by 2^k where the top 2^k bits are all zero. Returns u with
+  // u_k = 1 where stage k did NOT shift, so the shift is (2^stages - 1) - u.
+  Planes Normalise(const OutPlanes& v, int stages) {
+    const int n = static_cast<int>(v.size());
+    Planes u(stages, Zero());
+    for (int k = stages - 1; k >= 0; --k) {
+      const int s = 1 << k;
+      ZEPHYR_CHECK(s < n);
+      const Word* z = NoneOf(Planes(v.end() - s, v.end()));
+      ShiftLeft(v, z, s);
+      u[k] = Not(z, Loc::Internal);
+    }
+    return u;
+  }
+
+  // The shift-and-add product of a and b (unsigned) into out (a.size() + b.size()
+  // accumulator planes): per multiplier bit, its value into the mask register, a's bits
+  // added into the partial product (Batcher 1980's multiply).
+  void Multiply(const Planes& a, const Planes& b, const OutPlanes& out) {
+    const int w = static_cast<int>(out.size());
+    ZEPHYR_CHECK(w == static_cast<int>(a.size() + b.size()));
+    for (size_t j = 0; j < b.size(); ++j) {
+      Read(b[j]);
+      c_.Add(MicroOp::FlagOp);
+      for (const Word* x : a) {
+        Read(x);
+        c_.Add(MicroOp::AluStep);
+        c_.Add(MicroOp::AccumulatorRead);
+        c_.Add(MicroOp::AccumulatorWrite);
+      }
+    }
+    Planes aw(a);
+    aw.resize(w, Zero());
+    std::vector<int> shift(b.size());
+    std::vector<unsigned char> sub(b.size(), 0);
+    for (size_t j = 0; j < b.size(); ++j) shift[j] = static_cast<int>(j);
+    MulArgs args{aw.data(), w, b.data(), shift.data(), sub.data(), static_cast<int>(b.size()),
+                 out.data()};
+    m_.Kernels().mul(args, words_);
+  }
+
+ private:
+  Loc LocOf(const Word* p) const {
+    auto it = loc_.find(p);
+    ZEPHYR_CHECK(it != loc_.end());
+    return it->second;
+  }
+  const Word* Scan(const Planes& x, const Word* value, Loc loc) {
+    for (const Word* p : x) Read(p), c_.Add(MicroOp::AluStep);
+    Word* o = New(loc);
+    Write(o);
+    Planes ref(x.size(), value);
+    m_.Kernels().equal(x.data(), ref.data(), static_cast<int>(x.size()), o, words_);
+    return o;
+  }
+
+  Machine& m_;
+  size_t words_;
+  MicroOpCounts c_;
+  std::unordered_map<const Word*, Loc> loc_;
+  std::vector<Word*> owned_;
+};
+
+OutPlanes Out(const Multi& x, int from, int to) {
+  OutPlanes r;
+  for (int i = from; i < to; ++i) r.push_back(const_cast<Multi&>(x).Plane(i));
+  return r;
+}
+
+// An operand split into its fields, with its class flags.
+struct Unpacked {
+  Planes frac;     // fracBits planes (flush-to-zero formats: 0 where the exponent field is 0)
+  Planes exp;      // the effective biased exponent: a subnormal's field 0 reads as 1
+  Planes sig;      // frac and the hidden bit on top: the significand, precision planes
+  const Word* sign;
+  const Word* hidden;
+  const Word* maxField;
+  const Word* zero = nullptr;  // set by Classify
+  const Word* inf = nullptr;
+  const Word* nan = nullptr;
+};
+
+// The fields: one pass over the exponent latches "not all zero" (the hidden bit) and
+// "all ones" (inf or NaN); a subnormal's exponent bit 0 is then set (effective field 1).
+Unpacked Unpack(Serial& s, const MultiFloat& x, bool negate) {
+  const FloatFormat& f = x.Format();
+  const int m = f.fracBits, e = f.expBits, w = f.Width();
+  s.Place(x.Bits());
+  Unpacked u;
+  const Multi& bits = x.Bits();
+  for (int i = 0; i < m; ++i) u.frac.push_back(bits.Plane(i));
+  for (int i = m; i < m + e; ++i) u.exp.push_back(bits.Plane(i));
+  u.sign = negate ? s.Not(bits.Plane(w - 1), Loc::Internal) : bits.Plane(w - 1);
+  std::tie(u.hidden, u.maxField) = s.AnyAll(u.exp, Loc::Internal);
+  if (!f.subnormals)  // flush to zero on input: the passes that read the fraction gate
+    u.frac = s.Routed(s.Not(u.hidden), u.frac, {});  // it off where the field is 0
+  u.exp[0] = s.Logic(LogicOp::Or, u.exp[0], s.Not(u.hidden), Loc::Internal);
+  u.sig = Concat({u.frac, {u.hidden}});
+  return u;
+}
+
+// The class flags, given "any fraction bit set" (latched by a pass that read the fraction).
+void Classify(Serial& s, const FloatFormat& f, Unpacked& u, const Word* fracAny) {
+  u.nan = s.And(u.maxField, fracAny);
+  u.inf = s.AndNot(u.maxField, fracAny);
+  u.zero = f.subnormals ? s.Not(s.Or(u.hidden, fracAny)) : s.Not(u.hidden);
+}
+
+// The special results, decided from the operands' classes.
+struct Specials {
+  const Word* zero;     // the result is ±0 (sign: the `sign` given to RoundPack)
+  const Word* inf;      // the result is an infinity of sign infSign (from an operand)
+  const Word* infSign;
+  const Word* nan;      // the canonical NaN
+};
+
+// The exponent working width: a sign and the magnitude of every value the exponent
+// passes see (the field sum xr, the offset c, the denormalising shift).
+int ExpWidth(int xrMax, int c) { return CeilLog2(xrMax + std::abs(c) + 3) + 1; }
+
+// Rounds and packs. v: the significand, its leading one at the top position (or all zero
+// where sp.zero), v[0] a sticky bit. The biased exponent field of the top position is
+// xr + c (xr: `x` signed planes; c: a constant folded in here, so no pass adds it).
+// Subnormal formats first shift v right by 1 - (xr + c) where that is positive (the
+// exponent field becomes 0); then round to nearest even by one increment of the packed
+// exponent-and-fraction, which also carries a rounded-up significand into the exponent.
+// A field >= the maximum gives ±inf; flush-to-zero formats give ±0 for a field < 1.
+void RoundPack(Serial& s, const FloatFormat& f, const Word* sign, OutPlanes xr, int c,
+               OutPlanes v, const Specials& sp, MultiFloat& out) {
+  const int p = f.Precision(), m = f.fracBits, e = f.expBits;
+  const int x = static_cast<int>(xr.size());
+  const int n = static_cast<int>(v.size());
+  ZEPHYR_CHECK(n >= p + 2);
+  const Word* tiny = s.Zero();
+  if (f.subnormals) {
+    // t = -c - xr = (the denormalising shift) - 1; tiny where t >= 0.
+    OutPlanes t = s.New(x, Loc::Internal);
+    s.Add(s.Const(-c, x), In(xr), t, true, true);
+    tiny = s.Not(t[x - 1]);
+    const int stages = CeilLog2(n);
+    for (int k = 0; k < std::min(stages, x - 1); ++k)
+      s.ShiftRightSticky(v, s.And(t[k], tiny), 1 << k);
+    if (x - 1 > stages) {  // a shift of 2^stages or more leaves only the sticky bit
+      const Word* all = s.And(s.AnyOf(Slice(In(t), stages, x - 1)), tiny);
+      s.Logic(LogicOp::Or, v[0], s.And(all, s.AnyOf(Slice(In(v), 1, n))), Loc::Acc, v[0]);
+      s.Mux(all, s.Zeros(n - 1), Slice(In(v), 1, n), OutPlanes(v.begin() + 1, v.end()));
+    }
+    s.ShiftRightSticky(v, tiny, 1);  // the "+ 1" of the shift
+  }
+  // Round to nearest, ties to even: up = guard & (sticky | lsb).
+  const int lsb = n - p;
+  const Word* sticky = s.AnyOf(Slice(In(v), 0, lsb - 1));
+  const Word* up = s.And(v[lsb - 1], s.Or(sticky, v[lsb]));
+  // packed = (xr << m | fraction) + (c << m) + up, the exponent terms gated off where
+  // tiny (a subnormal's field is 0); the carry-in enters as position -1.
+  OutPlanes packed = s.New(m + x, Loc::Internal);
+  for (int i = 0; i < m; ++i) packed[i] = s.New(Loc::Acc);
+  OutPlanes sum = {nullptr};
+  sum.insert(sum.end(), packed.begin(), packed.end());
+  Planes cBits = s.Const(c, x);
+  for (auto& b : cBits) b = b == s.Ones() ? s.Not(tiny) : s.Zero();
+  Planes xrGated = f.subnormals ? s.Routed(tiny, In(xr), {}) : In(xr);
+  s.Add(Concat({{up}, Slice(In(v), lsb, lsb + m), xrGated}),
+        Concat({{up}, s.Zeros(m), cBits}), sum, false, false);
+  const Planes field = Slice(In(packed), m, m + x);
+  // field >= maxField (the sign of field - maxField, compared as the packing pass
+  // produces the field), ignoring a zero result.
+  OutPlanes diff(x, nullptr);
+  diff[x - 1] = s.New(Loc::Flag);
+  s.CompareAlong(field, s.Const(f.MaxField(), x), diff);
+  const Word* overflow = s.AndNot(s.Not(diff[x - 1]), sp.zero);
+  const Word* inf = s.Or(sp.inf, overflow);
+  const Word* zero = sp.zero;
+  if (!f.subnormals) {  // flush to zero: field < 1
+    OutPlanes below(x, nullptr);
+    below[x - 1] = s.New(Loc::Flag);
+    s.CompareAlong(field, s.Const(1, x), below);
+    zero = s.Or(zero, below[x - 1]);
+  }
+  const Word* special = s.Or(s.Or(zero, inf), sp.nan);
+  const Word* maxExp = s.Or(inf, sp.nan);
+  Planes fill = Concat({s.Zeros(m - 1), {sp.nan}, Planes(e, maxExp)});
+  s.Place(out.Bits());
+  s.Mux(special, fill, Slice(In(packed), 0, m + e), Out(out.Bits(), 0, m + e));
+  const Word* signed_ = s.AndNot(sp.inf, sp.nan);  // an operand's infinity gives its sign
+  Word* outSign = out.Bits().Plane(f.Width() - 1);
+  s.Mux(signed_, {sp.infSign}, {sign}, {outSign});
+  s.Logic(LogicOp::AndNot, outSign, sp.nan, Loc::Internal, outSign);
+}
+
+void CheckPair(const MultiFloat& a, const MultiFloat& b, const char* op) {
+  ZEPHYR_CHECK(!a.Empty() && !b.Empty());
+  if (&a.GetMachine() != &b.GetMachine())
+    throw UserError(fmt::format("{}: operands on different machines", op));
+  if (a.Format() != b.Format())
+    throw UserError(fmt::format("{}: operands have formats {} and {}", op, a.Format().Name(),
+                                b.Format().Name()));
+}
+
+// a + b (b negated for a subtraction): align the smaller significand by the exponent
+// difference, add or subtract, normalise, round.
+MultiFloat AddSub(const MultiFloat& a, const MultiFloat& b, bool subtract) {
+  const char* name = subtract ? "fsub" : "fadd";
+  CheckPair(a, b, name);
+  Machine& mach = a.GetMachine();
+  const FloatFormat& f = a.Format();
+  const int e = f.expBits, p = f.Precision();
+  const int n = p + 3;  // significand, guard, round and sticky positions
+  Serial s(mach);
+  Unpacked A = Unpack(s, a, false), B = Unpack(s, b, subtract);
+  // d = xa - xb; swap where b's exponent is larger; |d| by a conditional negation.
+  OutPlanes d = s.New(e + 1, Loc::Internal);
+  s.Add(Concat({A.exp, {s.Zero()}}), Concat({B.exp, {s.Zero()}}), d, true, true);
+  const Word* swap = d[e];
+  const Word* signL = s.Logic(LogicOp::Xor, A.sign, s.And(swap, s.Xor(A.sign, B.sign)), Loc::Internal);
+  // The larger-exponent significand to memory, the other into the accumulator above
+  // guard, round and sticky; the same pass latches each operand's "fraction not zero".
+  OutPlanes big = s.New(p, Loc::Internal);
+  OutPlanes small = s.New(n, Loc::Acc);
+  s.Swap(swap, A.sig, B.sig, big, OutPlanes(small.begin() + 3, small.end()));
+  Classify(s, f, A, s.AnyOfRead(A.frac));
+  Classify(s, f, B, s.AnyOfRead(B.frac));
+  const int stages = CeilLog2(n);
+  // Shift by |d|: by d where d >= 0, else by -d = ~d + 1 (stage masks d_k ^ swap, and
+  // one more stage of 1 under swap).
+  for (int k = 0; k < std::min(stages, e); ++k) s.ShiftRightSticky(small, s.Xor(d[k], swap), 1 << k);
+  s.ShiftRightSticky(small, swap, 1);
+  if (e > stages) {
+    s.ChargeReads(Slice(In(d), stages, e));
+    const Word* all = s.AnyOf(s.XorRouted(Slice(In(d), stages, e), swap));
+    s.Logic(LogicOp::Or, small[0], s.And(all, s.AnyOf(Slice(In(small), 1, n))), Loc::Acc, small[0]);
+    s.Mux(all, s.Zeros(n - 1), Slice(In(small), 1, n), OutPlanes(small.begin() + 1, small.end()));
+  }
+  // big ± small over n+1 positions (position n: the carry, or the sign of a difference);
+  // a per-PE subtraction complements small and carries in 1 through position -1.
+  const Word* sub = s.Xor(A.sign, B.sign, Loc::Internal);
+  s.XorWith(small, sub);
+  OutPlanes sum = s.New(n + 1, Loc::Acc);
+  OutPlanes sumOut = {nullptr};
+  sumOut.insert(sumOut.end(), sum.begin(), sum.end());
+  s.Add(Concat({{sub}, s.Zeros(3), In(big), {s.Zero()}}), Concat({{sub}, In(small), {sub}}),
+        sumOut, false, false);
+  // Equal exponents can leave small > big: negate (exactly) and flip the sign.
+  const Word* neg = s.And(sub, sum[n]);
+  s.NegateWhere(In(sum), neg, sum);
+  const Word* signR = s.Xor(signL, neg);
+  const Word* zero = s.NoneOf(In(sum));
+  // Exact zero: +0 for a difference, the operands' sign for a sum (-0 + -0 = -0).
+  const Word* sign = s.Logic(LogicOp::Or, s.AndNot(signR, zero), s.And(zero, s.AndNot(signL, sub)),
+                             Loc::Internal);
+  const int nstages = CeilLog2(n + 1);
+  const Planes u = s.Normalise(sum, nstages);
+  // The top position's field: xl + 1 - shift = xl + u + 2 - 2^nstages, with xl (the
+  // larger exponent) selected from the operands inside the same pass.
+  const int c = 2 - (1 << nstages);
+  const int x = ExpWidth((1 << e) + (1 << nstages), c);
+  OutPlanes xr = s.New(x, Loc::Internal);
+  s.ChargeReads(Concat({A.exp, B.exp}));
+  s.Add(Concat({s.Routed(swap, B.exp, A.exp), s.Zeros(x - e)}),
+        Concat({u, s.Zeros(x - nstages)}), xr, false, false);
+  const Word* bothNan = s.Or(A.nan, B.nan);
+  const Word* infMinusInf = s.And(s.And(A.inf, B.inf), sub);
+  Specials sp{zero, s.Or(A.inf, B.inf), s.Or(s.And(A.inf, A.sign), s.AndNot(B.sign, A.inf)),
+              s.Or(bothNan, infMinusInf)};
+  MultiFloat r(mach, f, name);
+  RoundPack(s, f, sign, xr, c, sum, sp, r);
+  mach.Charge(name, s.Counts());
+  return r;
+}
+
+}  // namespace
+
+MultiFloat WrapFloat(Multi bits, const FloatFormat& f) {
+  MultiFloat r;
+  r.format_ = f;
+  r.bits_ = std::move(bits);
+  return r;
+}
+
+MultiFloat::MultiFloat(Machine& machine, FloatFormat format, std::string name,
+                       std::optional<Space> space)
+    : format_(format) {
+  if (!format.IsValid())
+    throw UserError(fmt::format("multi float '{}': invalid format {}", name, format.Name()));
+  bits_ = Multi(machine, fixed::Format::Unsigned(format.Width(), 0), name, space);
+}
+
+void MultiFloat::Load(const std::vector<uint64_t>& bits) {
+  std::vector<int64_t> raw(bits.size());
+  for (size_t i = 0; i < bits.size(); ++i) raw[i] = static_cast<int64_t>(bits[i] & format_.Mask());
+  bits_.LoadRaw(raw);
+}
+
+std::vector<uint64_t> MultiFloat::Read() const {
+  std::vector<int64_t> raw = bits_.ReadRaw();
+  std::vector<uint64_t> r(raw.size());
+  for (size_t i = 0; i < raw.size(); ++i) r[i] = static_cast<uint64_t>(raw[i]) & format_.Mask();
+  return r;
+}
+
+uint64_t MultiFloat::At(int64_t pe) const {
+  uint64_t v = 0;
+  for (int i = 0; i < format_.Width(); ++i) v |= uint64_t{bits_.BitAt(i, pe)} << i;
+  return v;
+}
+
+MultiFloat Broadcast(Machine& m, const UniFloat& value) {
+  fixed::Format u = fixed::Format::Unsigned(value.format.Width(), 0);
+  return WrapFloat(Broadcast(m, fixed::Fixed{u, fixed::BigInt(value.bits & value.format.Mask())}),
+                   value.format);
+}
+
+MultiFloat Add(const MultiFloat& a, const MultiFloat& b) { return AddSub(a, b, false); }
+MultiFloat Sub(const MultiFloat& a, const MultiFloat& b) { return AddSub(a, b, true); }
+
+MultiFloat Mul(const MultiFloat& a, const MultiFloat& b) {
+  CheckPair(a, b, "fmul");
+  Machine& mach = a.GetMachine();
+  const FloatFormat& f = a.Format();
+  const int e = f.expBits, p = f.Precision();
+  Serial s(mach);
+  Unpacked A = Unpack(s, a, false), B = Unpack(s, b, false);
+  const Word* sign = s.Xor(A.sign, B.sign, Loc::Internal);
+  OutPlanes prod = s.New(2 * p, Loc::Acc);
+  s.Multiply(A.sig, B.sig, prod);
+  // The multiply reads every bit of both fractions: it latches "fraction not zero".
+  Classify(s, f, A, s.AnyOfRead(A.frac));
+  Classify(s, f, B, s.AnyOfRead(B.frac));
+  // Subnormal operands can leave up to 2p-1 leading zeros; normal ones at most one.
+  const int stages = f.subnormals ? CeilLog2(2 * p) : 1;
+  const Planes u = s.Normalise(prod, stages);
+  // Keep the top p+2 bits; the rest only as a sticky bit below them.
+  OutPlanes v = {s.New(Loc::Acc)};
+  s.Logic(LogicOp::Or, s.AnyOf(Slice(In(prod), 0, p - 2)), s.Zero(), Loc::Acc, v[0]);
+  v.insert(v.end(), prod.begin() + (p - 2), prod.end());
+  // Field of the top position: xa + xb - bias + 1 - shift = xa + xb + u + 2 - bias - 2^stages.
+  const int c = 2 - f.Bias() - (1 << stages);
+  const int x = ExpWidth((2 << e) + (1 << stages), c);
+  OutPlanes xr = s.New(x, Loc::Internal);
+  s.Add(Concat({A.exp, s.Zeros(x - e)}), Concat({B.exp, s.Zeros(x - e)}), xr, false, false);
+  s.Add(In(xr), Concat({u, s.Zeros(x - stages)}), xr, false, false);
+  const Word* nan = s.Or(s.Or(A.nan, B.nan), s.Or(s.And(A.inf, B.zero), s.And(A.zero, B.inf)));
+  const Specials sp{s.Or(A.zero, B.zero), s.Or(A.inf, B.inf), sign, nan};
+  MultiFloat r(mach, f, "fmul");
+  RoundPack(s, f, sign, xr, c, v, sp, r);
+  mach.Charge("fmul", s.Counts());
+  return r;
+}
+
+double FloatOpCycles(const MachineProfile& profile, const std::string& op,
+                     const FloatFormat& f, Space space) {
+  Machine m(profile);
+  MultiFloat a(m, f, "a", space), b(m, f, "b", space);
+  m.Report().Clear();
+  std::string name;
+  if (op == "fadd") Add(a, b), name = "fadd";
+  else if (op == "fsub") Sub(a, b), name = "fsub";
+  else if (op == "fmul") Mul(a, b), name = "fmul";
+  else throw UserError(fmt::format("unknown float operation '{}' (fadd, fsub, fmul)", op));
+  return m.Report().OpCycles(name);
+}
+
+}  // namespace zephyr::bitserial
