@@ -64,11 +64,43 @@ MultiFloat Broadcast(Machine& m, const UniFloat& value);
 MultiFloat Add(const MultiFloat& a, const MultiFloat& b);
 MultiFloat Sub(const MultiFloat& a, const MultiFloat& b);
 MultiFloat Mul(const MultiFloat& a, const MultiFloat& b);
+// Restoring division of the significands, one quotient bit per step (p + 2 of them).
+MultiFloat Div(const MultiFloat& a, const MultiFloat& b);
+// Restoring square root of the significand, one root bit per step (p + 2 of them).
+MultiFloat Sqrt(const MultiFloat& a);
+// IEEE 754-2019 minimumNumber / maximumNumber (a NaN operand yields the other; -0 < +0).
+MultiFloat Min(const MultiFloat& a, const MultiFloat& b);
+MultiFloat Max(const MultiFloat& a, const MultiFloat& b);
 
+// IEEE comparisons as 1-bit multis (u1.0): false where either operand is NaN; -0 == +0.
+// All three are charged as "fcompare".
+Multi Less(const MultiFloat& a, const MultiFloat& b);
+Multi LessEqual(const MultiFloat& a, const MultiFloat& b);
+Multi Equal(const MultiFloat& a, const MultiFloat& b);
+
+// Conversions (fixed::FloatFromFixed / FloatToFixed). ToFloat: a fixed-point multi's exact
+// value rounded once to f ("ffromfixed"). ToFixed: the float's exact value rounded and
+// fitted into `out` as fixed::Convert does (overflow flagged in the active PEs); NaN gives
+// 0 and sets the Invalid flag, ±inf out's largest / smallest value with the Overflow flag
+// ("ftofixed"). ToFixed throws UserError if out.Width() + precision + 3 > 128.
+MultiFloat ToFloat(const Multi& a, const fixed::FloatFormat& f);
+Multi ToFixed(const MultiFloat& a, fixed::Format out, fixed::Policy p = {});
+
+// The float operations `FloatOpCycles` and `zephyr cycles --op` know, each charged under
+// its own name: fadd fsub fmul fdiv fsqrt fmin fmax fcompare (Less) ftofixed ffromfixed.
+const std::vector<std::string>& FloatOpNames();
 // Cycles of one operation of format f on one virtual-PE layer, operands and result in
-// `space`, as the engine charges it ("fadd", "fsub", "fmul"); counted by running the
-// operation on a one-layer machine of `profile`.
+// `space`, as the engine charges it; counted by running the operation on a one-layer
+// machine of `profile`. The conversions take the fixed side's format and policy from
+// `fixedSide` and `policy`. UserError for an unknown op.
 double FloatOpCycles(const MachineProfile& profile, const std::string& op,
-                     const fixed::FloatFormat& f, Space space = Space::Internal);
+                     const fixed::FloatFormat& f, Space space = Space::Internal,
+                     fixed::Format fixedSide = fixed::Format::Signed(15, 16),
+                     fixed::Policy policy = {});
+// The same run's whole cycle report (the op's micro-ops by class).
+CycleReport FloatOpReport(const MachineProfile& profile, const std::string& op,
+                          const fixed::FloatFormat& f, Space space = Space::Internal,
+                          fixed::Format fixedSide = fixed::Format::Signed(15, 16),
+                          fixed::Policy policy = {});
 
 }  // namespace zephyr::bitserial

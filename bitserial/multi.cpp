@@ -6,20 +6,10 @@
 #include <bit>
 #include <cstring>
 
+#include "bitserial/internals.h"
 #include "fixed/check.h"
 
 namespace zephyr::bitserial {
-
-// The machine's writable flag planes and kernel-argument arrays (private to Machine; the
-// operations below are their only writers).
-struct MachineInternals {
-  static Word* Overflow(Machine& m) { return m.overflow_; }
-  static Word* DivideByZero(Machine& m) { return m.divideByZero_; }
-  static Word* Invalid(Machine& m) { return m.invalid_; }
-  static std::vector<const Word*>& PointersA(Machine& m) { return m.ptrA_; }
-  static std::vector<const Word*>& PointersB(Machine& m) { return m.ptrB_; }
-  static std::vector<Word*>& PointersOut(Machine& m) { return m.ptrOut_; }
-};
 
 using fixed::Format;
 using fixed::Policy;
@@ -645,6 +635,18 @@ Multi Shift(const Multi& a, int k, Format out, Policy p) {
 }
 
 Multi Convert(const Multi& a, Format out, Policy p) { return Shift(a, 0, out, p); }
+
+void ConvertUncharged(const Multi& a, Multi& out, Policy p) {
+  RoundFitInto(a.GetMachine(), a.Plane(0), a.Width(), a.Format().isSigned, a.Format().fracBits,
+               out, p);
+}
+
+void SetInvalid(Machine& m, const Word* where) {
+  Scratch active(m, 1);
+  m.Kernels().logic(LogicOp::And, where, m.Activity(), active.p, m.WordsPerPlane());
+  m.Kernels().logic(LogicOp::Or, MachineInternals::Invalid(m), active.p,
+                    MachineInternals::Invalid(m), m.WordsPerPlane());
+}
 
 Multi Select(const Multi& mask, const Multi& a, const Multi& b, Format out, Policy p) {
   CheckSameMachine(a, b);

@@ -6,6 +6,7 @@
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <functional>
 #include <map>
 
@@ -35,11 +36,9 @@ struct CyclesOptions {
   std::string floatFormat;  // --float: the float ops' format (default from --bits)
 };
 
-// The float operations (bitserial/float.h) and the name each is charged under.
-const std::map<std::string, std::string>& FloatOps() {
-  static const std::map<std::string, std::string> ops = {
-      {"fadd", "fadd"}, {"fsub", "fsub"}, {"fmul", "fmul"}};
-  return ops;
+bool IsFloatOp(const std::string& op) {
+  const auto& names = FloatOpNames();
+  return std::find(names.begin(), names.end(), op) != names.end();
 }
 
 // --float if given, else the IEEE interchange format of --bits (16, 32 or 64) with
@@ -54,32 +53,34 @@ fixed::FloatFormat FloatFormatOf(const CyclesOptions& o, const MachineProfile& p
                               "32/64) or --float eXmY, got --bits {}", o.bits));
 }
 
-void RunFloatCycles(const CyclesOptions& o, const MachineProfile& profile) {
-  const fixed::FloatFormat f = FloatFormatOf(o, profile);
-  Machine m(profile);
-  std::optional<Space> space;
-  if (o.external) space = Space::External;
-  MultiFloat a(m, f, "a", space), b(m, f, "b", space);
-  m.Report().Clear();
-  MultiFloat r;
-  if (o.op == "fadd") r = Add(a, b);
-  else if (o.op == "fsub") r = Sub(a, b);
-  else r = Mul(a, b);
-  const CycleReport& rep = m.Report();
-  const double cycles = rep.OpCycles(FloatOps().at(o.op));
+// The f* operations: the float format from --float or --bits; the conversions (ftofixed,
+// ffromfixed) take the fixed side from --bits/--frac/--unsigned and the float format from
+// --float (default binary32 as the profile keeps it).
+void RunFloatCycles(const CyclesOptions& o, const MachineProfile& profile,
+                    const fixed::Format& fixedSide, const fixed::Policy& policy) {
+  const bool conversion = o.op == "ftofixed" || o.op == "ffromfixed";
+  const fixed::FloatFormat f = conversion && o.floatFormat.empty()
+                                   ? fixed::FloatFormat{8, 23, profile.floatSubnormals}
+                                   : FloatFormatOf(o, profile);
+  const CycleReport rep = FloatOpReport(profile, o.op, f,
+                                        o.external ? Space::External : Space::Internal,
+                                        fixedSide, policy);
+  const double cycles = rep.OpCycles(o.op);
   const double mops = profile.physicalPes * profile.clockHz / cycles / 1e6;
   if (o.json) {
     nlohmann::json j = rep.Json();
     j["op"] = o.op;
     j["format"] = f.Name();
+    if (conversion) j["fixed"] = fixedSide.Name();
     j["cycles"] = cycles;
     j["mops"] = mops;
     fmt::print("{}\n", j.dump(2));
   } else {
-    fmt::print("{} {} on profile {} ({} memory): {} cycles per layer ({:.3g} us at {:g} Hz; "
-               "{:.0f} MOPS on {} PEs)\n", o.op, f.Name(), profile.name,
-               o.external ? "external" : "internal", cycles, cycles / profile.clockHz * 1e6,
-               profile.clockHz, mops, profile.physicalPes);
+    fmt::print("{} {}{} on profile {} ({} memory): {} cycles per layer ({:.3g} us at {:g} Hz; "
+               "{:.0f} MOPS on {} PEs)\n", o.op, f.Name(),
+               conversion ? (o.op == "ftofixed" ? " -> " : " <- ") + fixedSide.Name() : "",
+               profile.name, o.external ? "external" : "internal", cycles,
+               cycles / profile.clockHz * 1e6, profile.clockHz, mops, profile.physicalPes);
     fmt::print("{}", rep.Table());
   }
 }
@@ -96,14 +97,18 @@ void RunCycles(const CyclesOptions& o) {
     return o.isUnsigned ? fixed::Format::Unsigned(bits - o.frac, o.frac)
                         : fixed::Format::Signed(bits - 1 - o.frac, o.frac);
   };
-  if (FloatOps().count(o.op)) return RunFloatCycles(o, profile);
-  const fixed::Format fa = format(o.bits, "--bits");
-  const fixed::Format fb = format(o.bits2 ? o.bits2 : o.bits, "--bits2");
   fixed::Policy policy;
   if (o.rounding == "nearest") policy.rounding = fixed::Rounding::Nearest;
   else if (o.rounding != "floor") throw UserError("--rounding must be floor or nearest, got '" + o.rounding + "'");
   if (o.overflow == "saturate") policy.overflow = fixed::OverflowPolicy::Saturate;
   else if (o.overflow != "wrap") throw UserError("--overflow must be wrap or saturate, got '" + o.overflow + "'");
+  if (IsFloatOp(o.op)) {
+    const bool conversion = o.op == "ftofixed" || o.op == "ffromfixed";
+    return RunFloatCycles(o, profile, conversion ? format(o.bits, "--bits") : fixed::Format{},
+                          policy);
+  }
+  const fixed::Format fa = format(o.bits, "--bits");
+  const fixed::Format fb = format(o.bits2 ? o.bits2 : o.bits, "--bits2");
 
   Machine m(profile);
   std::optional<Space> space;
@@ -138,7 +143,7 @@ void RunCycles(const CyclesOptions& o) {
   if (it == ops.end()) {
     std::string known;
     for (auto& [name, v] : ops) known += (known.empty() ? "" : ", ") + name;
-    for (auto& [name, v] : FloatOps()) known += ", " + name;
+    for (const std::string& name : FloatOpNames()) known += ", " + name;
     throw UserError(fmt::format("--op '{}' is not an operation (known: {})", o.op, known));
   }
   m.Report().Clear();
@@ -168,9 +173,10 @@ CommandRegistration reg("cycles", [](CLI::App& program) {
   cmd->add_option("--profile", opts->profile, "Machine profile (wavetracer, mpp)");
   cmd->add_option("--op", opts->op,
                   "Operation: add sub neg abs mul mul-uni square div sqrt compare min max select shift; "
-                  "float: fadd fsub fmul");
+                  "float: fadd fsub fmul fdiv fsqrt fmin fmax fcompare ftofixed ffromfixed");
   cmd->add_option("--float", opts->floatFormat,
-                  "Float format of the f* operations, eXmY[ftz] (default: binary16/32/64 by --bits)");
+                  "Float format of the f* operations, eXmY[ftz] (default: binary16/32/64 by --bits; "
+                  "binary32 for ftofixed/ffromfixed, whose fixed side is --bits/--frac)");
   cmd->add_option("--bits", opts->bits, "Width of the first operand (and of the result)");
   cmd->add_option("--bits2", opts->bits2, "Width of the second operand / the constant (default --bits)");
   cmd->add_option("--frac", opts->frac, "Fraction bits of the operands");
