@@ -40,6 +40,16 @@ template <typename T>
 T Length(const Vec3T<T>& v) { return std::sqrt(Dot(v, v)); }
 template <typename T>
 Vec3T<T> Normalize(const Vec3T<T>& v) { return v / Length(v); }
+// The largest |component| (the infinity norm): a bound that never overflows.
+template <typename T>
+T MaxAbs(const Vec3T<T>& v) { return std::fmax(std::fabs(v.x), std::fmax(std::fabs(v.y), std::fabs(v.z))); }
+// v divided by its largest |component|, so Length and Normalize of the result neither
+// overflow nor underflow (v = 0 stays 0).
+template <typename T>
+Vec3T<T> ScaledDown(const Vec3T<T>& v) {
+  const T m = MaxAbs(v);
+  return m > T(0) ? v / m : v;
+}
 // Component-wise product (colours).
 template <typename T>
 constexpr Vec3T<T> Mul(const Vec3T<T>& a, const Vec3T<T>& b) { return {a.x * b.x, a.y * b.y, a.z * b.z}; }

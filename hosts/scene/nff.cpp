@@ -4,7 +4,9 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 #include "fixed/check.h"
@@ -18,35 +20,70 @@ struct Token {
   int line = 0, column = 0;
 };
 
-// Splits NFF text into whitespace-separated tokens, dropping `#` comments. SPD writes a
-// cone on one line or two, so the grammar works on the token stream, not on lines.
-std::vector<Token> Tokenize(std::string_view text) {
+struct Tokens {
   std::vector<Token> tokens;
+  int endLine = 1, endColumn = 1;  // just past the last byte, for "missing ..." errors
+};
+
+// Splits NFF text into whitespace-separated tokens, dropping `#` comments. SPD writes a
+// cone on one line or two, so the grammar works on the token stream, not on lines. A line
+// ends at LF, CRLF or a lone CR (classic Mac files), so comments and line numbers are
+// right in all three; a leading UTF-8 byte-order mark is skipped.
+Tokens Tokenize(std::string_view text) {
+  Tokens out;
   int line = 1, column = 1;
   size_t i = 0;
+  if (text.substr(0, 3) == "\xEF\xBB\xBF") i = 3;
+  auto lineEnd = [&](size_t at) { return text[at] == '\n' || text[at] == '\r'; };
+  auto isSpace = [&](size_t at) {
+    const char c = text[at];
+    return c == ' ' || c == '\t' || c == '\f' || c == '\v' || c == '\n' || c == '\r';
+  };
   while (i < text.size()) {
     const char c = text[i];
-    if (c == '\n') {
+    if (lineEnd(i)) {
+      if (c == '\r' && i + 1 < text.size() && text[i + 1] == '\n') ++i;  // CRLF is one end
       ++line;
       column = 1;
       ++i;
-    } else if (c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v') {
+    } else if (isSpace(i)) {
       ++column;
       ++i;
     } else if (c == '#') {
-      while (i < text.size() && text[i] != '\n') ++i;
+      while (i < text.size() && !lineEnd(i)) ++i, ++column;
     } else {
       const size_t start = i;
       const int startColumn = column;
-      while (i < text.size() && !std::isspace(static_cast<unsigned char>(text[i])) &&
-             text[i] != '#') {
+      while (i < text.size() && !isSpace(i) && text[i] != '#') {
         ++i;
         ++column;
       }
-      tokens.push_back({text.substr(start, i - start), line, startColumn});
+      out.tokens.push_back({text.substr(start, i - start), line, startColumn});
     }
   }
-  return tokens;
+  out.endLine = line;
+  out.endColumn = column;
+  return out;
+}
+
+// Text from the file as a message can show it: bytes outside printable ASCII become \xNN
+// (a NUL would otherwise cut the message where it is printed, and a stray byte-order mark
+// or control byte would be invisible), and a long token is cut to its first 40 bytes.
+std::string Printable(std::string_view s) {
+  constexpr size_t kShown = 40;
+  std::string out;
+  for (size_t i = 0; i < s.size() && i < kShown; ++i) {
+    const unsigned char c = static_cast<unsigned char>(s[i]);
+    if (c >= 0x20 && c < 0x7f) {
+      out += char(c);
+    } else {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\x%02x", c);
+      out += buf;
+    }
+  }
+  if (s.size() > kShown) out += "...";
+  return out;
 }
 
 bool LooksNumeric(std::string_view s) {
@@ -63,15 +100,12 @@ struct StatementError {
 
 class NffParser {
  public:
-  NffParser(std::string_view text, std::string fileName, std::vector<std::string>& errors)
-      : tokens_(Tokenize(text)), file_(std::move(fileName)), errors_(errors) {
-    // End-of-file location, for errors about what is missing.
-    int line = 1, column = 1;
-    for (char c : text) {
-      if (c == '\n') { ++line; column = 1; } else { ++column; }
-    }
-    endLine_ = line;
-    endColumn_ = column;
+  NffParser(std::string_view text, const std::string& fileName, std::vector<std::string>& errors)
+      : file_(Printable(fileName)), errors_(errors) {
+    Tokens t = Tokenize(text);
+    tokens_ = std::move(t.tokens);
+    endLine_ = t.endLine;
+    endColumn_ = t.endColumn;
   }
 
   std::optional<Scene> Parse() {
@@ -116,9 +150,9 @@ class NffParser {
     if (ec == std::errc::result_out_of_range || (ec == std::errc() && end == s.data() + s.size() &&
                                                  !std::isfinite(value)))
       Fail(t, std::string("expected a finite number for ") + what + ", got '" +
-                  std::string(t.text) + "'");
+                  Printable(t.text) + "'");
     if (ec != std::errc() || end != s.data() + s.size())
-      Fail(t, std::string("expected a number for ") + what + ", got '" + std::string(t.text) + "'");
+      Fail(t, std::string("expected a number for ") + what + ", got '" + Printable(t.text) + "'");
     return value;
   }
 
@@ -135,14 +169,14 @@ class NffParser {
     const double v = Number(what);
     if (v != std::floor(v) || v < double(lo) || v > double(hi))
       Fail(t, std::string("expected an integer from ") + std::to_string(lo) + " to " +
-                  std::to_string(hi) + " for " + what + ", got '" + std::string(t.text) + "'");
+                  std::to_string(hi) + " for " + what + ", got '" + Printable(t.text) + "'");
     return long(v);
   }
 
   bool NextIsNumber() const { return pos_ < tokens_.size() && LooksNumeric(tokens_[pos_].text); }
 
   void Once(bool& seen, const Token& keyword) {
-    if (seen) Fail(keyword, "'" + std::string(keyword.text) + "' given twice");
+    if (seen) Fail(keyword, "'" + Printable(keyword.text) + "' given twice");
     seen = true;
   }
 
@@ -153,12 +187,16 @@ class NffParser {
       Once(seenV_, k);
     } else if (w == "from") {
       Once(seenFrom_, k);
+      fromAt_ = k;
+      cam.where = SourceLocation{file_, k.line, k.column};
       cam.from = Triple("the eye position 'from x y z'");
     } else if (w == "at") {
       Once(seenAt_, k);
+      atAt_ = k;
       cam.at = Triple("the look-at point 'at x y z'");
     } else if (w == "up") {
       Once(seenUp_, k);
+      upAt_ = k;
       cam.up = Triple("the up vector 'up x y z'");
     } else if (w == "angle") {
       Once(seenAngle_, k);
@@ -178,8 +216,10 @@ class NffParser {
       scene_.background = Colour("the background colour 'b r g b'", k);
     } else if (w == "l") {
       Light light;
+      light.where = SourceLocation{file_, k.line, k.column};
       light.position = Triple("the light position 'l x y z [r g b]'");
-      if (NextIsNumber()) light.colour = Colour("the light colour", k);
+      light.colourGiven = NextIsNumber();
+      if (light.colourGiven) light.colour = Colour("the light colour", k);
       scene_.lights.push_back(light);
     } else if (w == "f") {
       MaterialStatement(k);
@@ -207,9 +247,9 @@ class NffParser {
       TransformStatement(k);
     } else if (LooksNumeric(w)) {
       Fail(k, "expected a keyword (v, from, at, up, angle, hither, resolution, b, l, f, s, c, "
-              "p, pp, transform), got the number '" + std::string(w) + "'");
+              "p, pp, transform), got the number '" + Printable(w) + "'");
     } else {
-      Fail(k, "unknown keyword '" + std::string(w) +
+      Fail(k, "unknown keyword '" + Printable(w) +
                   "' (expected v, from, at, up, angle, hither, resolution, b, l, f, s, c, p, "
                   "pp or transform)");
     }
@@ -221,20 +261,41 @@ class NffParser {
     return c;
   }
 
+  // A number that must lie in [lo, hi] (hi = inf: no upper end); an error points at the
+  // number itself and names the range.
+  double NumberIn(const char* what, double lo, double hi) {
+    const Token& t = tokens_[pos_ < tokens_.size() ? pos_ : tokens_.size() - 1];
+    const double v = Number(what);
+    if (!(v >= lo && v <= hi)) {
+      char range[64];
+      if (std::isinf(hi)) std::snprintf(range, sizeof range, ">= %g", lo);
+      else std::snprintf(range, sizeof range, "from %g to %g", lo, hi);
+      Fail(t, std::string("expected ") + what + " " + range + ", got '" + Printable(t.text) + "'");
+    }
+    return v;
+  }
+
+  // Every material value is checked against its own range, the same way (docs/scene-format.md):
+  // the colour, Kd, Ks and T are fractions of light in [0, 1] (the NFF description: "usually
+  // 0 <= Kd <= 1 and 0 <= Ks <= 1"; T above 1 would amplify the light through a surface);
+  // Shine is an exponent >= 0; ior > 0, or 0 (SPD's value for opaque materials) when T = 0.
   void MaterialStatement(const Token& k) {
     seenMaterial_ = true;  // even if malformed: do not also blame every following object
     Material m;
-    m.colour = Colour("the material colour 'f r g b Kd Ks Shine T ior'", k);
-    m.kd = Number("Kd");
-    m.ks = Number("Ks");
-    m.shine = Number("Shine");
-    m.t = Number("T");
-    m.ior = Number("ior");
-    if (m.kd < 0 || m.ks < 0 || m.shine < 0 || m.t < 0)
-      Fail(k, "expected Kd, Ks, Shine and T >= 0");
+    constexpr double kInf = std::numeric_limits<double>::infinity();
+    m.colour.x = NumberIn("the material's red r", 0, 1);
+    m.colour.y = NumberIn("the material's green g", 0, 1);
+    m.colour.z = NumberIn("the material's blue b", 0, 1);
+    m.kd = NumberIn("the diffuse weight Kd", 0, 1);
+    m.ks = NumberIn("the specular and mirror weight Ks", 0, 1);
+    m.shine = NumberIn("the Phong exponent Shine", 0, kInf);
+    m.t = NumberIn("the transmission T", 0, 1);
+    const Token& iorToken = tokens_[pos_ < tokens_.size() ? pos_ : tokens_.size() - 1];
+    m.ior = NumberIn("the index of refraction ior", 0, kInf);
     // SPD writes ior 0 for opaque materials; a transparent one needs a real index.
-    if (m.ior < 0 || (m.t > 0 && !(m.ior > 0)))
-      Fail(k, "expected an index of refraction > 0 (or 0 for an opaque material)");
+    if (m.t > 0 && !(m.ior > 0))
+      Fail(iorToken, "expected an index of refraction ior > 0 for a transparent material (T > 0), got '" +
+                         Printable(iorToken.text) + "'");
     // Reuse an identical material (SPD files repeat `f` lines).
     auto it = std::find(scene_.materials.begin(), scene_.materials.end(), m);
     current_ = int(it - scene_.materials.begin());
@@ -318,13 +379,28 @@ class NffParser {
     for (const Need& n : needs)
       if (!n.seen) errors_.push_back(end + "missing " + std::string(n.what));
     if (seenFrom_ && seenAt_ && seenUp_) {
+      // Reported at the item's own line. Both vectors are scaled by their largest component
+      // first, so the test cannot overflow.
       const Camera& c = scene_.camera;
-      const Vec3 dir = c.at - c.from;
-      const double len = Length(dir);
-      if (!(len > 0)) {
-        errors_.push_back(end + "the view has 'from' equal to 'at'");
-      } else if (!(Length(Cross(dir / len, c.up)) > 1e-9 * Length(c.up))) {
-        errors_.push_back(end + "the view's 'up' is zero or parallel to the view direction");
+      const Vec3 dir = ScaledDown(c.at * 0.5 - c.from * 0.5), up = ScaledDown(c.up);
+      if (!(MaxAbs(dir) > 0)) {
+        Report(fromAt_, "the view's 'from' equals 'at' (" + Where(atAt_) + "): no view direction");
+      } else if (!(MaxAbs(up) > 0)) {
+        Report(upAt_, "the view's 'up' is zero");
+      } else if (!(Length(Cross(Normalize(dir), Normalize(up))) > 1e-9)) {
+        Report(upAt_, "the view's 'up' is parallel to the view direction 'at' - 'from'");
+      }
+    }
+    // Values whose squares overflow double would give a silently wrong image (an r² of
+    // inf misses everything): rejected here with their line (docs/scene-format.md).
+    if (errors_.empty()) {
+      if (const auto fault = FindMagnitudeOver(scene_, kMagnitudeLimitDouble)) {
+        char what[320];
+        std::snprintf(what, sizeof what,
+                      ": %s reaches %.3g; every method squares coordinates in double, so values "
+                      "must stay within %.0e (scale the scene down)",
+                      fault->what.c_str(), fault->magnitude, kMagnitudeLimitDouble);
+        errors_.push_back(fault->where.ToString() + what);
       }
     }
   }
@@ -337,6 +413,7 @@ class NffParser {
   Scene scene_;
   int current_ = -1;
   std::optional<Affine> transform_;
+  Token fromAt_, atAt_, upAt_;  // where the view items were given
   bool seenV_ = false, seenFrom_ = false, seenAt_ = false, seenUp_ = false, seenAngle_ = false,
        seenHither_ = false, seenResolution_ = false, seenBackground_ = false, seenMaterial_ = false;
 };
@@ -363,12 +440,29 @@ Scene ParseNffOrThrow(std::string_view text, const std::string& fileName) {
 }
 
 Scene ReadNffFile(const std::string& path) {
+  // Only a regular file is read: a directory would read as empty, and a device or a pipe
+  // (/dev/zero) may never end. Its size is checked before any byte is read.
+  const std::string shown = Printable(path);
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::file_status status = fs::status(path, ec);
+  if (ec || !fs::exists(status)) throw UserError(shown + ": cannot open the scene file (no such file)");
+  if (fs::is_directory(status))
+    throw UserError(shown + ": is a directory, expected an NFF scene file");
+  if (!fs::is_regular_file(status))
+    throw UserError(shown + ": is not a regular file (a device, pipe or socket), expected an NFF scene file");
+  const std::uintmax_t size = fs::file_size(path, ec);
+  if (ec) throw UserError(shown + ": cannot read the scene file's size");
+  if (size > kMaxSceneBytes)
+    throw UserError(shown + ": the scene file has " + std::to_string(size) + " bytes, more than the " +
+                    std::to_string(kMaxSceneBytes >> 20) + " MiB a scene may have");
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw UserError(path + ": cannot open the scene file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) throw UserError(path + ": cannot read the scene file");
-  return ParseNffOrThrow(text.str(), path);
+  if (!in) throw UserError(shown + ": cannot open the scene file");
+  std::string text(size, '\0');
+  in.read(text.data(), std::streamsize(size));
+  if (in.gcount() != std::streamsize(size) || in.bad())
+    throw UserError(shown + ": cannot read the scene file");
+  return ParseNffOrThrow(text, path);
 }
 
 namespace {
@@ -387,7 +481,8 @@ std::string WriteNff(const Scene& s) {
   out += "v\nfrom " + Nums(c.from) + "\nat " + Nums(c.at) + "\nup " + Nums(c.up) + "\nangle " +
          Num(c.angleDegrees) + "\nhither " + Num(c.hither) + "\nresolution " +
          std::to_string(c.width) + " " + std::to_string(c.height) + "\n";
-  for (const Light& l : s.lights) out += "l " + Nums(l.position) + " " + Nums(l.colour) + "\n";
+  for (const Light& l : s.lights)
+    out += "l " + Nums(l.position) + (l.colourGiven ? " " + Nums(l.colour) : std::string()) + "\n";
   int material = -1;
   std::optional<Affine> transform;
   for (const Primitive& o : s.objects) {

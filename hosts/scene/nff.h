@@ -7,6 +7,7 @@
 // UserError listing them all.
 #pragma once
 
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -19,6 +20,9 @@ namespace zephyr {
 // Limits that make a scene "absurd" rather than merely big.
 inline constexpr int kMaxResolution = 16384;           // per side
 inline constexpr int kMaxPolygonVertices = 1 << 20;
+// The largest scene file ReadNffFile reads: 64 MiB, over a million SPD objects, far more
+// than an exhaustive tracer (every ray against every object) can render.
+inline constexpr std::uintmax_t kMaxSceneBytes = std::uintmax_t(64) << 20;
 
 // Parses NFF text. On success returns the scene and leaves errors empty; otherwise returns
 // nullopt with every error found (at least one).
@@ -28,7 +32,8 @@ std::optional<Scene> ParseNff(std::string_view text, const std::string& fileName
 // ParseNff, throwing a UserError that lists every error.
 Scene ParseNffOrThrow(std::string_view text, const std::string& fileName);
 
-// Reads a file; a missing or unreadable file is a UserError too.
+// Reads a file; a missing or unreadable file, a directory, anything but a regular file, and
+// a file over kMaxSceneBytes are UserErrors too.
 Scene ReadNffFile(const std::string& path);
 
 // Writes a scene as NFF (with `transform` lines where objects have one). Numbers are

@@ -25,12 +25,14 @@ std::string Vec(const Vec3& v) { return "<" + Num(v.x) + ", " + Num(v.y) + ", " 
 // POV-Ray weights a surface's own lighting (diffuse and highlight) by its opacity
 // 1 − transmit, where ours uses Kd and Ks as given; the exporter divides them back out.
 // Reflection and transmission are not weighted, in either renderer.
+// The ambient term (docs/shading.md: A · Kd · C) is POV-Ray's finish ambient Kd against
+// ambient_light A, divided by the opacity like the diffuse weight.
 std::string Texture(const Material& m) {
   const double opacity = 1 - m.t;
   const double scale = opacity > 1e-6 ? 1 / opacity : 0;
   std::string s = "  pigment { rgb " + Vec(m.colour);
   if (m.t > 0) s += " transmit " + Num(m.t);
-  s += " }\n  finish { ambient 0 emission 0 diffuse " + Num(m.kd * scale);
+  s += " }\n  finish { ambient " + Num(m.kd * scale) + " emission 0 diffuse " + Num(m.kd * scale);
   if (m.ks > 0) {
     s += " phong " + Num(m.ks * scale) + " phong_size " + Num(m.shine);
     s += " reflection { " + Num(m.ks) + " }";
@@ -53,20 +55,22 @@ std::string Matrix(const Affine& a) {
 std::string ExportPov(const Scene& scene, int depth) {
   const Camera& c = scene.camera;
   std::string out = "// Exported by `zephyr export-pov` from " + scene.source + "\n";
+  const double ambient = scene.Ambient();
   out += "#version 3.7;\nglobal_settings { assumed_gamma 1.0 max_trace_level " + std::to_string(depth) +
-         " adc_bailout 0 ambient_light 0 }\n";
+         " adc_bailout 0 ambient_light " + Vec(Vec3{ambient, ambient, ambient}) + " }\n";
   out += "background { rgb " + Vec(scene.background) + " }\n";
   // Our camera (hosts/trace/tracer.cpp PrimaryRays): `angle` spans the centres of the top and
   // bottom rows. POV-Ray's image plane spans the pixel edges, so up and right are the
   // pixel pitch times the pixel counts. Explicit vectors keep our right-handed frame.
-  const Vec3 forward = Normalize(c.at - c.from);
-  const Vec3 right = Normalize(Cross(forward, c.up));
+  const Vec3 forward = Normalize(ScaledDown(c.at - c.from));
+  const Vec3 right = Normalize(ScaledDown(Cross(forward, ScaledDown(c.up))));
   const Vec3 up = Cross(right, forward);
   const double pitch = 2 * std::tan(c.angleDegrees * M_PI / 360) / std::max(c.height - 1, 1);
   out += "camera { perspective location " + Vec(c.from) + " direction " + Vec(forward) + " right " +
          Vec(right * (pitch * c.width)) + " up " + Vec(up * (pitch * c.height)) + " }\n";
-  for (const Light& l : scene.lights)
-    out += "light_source { " + Vec(l.position) + " color rgb " + Vec(l.colour) + " }\n";
+  // Lights with the intensity every method shades with (SPD's √N/(2N) when a light has no colour).
+  for (size_t i = 0; i < scene.lights.size(); ++i)
+    out += "light_source { " + Vec(scene.lights[i].position) + " color rgb " + Vec(scene.LightColour(i)) + " }\n";
   for (const Primitive& o : scene.objects) {
     std::string body;
     if (auto* s = std::get_if<Sphere>(&o.shape)) {

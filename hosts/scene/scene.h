@@ -31,11 +31,16 @@ struct Camera {
   double angleDegrees = 45;
   double hither = 0;
   int width = 0, height = 0;
+  SourceLocation where = {};  // the `from` line (messages about the eye)
 };
 
+// NFF `l x y z [r g b]`. Without a colour (colourGiven false) the intensity comes from
+// Scene::LightColour, SPD's rule.
 struct Light {
   Vec3 position;
   Vec3 colour{1, 1, 1};
+  bool colourGiven = true;
+  SourceLocation where = {};
 };
 
 // NFF `f r g b Kd Ks Shine T ior` (docs/shading.md says how each term is used).
@@ -90,9 +95,36 @@ struct Scene {
   std::string source;              // file name, for messages and reports
   std::vector<std::string> warnings;  // "file:line:column: warning: ..." (printed by render)
 
-  // A radius that encloses every primitive and the eye, centred at the origin — used to
-  // scale epsilons.
-  double Extent() const;
+  // The intensity every method shades with for light i: its colour if the file gave one;
+  // otherwise √N/(2N) in each channel for the scene's N lights (SPD readme, "so that the
+  // scene does not saturate"; docs/scene-format.md).
+  Vec3 LightColour(size_t i) const;
+  // The ambient intensity A (shading adds A · Kd · C at every hit, shadowed or not): √N/(2N)
+  // when some light has no colour (the SPD readme's ambient term), else 0.
+  double Ambient() const;
 };
+
+// Where a value of the scene is larger than arithmetic can square: the item's location,
+// what it is and the magnitude found.
+struct MagnitudeFault {
+  SourceLocation where;
+  std::string what;   // "the eye ('from')", "light", "sphere", ...
+  double magnitude;
+};
+
+// The tracers form products of two coordinates and sums of a few such products (|f|², the
+// cone's quadratic, a polygon's edge functions); a scene whose values stay within `limit`
+// keeps them finite when limit² · 64 is below the arithmetic's largest number. Checked per
+// item: the eye and `at`, each light, each object's world-space extent, and for an object
+// with a transform or a cone's slope the magnitudes it meets in its own coordinates (the
+// eye, lights and scene mapped by T⁻¹, times ‖T⁻¹‖ and (1 + |slope|)²). Returns the first
+// item over the limit, in file order.
+std::optional<MagnitudeFault> FindMagnitudeOver(const Scene& scene, double limit);
+
+// The limits the tracers use (docs/scene-format.md): sqrt(largest finite) / 64, rounded
+// down to a power of ten: 1e150 for double (sqrt(1.8e308) = 1.3e154), 1e17 for float
+// (sqrt(3.4e38) = 1.8e19).
+inline constexpr double kMagnitudeLimitDouble = 1e150;
+inline constexpr double kMagnitudeLimitFloat = 1e17;
 
 }  // namespace zephyr

@@ -44,27 +44,29 @@ std::optional<Real> SphereHit(const RealVec& centre, const Real& radius, const R
   return std::nullopt;
 }
 
-// The plane (Newell's normal) and the even-odd test in the projection that drops the
-// normal's largest axis.
+// The plane (Newell's normal) and the inside by the tracer's edge functions along the ray,
+// with its shared-edge rule (hosts/trace/intersect.h InsideAlongRay).
 std::optional<Real> PolygonHit(const Polygon& poly, const RealVec& o, const RealVec& d, const Real& tMin) {
   const size_t n = poly.vertices.size();
   std::vector<RealVec> v;
   for (const Vec3& p : poly.vertices) v.push_back(Make(p));
   RealVec nn{0, 0, 0};
+  Vec3 normal;  // the same normal in double, for the tracer's edge groups
   for (size_t i = 0; i < n; ++i) {
     const RealVec &a = v[i], &b = v[(i + 1) % n];
     nn = {nn.x + (a.y - b.y) * (a.z + b.z), nn.y + (a.z - b.z) * (a.x + b.x), nn.z + (a.x - b.x) * (a.y + b.y)};
+    const Vec3 &p = poly.vertices[i], &q = poly.vertices[(i + 1) % n];
+    normal += Vec3{(p.y - q.y) * (p.z + q.z), (p.z - q.z) * (p.x + q.x), (p.x - q.x) * (p.y + q.y)};
   }
   const Real nd = Dot(nn, d);
   if (nd == 0) return std::nullopt;
   const Real t = Dot(nn, Minus(v[0], o)) / nd;
   if (!(t > tMin)) return std::nullopt;
-  const RealVec hit = {o.x + t * d.x, o.y + t * d.y, o.z + t * d.z};
-  const Real ax = abs(nn.x), ay = abs(nn.y), az = abs(nn.z);
-  const int drop = (ax >= ay && ax >= az) ? 0 : (ay >= az ? 1 : 2);
-  std::vector<Real> uv;
-  for (const RealVec& p : v) uv.push_back(p[(drop + 1) % 3]), uv.push_back(p[(drop + 2) % 3]);
-  if (!InsidePolygon2D(uv, hit[(drop + 1) % 3], hit[(drop + 2) % 3])) return std::nullopt;
+  std::vector<Vec3T<Real>> w;
+  for (const RealVec& p : v) w.push_back({p.x, p.y, p.z});
+  const auto groups = PolygonEdgeGroups(poly.vertices, Normalize(ScaledDown(normal)));
+  if (!InsideAlongRay<Real>(w, groups, {o.x, o.y, o.z}, {d.x, d.y, d.z}, nd > 0 ? 1 : -1))
+    return std::nullopt;
   return t;
 }
 

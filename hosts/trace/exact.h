@@ -7,7 +7,7 @@
 // Inputs are the double values the methods see (the scene's numbers, the double eye ray),
 // taken exactly; only the arithmetic after them is 128-bit. Spheres (Hearn–Baker), ellipsoids
 // and transformed cones (the ray through the scene's double T⁻¹, then exact), polygons
-// (Newell's plane, even-odd test) and open truncated cones as hosts/trace/intersect.h
+// (Newell's plane, the tracer's edge functions with the shared-edge rule) and open truncated cones as hosts/trace/intersect.h
 // defines them.
 #pragma once
 

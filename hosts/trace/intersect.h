@@ -98,14 +98,77 @@ inline int IntersectCone(const Vec3T<T>& o, const Vec3T<T>& d, const Vec3T<T>& b
   return n;
 }
 
-// Even-odd point-in-polygon test on vertices projected by dropping one axis.
+// A polygon's inside as edge functions along the ray, with an edge rule that gives every
+// point of an edge two faces share to exactly one of them (a ray through a roof ridge
+// hits the roof). Built once per polygon (PolygonEdgeGroups); tested per ray
+// (InsideAlongRay). The SIMD pass's edge functions follow the same rule (hosts/simd).
+//
+// For a ray o + t d and an edge (p, q), e = d · ((p − o) × (q − o)): its sign says on which
+// side of the plane through o, p and q the ray passes. A convex polygon is one group of
+// edges; a concave one a fan of triangles from vertex 0 whose parity is the even-odd rule.
+// The ray is inside a group when, for every edge, side·s·e > 0, s = sign(d · n) the
+// polygon's facing. The edge rule: each edge is stored with its end points in one
+// canonical order (the lexicographically smaller vertex first), so two faces sharing it
+// compute the same e bit for bit, and e = 0 belongs to the face for which side·s > 0.
+struct PolygonEdge {
+  int p = 0, q = 0;  // vertex indices, vertex p < vertex q lexicographically (x, then y, z)
+  int side = 1;      // +1 or −1: the group's inside is where side · s · e > 0
+};
+using PolygonEdgeGroup = std::vector<PolygonEdge>;
+
+// The groups of a planar polygon with Newell normal `normal` (convex: one group of every
+// edge; concave: the fan triangles (0, i, i+1) that are not collinear).
+inline std::vector<PolygonEdgeGroup> PolygonEdgeGroups(const std::vector<Vec3>& v, const Vec3& normal) {
+  const size_t n = v.size();
+  bool convex = true;
+  for (size_t i = 0; i < n; ++i) {
+    const Vec3 e0 = v[(i + 1) % n] - v[i], e1 = v[(i + 2) % n] - v[(i + 1) % n];
+    if (Dot(Cross(e0, e1), normal) < 0) convex = false;
+  }
+  auto less = [&](int a, int b) {
+    return v[a].x != v[b].x ? v[a].x < v[b].x : (v[a].y != v[b].y ? v[a].y < v[b].y : v[a].z < v[b].z);
+  };
+  auto edge = [&](int a, int b, int tau) {
+    return less(a, b) ? PolygonEdge{a, b, tau} : PolygonEdge{b, a, -tau};
+  };
+  std::vector<PolygonEdgeGroup> groups;
+  if (convex) {
+    PolygonEdgeGroup g;
+    for (size_t i = 0; i < n; ++i) g.push_back(edge(int(i), int((i + 1) % n), 1));
+    groups.push_back(g);
+  } else {
+    for (size_t i = 1; i + 1 < n; ++i) {
+      const double tau = Dot(Cross(v[i] - v[0], v[i + 1] - v[0]), normal);
+      if (tau == 0) continue;  // a collinear fan triangle covers nothing
+      const int s = tau > 0 ? 1 : -1;
+      groups.push_back({edge(0, int(i), s), edge(int(i), int(i + 1), s), edge(int(i + 1), 0, s)});
+    }
+  }
+  return groups;
+}
+
+// One edge's test: inside when side·s·e > 0, and e = 0 goes to the face with side·s > 0.
 template <typename T>
-inline bool InsidePolygon2D(const std::vector<T>& uv, T pu, T pv) {
+inline bool InsideEdge(T e, int sideTimesFacing) {
+  return sideTimesFacing > 0 ? e >= T(0) : e < T(0);
+}
+
+// Whether the ray o + t d passes inside the polygon (vertices v, groups from
+// PolygonEdgeGroups, facing = sign of d · normal, ±1).
+template <typename T>
+inline bool InsideAlongRay(const std::vector<Vec3T<T>>& v, const std::vector<PolygonEdgeGroup>& groups,
+                           const Vec3T<T>& o, const Vec3T<T>& d, int facing) {
   bool inside = false;
-  const size_t n = uv.size() / 2;
-  for (size_t i = 0, j = n - 1; i < n; j = i++) {
-    const T ui = uv[2 * i], vi = uv[2 * i + 1], uj = uv[2 * j], vj = uv[2 * j + 1];
-    if ((vi > pv) != (vj > pv) && pu < (uj - ui) * (pv - vi) / (vj - vi) + ui) inside = !inside;
+  for (const PolygonEdgeGroup& g : groups) {
+    bool in = true;
+    for (const PolygonEdge& e : g) {
+      const T value = Dot(d, Cross(v[e.p] - o, v[e.q] - o));
+      if (!InsideEdge(value, e.side * facing)) {
+        in = false;
+        break;
+      }
+    }
+    inside ^= in;
   }
   return inside;
 }

@@ -1,6 +1,7 @@
 #include "hosts/trace/tracer.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <cmath>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -24,8 +25,10 @@ const char* PrecisionName(Precision p) { return p == Precision::kFloat ? "float"
 const char* SphereTestName(SphereTest s) { return s == SphereTest::kHearnBaker ? "hb" : "naive"; }
 
 PrimaryRays::PrimaryRays(const Camera& c) : eye_(c.from) {
-  forward_ = Normalize(c.at - c.from);
-  right_ = Normalize(Cross(forward_, c.up));
+  // Scaled before normalising, so an `up` of 1e300 or 1e-300 neither overflows nor
+  // underflows (the reader has rejected a zero or parallel one).
+  forward_ = Normalize(ScaledDown(c.at - c.from));
+  right_ = Normalize(ScaledDown(Cross(forward_, ScaledDown(c.up))));
   up_ = Cross(right_, forward_);
   const double span = 2 * std::tan(c.angleDegrees * M_PI / 360);
   pitch_ = span / std::max(c.height - 1, 1);
@@ -109,9 +112,12 @@ struct Prepared {
   T height = 0, r0 = 0, slope = 0;
   // Polygon
   V normal, v0;
-  int dropAxis = 0;
-  std::vector<T> uv;               // vertices projected on the two kept axes
+  std::vector<PolygonEdgeGroup> groups;  // the inside, with the shared-edge rule
   std::vector<V> vertices, normals;  // normals only for `pp`
+  // The magnitude of the object's own numbers in world units (sphere |c| + r, cone ends and
+  // radii, polygon plane offset |n·v0|; with a transform its world-space bound): part of the
+  // error bound that sets how far secondary rays leaving it skip (SecondaryOffset).
+  T scale = 0;
 
   V ToObjectPoint(const V& p) const {
     return {inverse[0][0] * p.x + inverse[0][1] * p.y + inverse[0][2] * p.z + inverse[0][3],
@@ -163,18 +169,34 @@ Prepared<T> Prepare(const Primitive& p) {
       const Vec3& b = poly.vertices[(i + 1) % poly.vertices.size()];
       n += Vec3{(a.y - b.y) * (a.z + b.z), (a.z - b.z) * (a.x + b.x), (a.x - b.x) * (a.y + b.y)};
     }
-    n = Normalize(n);
+    n = Normalize(ScaledDown(n));
     r.normal = V(n);
     r.v0 = V(poly.vertices[0]);
-    const double ax = std::abs(n.x), ay = std::abs(n.y), az = std::abs(n.z);
-    r.dropAxis = (ax >= ay && ax >= az) ? 0 : (ay >= az ? 1 : 2);
-    for (const Vec3& v : poly.vertices) {
-      r.vertices.push_back(V(v));
-      r.uv.push_back(T(v[(r.dropAxis + 1) % 3]));
-      r.uv.push_back(T(v[(r.dropAxis + 2) % 3]));
-    }
+    r.groups = PolygonEdgeGroups(poly.vertices, n);
+    for (const Vec3& v : poly.vertices) r.vertices.push_back(V(v));
     for (const Vec3& v : poly.normals) r.normals.push_back(V(v));
   }
+  double scale = 0;
+  if (p.transform) {
+    double norm = 0;  // ‖A‖∞
+    for (int i = 0; i < 3; ++i)
+      norm = std::max(norm, std::abs(p.transform->m[i][0]) + std::abs(p.transform->m[i][1]) +
+                                std::abs(p.transform->m[i][2]));
+    auto grow = [&](const Vec3& q, double radius) {
+      scale = std::max(scale, MaxAbs(p.transform->ApplyPoint(q)) + radius * norm);
+    };
+    if (auto* s = std::get_if<Sphere>(&p.shape)) grow(s->center, s->radius);
+    if (auto* c = std::get_if<Cone>(&p.shape)) grow(c->base, c->baseRadius), grow(c->apex, c->apexRadius);
+    if (auto* q = std::get_if<Polygon>(&p.shape))
+      for (const Vec3& v : q->vertices) grow(v, 0);
+  } else if (auto* s = std::get_if<Sphere>(&p.shape)) {
+    scale = MaxAbs(s->center) + s->radius;
+  } else if (auto* c = std::get_if<Cone>(&p.shape)) {
+    scale = std::max(MaxAbs(c->base), MaxAbs(c->apex)) + std::max(c->baseRadius, c->apexRadius);
+  } else {
+    scale = std::abs(Dot(Vec3(r.normal), std::get<Polygon>(p.shape).vertices[0]));
+  }
+  r.scale = T(scale);
   return r;
 }
 
@@ -205,8 +227,7 @@ int Intersect(const Prepared<T>& obj, SphereTest form, Vec3T<T> o, Vec3T<T> d, T
       if (nd == T(0)) return 0;
       const T t = Dot(obj.normal, obj.v0 - o) / nd;
       if (!(t > tMin)) return 0;
-      const Vec3T<T> p = o + d * t;
-      if (!InsidePolygon2D(obj.uv, p[(obj.dropAxis + 1) % 3], p[(obj.dropAxis + 2) % 3])) return 0;
+      if (!InsideAlongRay(obj.vertices, obj.groups, o, d, nd > T(0) ? 1 : -1)) return 0;
       roots[0] = t;
       return 1;
     }
@@ -286,11 +307,9 @@ class TracerT final : public Tracer {
         scalarObjects_.push_back(index);
       }
     }
-    // Secondary rays start this far along, so they do not re-hit their own surface.
-    // Float keeps ~7 digits: 1e-4 of the scene's size is well above its rounding.
-    const double relative = std::is_same_v<T, float> ? 1e-4 : 1e-9;
-    epsilon_ = T(relative * scene.Extent());
     hither_ = T(std::max(scene.camera.hither, 0.0));
+    for (size_t i = 0; i < scene.lights.size(); ++i) lightColour_.push_back(V(scene.LightColour(i)));
+    ambient_ = T(scene.Ambient());
   }
 
   PrimaryHit FirstHit(const PrimaryRay& ray, TraceStats& stats) const override {
@@ -328,15 +347,26 @@ class TracerT final : public Tracer {
     return best;
   }
 
+  // How far a secondary or shadow ray leaving a hit skips, so it does not re-hit the
+  // surface it leaves: a bound on the hit point's error, which grows with the magnitudes
+  // that computed it — the ray's origin, the distance t and the object's own numbers —
+  // times 1e-9 (double) or 1e-4 (float, ~7 digits). Tied to the hit, not to the scene: a
+  // far "infinite" floor changes nothing here (docs/shading.md).
+  T SecondaryOffset(const V& o, T t, const Prepared<T>& obj) const {
+    const T relative = std::is_same_v<T, float> ? T(1e-4) : T(1e-9);
+    return relative * (MaxAbs(o) + std::abs(t) + obj.scale);
+  }
+
   // Light let through toward a light `dist` away: every surface crossed multiplies it by
-  // that surface's transparency T (0 for opaque: full shadow).
-  T Transmission(const V& p, const V& toLight, T dist, TraceStats& stats) const {
+  // that surface's transparency T (0 for opaque: full shadow). Hits nearer than tMin (the
+  // offset of the hit the ray leaves) are ignored.
+  T Transmission(const V& p, const V& toLight, T dist, T tMin, TraceStats& stats) const {
     ++stats.rays[int(RayKind::kShadow)];
     for (int k = 0; k < kShapeKinds; ++k) stats.tests[k] += kindCount_[k];
     T through = T(1);
     T roots[2];
     for (const Prepared<T>& obj : objects_) {
-      const int n = Intersect(obj, options_.sphereTest, p, toLight, epsilon_, roots);
+      const int n = Intersect(obj, options_.sphereTest, p, toLight, tMin, roots);
       for (int i = 0; i < n; ++i) {
         if (roots[i] >= dist) break;
         through *= T(scene_.materials[obj.material].t);
@@ -346,10 +376,10 @@ class TracerT final : public Tracer {
     return through;
   }
 
-  V Trace(const V& o, const V& d, int depth, RayKind kind, TraceStats& stats) const {
+  V Trace(const V& o, const V& d, T tMin, int depth, RayKind kind, TraceStats& stats) const {
     ++stats.rays[int(kind)];
     T t;
-    const int object = Nearest(o, d, epsilon_, stats, t);
+    const int object = Nearest(o, d, tMin, stats, t);
     if (object < 0) return V(scene_.background);
     ++stats.hits;
     return Shade(o, d, object, t, depth, stats);
@@ -364,35 +394,38 @@ class TracerT final : public Tracer {
     const bool inside = Dot(n, d) > T(0);
     if (inside) n = -n;  // face the viewer
     const V surface(m.colour);
-    V colour{};
-    for (const Light& light : scene_.lights) {
+    const T leave = SecondaryOffset(o, t, obj);
+    // The ambient term (SPD's, for scenes with lights of no colour): unshadowed.
+    V colour = surface * (T(m.kd) * ambient_);
+    for (size_t i = 0; i < scene_.lights.size(); ++i) {
       ++stats.lightSamples;
-      V toLight = V(light.position) - p;
+      const V& lightColour = lightColour_[i];
+      V toLight = V(scene_.lights[i].position) - p;
       const T dist = Length(toLight);
       toLight = toLight / dist;
       const T nl = Dot(n, toLight);
       if (nl <= T(0)) continue;
-      const T through = Transmission(p, toLight, dist, stats);
+      const T through = Transmission(p, toLight, dist, leave, stats);
       if (through == T(0)) continue;
-      V local = Mul(surface, V(light.colour)) * (T(m.kd) * nl);
+      V local = Mul(surface, lightColour) * (T(m.kd) * nl);
       if (m.ks > 0) {
         // Phong: the mirror direction of the light against the direction to the eye.
         const V r = n * (T(2) * nl) - toLight;
         const T rv = -Dot(r, d);
-        if (rv > T(0)) local += V(light.colour) * (T(m.ks) * std::pow(rv, T(m.shine)));
+        if (rv > T(0)) local += lightColour * (T(m.ks) * std::pow(rv, T(m.shine)));
       }
       colour += local * through;
     }
     if (depth < options_.depth) {
       const T dn = Dot(d, n);  // < 0: n faces the incoming ray
       const V reflected = d - n * (T(2) * dn);
-      if (m.ks > 0) colour += Trace(p, reflected, depth + 1, RayKind::kReflected, stats) * T(m.ks);
+      if (m.ks > 0) colour += Trace(p, reflected, leave, depth + 1, RayKind::kReflected, stats) * T(m.ks);
       if (m.t > 0) {
         // Snell: entering uses 1/ior, leaving uses ior/1. Under total internal reflection
         // the transmitted share is reflected.
         const T eta = inside ? T(m.ior) : T(1) / T(m.ior);
         const std::optional<V> refracted = Refract(d, n, eta);
-        colour += Trace(p, refracted ? *refracted : reflected, depth + 1,
+        colour += Trace(p, refracted ? *refracted : reflected, leave, depth + 1,
                         refracted ? RayKind::kRefracted : RayKind::kReflected, stats) * T(m.t);
       }
     }
@@ -404,7 +437,8 @@ class TracerT final : public Tracer {
   std::vector<int> sphereObject_;    // spheres_ index -> objects_ index (increasing)
   std::vector<int> scalarObjects_;   // every other object, in order
   uint64_t kindCount_[kShapeKinds] = {};
-  T epsilon_, hither_;
+  std::vector<V> lightColour_;       // Scene::LightColour of each light
+  T ambient_, hither_;
 };
 
 }  // namespace
@@ -412,6 +446,17 @@ class TracerT final : public Tracer {
 std::unique_ptr<Tracer> Tracer::Create(const Scene& scene, const TraceOptions& options) {
   if (options.depth < 1 || options.depth > 64)
     throw UserError("--depth: expected 1..64, got " + std::to_string(options.depth));
+  // The reader has held the scene to double's limit; float's is lower (docs/scene-format.md).
+  const bool isFloat = options.precision == Precision::kFloat;
+  const double limit = isFloat ? kMagnitudeLimitFloat : kMagnitudeLimitDouble;
+  if (const auto fault = FindMagnitudeOver(scene, limit)) {
+    char what[320];
+    std::snprintf(what, sizeof what,
+                  ": %s reaches %.3g, beyond %.0e, where squares overflow %s%s", fault->what.c_str(),
+                  fault->magnitude, limit, isFloat ? "float" : "double",
+                  isFloat ? " (use --precision double)" : " (scale the scene down)");
+    throw UserError(fault->where.ToString() + what);
+  }
   if (options.precision == Precision::kFloat) return std::make_unique<TracerT<float>>(scene, options);
   return std::make_unique<TracerT<double>>(scene, options);
 }

@@ -1,8 +1,11 @@
 // Tests for the NFF reader, its error reports and the scene generators.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 
 #include "fixed/check.h"
 #include "hosts/scene/nff.h"
@@ -121,6 +124,162 @@ TEST(SceneNff, ThrowingReaderListsEveryErrorOnce) {
     EXPECT_NE(m.find("x.nff:11:1: unknown keyword 'z'"), std::string::npos) << m;
   }
   EXPECT_THROW(ReadNffFile("/nonexistent/scene.nff"), UserError);
+}
+
+// Issue 11: LF, CRLF and a lone CR all end a line (comments end there too, line numbers
+// count them), and a leading UTF-8 byte-order mark is skipped.
+TEST(SceneNff, EveryLineEndingEndsALineAndABomIsSkipped) {
+  const std::string lines[] = {"v", "from 0 0 6", "at 0 0 0", "up 0 1 0", "angle 40", "hither 0.01",
+                               "resolution 8 8", "b 0 0 0", "l 3 4 6", "f 1 0 0 1 0 1 0 0",
+                               "s -1 0 0 0.8 # left", "s 1 0 0 0.8", "s 0 0 0 -1"};
+  for (const std::string eol : {"\n", "\r\n", "\r"}) {
+    for (const std::string bom : {"", "\xEF\xBB\xBF"}) {
+      std::string text = bom;
+      for (const std::string& l : lines) text += l + eol;
+      const auto errors = Errors(text);
+      ASSERT_EQ(errors.size(), 1u) << errors[0];
+      // The comment ended at its line end: the sphere after it was read, and the bad
+      // radius is reported on line 13, column 1.
+      EXPECT_NE(errors[0].find("t.nff:13:1: expected a sphere radius > 0"), std::string::npos)
+          << errors[0];
+      std::vector<std::string> none;
+      const auto scene = ParseNff(text.substr(0, text.rfind("s 0 0 0 -1")), "t.nff", none);
+      ASSERT_TRUE(scene) << none[0];
+      EXPECT_EQ(scene->objects.size(), 2u);
+      EXPECT_EQ(scene->objects[1].where.line, 12);
+    }
+  }
+  // A mark anywhere else is no keyword, and it is shown, not invisible.
+  const auto errors = Errors(std::string(kView) + "f 1 1 1 1 0 0 0 1\n\xEF\xBB\xBFs 0 0 0 1\n");
+  EXPECT_NE(errors[0].find("unknown keyword '\\xef\\xbb\\xbfs'"), std::string::npos) << errors[0];
+}
+
+// Issue 11: a NUL or control byte is escaped in messages, so the whole report is printed.
+TEST(SceneNff, BytesThatAreNotPrintableAreEscapedAndEveryErrorIsListed) {
+  try {
+    ParseNffOrThrow(std::string(kView) + "f 1 1 1 1 0 0 0 1\nfoo" + std::string(1, '\0') + "bar\nq\x01\nz\n", "x.nff");
+    FAIL() << "expected a UserError";
+  } catch (const UserError& e) {
+    const std::string m = e.what();
+    EXPECT_EQ(m.find('\0'), std::string::npos);
+    EXPECT_NE(m.find("3 errors"), std::string::npos) << m;
+    EXPECT_NE(m.find("x.nff:10:1: unknown keyword 'foo\\x00bar'"), std::string::npos) << m;
+    EXPECT_NE(m.find("x.nff:11:1: unknown keyword 'q\\x01'"), std::string::npos) << m;
+    EXPECT_NE(m.find("x.nff:12:1: unknown keyword 'z'"), std::string::npos) << m;
+  }
+}
+
+// Issue 11: what the reader cannot hold is a clear error before anything is read.
+TEST(SceneNff, DirectoriesDevicesAndHugeFilesAreClearErrors) {
+  auto message = [](const std::string& path) {
+    try {
+      ReadNffFile(path);
+    } catch (const UserError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  const auto dir = std::filesystem::temp_directory_path() / ("zephyr_nff_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  EXPECT_NE(message(dir.string()).find("is a directory"), std::string::npos);
+  EXPECT_NE(message("/dev/zero").find("is not a regular file"), std::string::npos);
+  EXPECT_NE(message((dir / "none.nff").string()).find("cannot open"), std::string::npos);
+  const auto big = dir / "big.nff";
+  { std::ofstream(big) << "b 0 0 0\n"; }
+  std::filesystem::resize_file(big, kMaxSceneBytes + 1);  // sparse: costs no disk
+  EXPECT_NE(message(big.string()).find("more than the 64 MiB"), std::string::npos) << message(big.string());
+  std::filesystem::resize_file(big, 8);
+  EXPECT_NE(message(big.string()).find("missing 'v'"), std::string::npos);
+  std::filesystem::remove_all(dir);
+}
+
+// Issue 11: every material value is range-checked alike and reported at its own column.
+TEST(SceneNff, EveryMaterialValueIsCheckedAgainstItsRangeAtItsColumn) {
+  struct Case { const char* f; const char* want; };
+  const Case cases[] = {
+      {"f 1.5 1 1 1 0 0 0 1", "t.nff:9:3: expected the material's red r from 0 to 1, got '1.5'"},
+      {"f 1 -1 1 1 0 0 0 1", "t.nff:9:5: expected the material's green g from 0 to 1"},
+      {"f 1 1 2 1 0 0 0 1", "t.nff:9:7: expected the material's blue b from 0 to 1"},
+      {"f 1 1 1 1.2 0 0 0 1", "t.nff:9:9: expected the diffuse weight Kd from 0 to 1"},
+      {"f 1 1 1 1 -0.1 0 0 1", "t.nff:9:11: expected the specular and mirror weight Ks from 0 to 1"},
+      {"f 1 1 1 1 0 -3 0 1", "t.nff:9:13: expected the Phong exponent Shine >= 0"},
+      {"f 1 1 1 1 0 0 1.5 1", "t.nff:9:15: expected the transmission T from 0 to 1, got '1.5'"},
+      {"f 1 1 1 1 0 0 -1 1", "t.nff:9:15: expected the transmission T from 0 to 1"},
+      {"f 1 1 1 1 0 0 0 -1", "t.nff:9:17: expected the index of refraction ior >= 0"},
+      {"f 1 1 1 1 0 0 0.5 0", "t.nff:9:19: expected an index of refraction ior > 0 for a transparent"},
+  };
+  for (const Case& c : cases) {
+    const auto errors = Errors(std::string(kView) + c.f + "\ns 0 0 0 1\n");
+    ASSERT_EQ(errors.size(), 1u) << c.f;
+    EXPECT_NE(errors[0].find(c.want), std::string::npos) << errors[0];
+  }
+  std::vector<std::string> errors;  // both ends of each range are allowed
+  EXPECT_TRUE(ParseNff(std::string(kView) + "f 0 1 0 1 0 0 1 1.5\nf 1 0 1 0 1 1e5 0 0\ns 0 0 0 1\n", "t.nff", errors));
+}
+
+// Issue 11: a bad view is reported at the line of the item that is wrong.
+TEST(SceneNff, ViewErrorsPointAtTheirOwnLine) {
+  auto view = [](const std::string& from, const std::string& at, const std::string& up) {
+    return "b 0 0 0\nv\nfrom " + from + "\nat " + at + "\nup " + up +
+           "\nangle 30\nhither 0\nresolution 5 5\nf 1 1 1 1 0 0 0 1\ns 0 0 0 1\n";
+  };
+  auto one = [](const std::vector<std::string>& e) { return e.size() == 1 ? e[0] : std::string("several"); };
+  EXPECT_NE(one(Errors(view("1 2 3", "1 2 3", "0 1 0"))).find("t.nff:3:1: the view's 'from' equals 'at' (t.nff:4:1)"),
+            std::string::npos);
+  EXPECT_NE(one(Errors(view("0 0 5", "0 0 0", "0 0 0"))).find("t.nff:5:1: the view's 'up' is zero"), std::string::npos);
+  EXPECT_NE(one(Errors(view("0 0 5", "0 0 0", "0 0 -2"))).find("t.nff:5:1: the view's 'up' is parallel"),
+            std::string::npos);
+  std::vector<std::string> errors;  // huge and tiny vectors are fine: the test is scaled
+  EXPECT_TRUE(ParseNff(view("0 0 5", "0 0 0", "0 1e300 0"), "t.nff", errors));
+  EXPECT_TRUE(ParseNff(view("0 0 5", "0 0 0", "0 1e-300 0"), "t.nff", errors));
+}
+
+// Issue 11: values whose squares overflow double are rejected with their line, per item;
+// large values within the limit are read.
+TEST(SceneNff, ValuesWhoseSquaresOverflowAreRejectedWithTheirLine) {
+  const std::string f = "f 1 1 1 1 0 0 0 1\n";
+  auto first = [](const std::vector<std::string>& e) { return e.empty() ? std::string() : e[0]; };
+  EXPECT_NE(first(Errors(std::string(kView) + f + "s 0 0 10 1e155\n")).find("t.nff:10:1: sphere reaches 1e+155"),
+            std::string::npos);
+  EXPECT_NE(first(Errors(std::string(kView) + f + "s 0 0 0 1\ns 1e300 0 0 1\n")).find("t.nff:11:1: sphere reaches"),
+            std::string::npos);
+  EXPECT_NE(first(Errors(std::string(kView) + f + "s 0 0 0 1\nl 0 0 -1e200\n")).find("t.nff:11:1: light reaches"),
+            std::string::npos);
+  EXPECT_NE(first(Errors("b 0 0 0\nv\nfrom 0 0 1e160\nat 0 0 0\nup 0 1 0\nangle 30\nhither 0\nresolution 5 5\n" + f +
+                         "s 0 0 0 1\n")).find("t.nff:3:1: the eye ('from') reaches"),
+            std::string::npos);
+  EXPECT_NE(first(Errors(std::string(kView) + f + "c 0 0 0 1e149 0 0 1e140 1e149\n")).find("t.nff:10:1: cone"),
+            std::string::npos);
+  // A transform that shrinks a huge sphere to size 1: in its own coordinates the eye is at
+  // 1e151 and its squares overflow.
+  EXPECT_NE(first(Errors(std::string(kView) + f + "transform 1e-140 0 0 0 0 1e-140 0 0 0 0 1e-140 0\n"
+                         "s 0 0 0 1e140\n")).find("t.nff:11:1: sphere (in its own coordinates"),
+            std::string::npos);
+  std::vector<std::string> errors;
+  EXPECT_TRUE(ParseNff("b 0 0 0\nv\nfrom 0 0 1e140\nat 0 0 0\nup 0 1 0\nangle 30\nhither 0\nresolution 5 5\n" + f +
+                       "s 0 0 0 1e139\nl 0 1e140 1e140\n", "t.nff", errors)) << first(errors);
+}
+
+// Issue 11: NFF lights without a colour get the SPD readme's √N/(2N) each and an ambient
+// term of the same (docs/scene-format.md); given colours are kept, with no ambient term.
+TEST(SceneNff, LightsWithoutColourShareSqrtNOver2N) {
+  std::vector<std::string> errors;
+  auto spd = ParseNff(std::string(kView) + "l 1 2 3\nl 4 5 6\nl 7 8 9\nf 1 1 1 1 0 0 0 0\ns 0 0 0 1\n", "t.nff", errors);
+  ASSERT_TRUE(spd);
+  const double each = std::sqrt(3.0) / 6;
+  for (size_t i = 0; i < 3; ++i) EXPECT_EQ(spd->LightColour(i), (Vec3{each, each, each}));
+  EXPECT_DOUBLE_EQ(spd->Ambient(), each);
+  EXPECT_NE(WriteNff(*spd).find("l 1 2 3\n"), std::string::npos);  // written back without a colour
+  auto one = ParseNff(std::string(kView) + "l 1 2 3\nf 1 1 1 1 0 0 0 0\ns 0 0 0 1\n", "t.nff", errors);
+  ASSERT_TRUE(one);
+  EXPECT_EQ(one->LightColour(0), (Vec3{0.5, 0.5, 0.5}));
+  EXPECT_DOUBLE_EQ(one->Ambient(), 0.5);
+  auto given = ParseNff(std::string(kView) + "l 1 2 3 1 1 1\nl 4 5 6 0.2 0.3 0.4\nf 1 1 1 1 0 0 0 0\ns 0 0 0 1\n",
+                        "t.nff", errors);
+  ASSERT_TRUE(given);
+  EXPECT_EQ(given->LightColour(0), (Vec3{1, 1, 1}));
+  EXPECT_EQ(given->LightColour(1), (Vec3{0.2, 0.3, 0.4}));
+  EXPECT_EQ(given->Ambient(), 0);
 }
 
 TEST(SceneNff, WriteThenReadIsExact) {

@@ -14,6 +14,7 @@
 #include "hosts/trace/image.h"
 #include "hosts/trace/tracer.h"
 #include "hosts/scene/gen.h"
+#include "hosts/scene/nff.h"
 #include "hosts/scene/pov.h"
 
 namespace zephyr {
@@ -64,6 +65,25 @@ TEST(TracePov, TransformedPrimitivesMatchPovray) {
   const double psnr = CompareWithPovray(GenerateTransformedShowcase(96, 96), "showcase");
   RecordProperty("psnr_db", std::to_string(psnr));
   EXPECT_GE(psnr, 90);
+}
+
+// Issue 11: an SPD-style scene — three lights without a colour — with POV-Ray: the
+// √N/(2N) intensities, the ambient term and the shadows agree (before, every light was 1
+// and the floor saturated to white).
+TEST(TracePov, LightsWithoutColourMatchPovray) {
+  const Scene s = ParseNffOrThrow(
+      "v\nfrom 0 -6 4\nat 0 0 0.5\nup 0 0 1\nangle 40\nhither 0.01\nresolution 96 96\nb 0.078 0.361 0.753\n"
+      "l 3 -2 6\nl -4 -3 5\nl 1 4 7\nf 1 1 1 1 0 100000 0 0\np 4\n-4 -4 0\n4 -4 0\n4 4 0\n-4 4 0\n"
+      "f 1 0 0 0.5 0.2 3.0827 0 0\ns -1 0 1 1\nf 0.9 0.9 0.9 0.1 0.1 101.148 0.8 1.5\ns 1.2 -0.5 0.7 0.7\n",
+      "spd.nff");
+  const std::string pov = ExportPov(s, 5);
+  const std::string each = "0.28867513459481287";  // √3/6
+  EXPECT_NE(pov.find("ambient_light <" + each + ", " + each + ", " + each + ">"), std::string::npos) << pov;
+  EXPECT_NE(pov.find("color rgb <" + each), std::string::npos) << pov;
+  if (!HavePovray()) GTEST_SKIP() << "povray is not installed";
+  const double psnr = CompareWithPovray(s, "spd");
+  RecordProperty("psnr_db", std::to_string(psnr));
+  EXPECT_GE(psnr, 30);
 }
 
 TEST(TracePov, ExportMapsOpacityAndTransforms) {

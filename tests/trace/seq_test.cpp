@@ -7,6 +7,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "fixed/check.h"
 #include "hosts/cmd/command.h"
 #include "hosts/trace/image.h"
 #include "hosts/scene/nff.h"
@@ -211,6 +212,151 @@ TEST(TraceShade, RefractionAndTotalInternalReflectionSplitTheEnergy) {
     EXPECT_EQ(out.rays[int(RayKind::kReflected)], tir ? 2u : 1u) << deg;
     EXPECT_NEAR(Length(colour(deg, true, false, outOpen) - b * 0.75), 0, 1e-12) << "leaving at " << deg;
   }
+
+// Issue 11: the shadow under a sphere resting on a floor: at pixel (35, 38) the floor is
+// in shadow, so only the ambient term is left (SPD light rule: one light without a colour
+// gives 1/2 and an ambient 1/2; Kd 0.8 · C 0.8 · 1/2 = 0.32). The floor's size must not
+// matter: exporters write "infinite" floors as ±1e6 polygons (±1e9 in double).
+Scene FloorAndSphere(const std::string& half) {
+  return ParseNffOrThrow(
+      "v\nfrom 0 3 8\nat 0 0.5 0\nup 0 1 0\nangle 40\nhither 0.01\nresolution 64 64\nb 0.1 0.1 0.3\nl 4 8 3\n"
+      "f 0.8 0.8 0.8 0.8 0.2 20 0 0\np 4\n-" + half + " 0 -" + half + "\n" + half + " 0 -" + half + "\n" +
+      half + " 0 " + half + "\n-" + half + " 0 " + half + "\nf 0.9 0.2 0.2 0.7 0.3 40 0 0\ns 0 1 0 1\n",
+      "floor.nff");
+}
+
+TEST(TraceShade, ContactShadowDoesNotDependOnTheFloorsSize) {
+  for (const Precision p : {Precision::kFloat, Precision::kDouble}) {
+    for (const std::string half : {"4", "1e6", "1e9"}) {
+      TraceOptions o;
+      o.depth = 1;
+      o.precision = p;
+      const Scene s = FloorAndSphere(half);
+      const auto tracer = Tracer::Create(s, o);
+      TraceStats stats;
+      PrimaryHit hit;
+      const Vec3 c = tracer->TracePixel(35, 38, stats, &hit);
+      ASSERT_EQ(hit.object, 0) << half;
+      const double tol = p == Precision::kFloat ? 1e-6 : 1e-12;
+      EXPECT_NEAR(c.x, 0.32, tol) << PrecisionName(p) << " floor ±" << half;
+      EXPECT_NEAR(c.y, 0.32, tol) << PrecisionName(p) << " floor ±" << half;
+    }
+  }
+}
+
+// Issue 11: an object out of view changes nothing, however large (the offset secondary
+// rays skip follows the hit, not the scene's extent).
+TEST(TraceShade, AFarObjectOutOfViewLeavesTheImageAlone) {
+  for (const Precision p : {Precision::kFloat, Precision::kDouble}) {
+    TraceOptions o;
+    o.precision = p;
+    o.depth = 1;  // primary and shadow rays: neither can reach behind the eye
+    const Scene near = FloorAndSphere("4");
+    Scene far = near;
+    Primitive big = far.objects[0];  // a 2e6 × 2e6 floor behind the eye, 1e6 away
+    for (Vec3& v : std::get<Polygon>(big.shape).vertices) v = v * 250000.0 + Vec3{0, 0, 2e6};
+    far.objects.push_back(big);
+    Image a(64, 64), b(64, 64);
+    TraceStats stats;
+    RenderRegion(*Tracer::Create(near, o), 0, 0, 64, 64, a.pixels, stats);
+    RenderRegion(*Tracer::Create(far, o), 0, 0, 64, 64, b.pixels, stats);
+    EXPECT_EQ(a.pixels, b.pixels) << PrecisionName(p);
+  }
+}
+
+// Issue 11: two polygons sharing an edge leave no crack. The roof ridge seen edge-on: the
+// rays of row 32 pass exactly through the shared edge and must show the roof.
+TEST(TraceIntersect, ARayThroughASharedEdgeHitsOneOfTheFaces) {
+  const Scene roof = ParseNffOrThrow(
+      "v\nfrom 0 0 0\nat 0 0 -1\nup 0 1 0\nangle 40\nhither 0.01\nresolution 65 65\nb 1 0 1\nl 0 10 10\n"
+      "l 0 -10 10\nf 0.9 0.8 0.2 0.9 0 1 0 0\np 4\n-3 0 -5\n3 0 -5\n3 2 -7\n-3 2 -7\n"
+      "p 4\n-3 0 -5\n-3 -2 -7\n3 -2 -7\n3 0 -5\n", "roof.nff");
+  for (const Precision p : {Precision::kFloat, Precision::kDouble}) {
+    TraceOptions o;
+    o.precision = p;
+    const auto tracer = Tracer::Create(roof, o);
+    TraceStats stats;
+    for (int x = 0; x < 65; ++x) {
+      const PrimaryRay ray = tracer->Rays().At(x, 32);
+      ASSERT_EQ(ray.direction.y, 0);  // exactly through the ridge
+      if (std::abs(ray.direction.x / ray.direction.z) * 5 >= 3) continue;  // beyond the roof's ends
+      EXPECT_GE(tracer->FirstHit(ray, stats).object, 0) << PrecisionName(p) << " x=" << x;
+    }
+  }
+  // The whole kind: rays through many points of shared edges (and near them) hit exactly
+  // one face of each pair, whatever the faces' winding: a folded pair, a flat pair split
+  // on a diagonal, and a pair wound inconsistently.
+  const Scene pairs = ParseNffOrThrow(
+      "v\nfrom 0 0 0\nat 0 0 -1\nup 0 1 0\nangle 40\nhither 0\nresolution 3 3\nb 0 0 0\n"
+      "f 1 1 1 1 0 0 0 0\n"
+      "p 3\n-1.3 -0.7 -5.1\n1.1 0.3 -4.7\n0.2 1.9 -6.3\np 3\n-1.3 -0.7 -5.1\n0.4 -1.7 -3.9\n1.1 0.3 -4.7\n"
+      "p 3\n-2 -1 -6\n2 -1 -6\n2 1 -6\np 3\n-2 -1 -6\n2 1 -6\n-2 1 -6\n"
+      "p 3\n-0.9 0.1 -3.3\n0.7 0.6 -3.1\n0.1 1.4 -3.9\np 3\n-0.9 0.1 -3.3\n0.7 0.6 -3.1\n-0.2 -0.8 -2.7\n",
+      "pairs.nff");
+  const std::pair<Vec3, Vec3> edges[] = {{{-1.3, -0.7, -5.1}, {1.1, 0.3, -4.7}},
+                                         {{-2, -1, -6}, {2, 1, -6}},
+                                         {{-0.9, 0.1, -3.3}, {0.7, 0.6, -3.1}}};
+  for (int pair = 0; pair < 3; ++pair) {
+    const auto [a, b] = edges[pair];
+    int rays = 0;
+    for (int k = 1; k < 200; ++k) {
+      for (const double nudge : {0.0, 1e-15, -1e-15, 1e-9, -1e-9}) {
+        const Vec3 target = a + (b - a) * (k / 200.0) + Vec3{0, nudge, 0};
+        const Vec3 d = Normalize(target);
+        int hits = 0;
+        for (int i = 2 * pair; i < 2 * pair + 2; ++i) hits += IntersectObject(pairs, i, {0, 0, 0}, d).has_value();
+        EXPECT_EQ(hits, 1) << "pair " << pair << " k " << k << " nudge " << nudge;
+        ++rays;
+      }
+    }
+    EXPECT_EQ(rays, 199 * 5);
+  }
+}
+
+// Issue 11: a scene at a scale of 1e140 renders like the same scene at scale 1 (no square
+// overflows in double), and a scale float cannot square is a clear error naming the line.
+TEST(TraceRender, LargeScenesRenderOrAreAClearError) {
+  auto scene = [](const std::string& k) {
+    return ParseNffOrThrow("v\nfrom 0 0 10" + k + "\nat 0 0 0\nup 0 1 0\nangle 40\nhither 0\nresolution 9 9\n"
+                           "b 0.1 0.2 0.3\nl 3" + k + " 4" + k + " 10" + k + " 1 1 1\nf 1 0.5 0 0.8 0.2 10 0 0\n"
+                           "s 0 0 0 1" + k + "\ns 0 0 0.8" + k + " 0.3" + k + "\n", "big.nff");
+  };
+  const Scene unit = scene(""), big = scene("e140");
+  Image a(9, 9), b(9, 9);
+  TraceStats stats;
+  RenderRegion(*Tracer::Create(unit, {}), 0, 0, 9, 9, a.pixels, stats);
+  RenderRegion(*Tracer::Create(big, {}), 0, 0, 9, 9, b.pixels, stats);
+  EXPECT_GT(Psnr(a, b), 60);
+  EXPECT_NE(b.pixels[4 * 9 + 4], big.background);
+  TraceOptions f;
+  f.precision = Precision::kFloat;
+  try {
+    Tracer::Create(scene("e18"), f);
+    FAIL() << "expected a UserError";
+  } catch (const UserError& e) {
+    EXPECT_NE(std::string(e.what()).find("big.nff:3:1: the eye ('from') reaches 1e+19"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("--precision double"), std::string::npos) << e.what();
+  }
+  EXPECT_NO_THROW(Tracer::Create(scene("e15"), f));
+}
+
+// Issue 11: lights without a colour (SPD scenes) are √N/(2N) each with an ambient term of
+// the same, in every method's shading: a lit point and a shadowed one, by value.
+TEST(TraceShade, LightsWithoutColourFollowTheSpdRule) {
+  const Scene s = ParseNffOrThrow(
+      "v\nfrom 0 -10 10\nat 0 0 0\nup 0 0 1\nangle 30\nhither 0\nresolution 3 3\nb 0 0 0\n"
+      "l 0 0 20\nl 0 0 30\nl 0 0 40\nl 0 0 50\nf 1 0.5 0.25 0.5 0 0 0 0\np 4\n-5 -5 0\n5 -5 0\n5 5 0\n-5 5 0\n",
+      "spd.nff");
+  TraceOptions o;
+  o.depth = 1;
+  const auto tracer = Tracer::Create(s, o);
+  TraceStats stats;
+  const PrimaryHit hit{0, Length(Vec3{0, -10, 10}), Normalize(Vec3{0, 10, -10})};
+  // N = 4: each light 2/8 = 0.25, N·L = 1 for all four; ambient 0.25.
+  const Vec3 c = tracer->ShadeFromPrimaryHit(hit, stats);
+  EXPECT_NEAR(c.x, 0.5 * 1 * (4 * 0.25 + 0.25), 1e-12);
+  EXPECT_NEAR(c.y, 0.5 * 0.5 * (4 * 0.25 + 0.25), 1e-12);
+  EXPECT_NEAR(c.z, 0.5 * 0.25 * (4 * 0.25 + 0.25), 1e-12);
 }
 
 TEST(TraceRender, RegionsAreBitIdenticalToTheFullImage) {
