@@ -102,17 +102,21 @@ charts: setup ## Run the experiment sweeps and draw the charts under docs/result
 FUZZ_CXX  ?= clang++-14
 FUZZ_RUNS ?= 1000000
 FUZZ_BIN  := $(BUILD)/fuzz/nff_fuzz
+# The reader, the host tracer and the SIMD planner (with the arithmetic and array it
+# plans for); not the pass itself, which runs the array and is far too slow per input.
 FUZZ_SRCS := tests/fuzz/nff_fuzz.cpp hosts/scene/nff.cpp hosts/scene/scene.cpp \
-             hosts/scene/geometry.cpp hosts/trace/tracer.cpp hosts/trace/sphere_kernels.cpp
+             hosts/scene/geometry.cpp hosts/trace/tracer.cpp hosts/trace/sphere_kernels.cpp \
+             $(wildcard fixed/*.cpp bitserial/*.cpp) \
+             $(addprefix hosts/simd/,plan.cpp bounds.cpp ops.cpp sphere.cpp ellipsoid.cpp polygon.cpp cone.cpp)
 FUZZ_RUN   = mkdir -p $(BUILD)/fuzz/corpus && $(FUZZ_BIN) -max_len=4096 -timeout=10 \
              $(BUILD)/fuzz/corpus tests/fuzz/corpus
 $(FUZZ_BIN): $(FUZZ_SRCS) $(wildcard hosts/*/*.h fixed/*.h)
 	$(call say,FUZZCXX,$@)
 	@mkdir -p $(@D)
 	$(Q)$(FUZZ_CXX) -std=c++20 -O1 -g -I. -fsanitize=fuzzer,address,undefined \
-	  -fno-sanitize-recover=all $(FUZZ_SRCS) -o $@ $$(pkg-config --cflags --libs libhwy)
+	  -fno-sanitize-recover=all $(FUZZ_SRCS) -o $@ $$(pkg-config --cflags --libs libhwy fmt)
 
-fuzz: ## Fuzz the NFF reader: FUZZ_RUNS inputs (default 10^6) under ASan+UBSan
+fuzz: ## Fuzz the NFF reader, tracer and SIMD planner: FUZZ_RUNS inputs (default 10^6) under ASan+UBSan
 	$(Q)$(MAKE) --no-print-directory $(FUZZ_BIN)
 	$(Q)$(FUZZ_RUN) -runs=$(FUZZ_RUNS)
 

@@ -77,6 +77,10 @@ const char* ObjectPlan::KindName() const {
 
 namespace {
 
+// The pass reads t, the object index and the direction of each pixel to the host as one
+// 64-bit word each (Multi::ReadRaw), so the planner keeps those formats within 64 bits.
+constexpr int kMaxMatrixWordBits = 64;
+
 ObjectExtent ExtentOf(const Primitive& p, const Vec3& eye) {
   switch (p.Kind()) {
     case ShapeKind::kSphere: return p.transform ? EllipsoidExtent(p, eye) : SphereExtent(p, eye);
@@ -105,12 +109,14 @@ ObjectPlan PlanObject(const Scene& scene, int index, const PassFormats& pf) {
 // the largest sphere radius (at least 1).
 struct SceneRange {
   double farthest = 1, rMin = 1e300, rMax = 1;
+  const Primitive* farthestObject = nullptr;  // for messages
 };
 
 SceneRange RangeOf(const Scene& scene) {
   SceneRange r;
   for (const Primitive& p : scene.objects) {
     const ObjectExtent e = ExtentOf(p, scene.camera.from);
+    if (!(e.farthest <= r.farthest)) r.farthestObject = &p;
     r.farthest = std::max(r.farthest, e.farthest);
     if (p.Kind() == ShapeKind::kSphere) r.rMax = std::max(r.rMax, e.radius);
     r.rMin = std::min(r.rMin, e.feature);
@@ -121,16 +127,47 @@ SceneRange RangeOf(const Scene& scene) {
 
 // The widths: integer bits for the farthest distance (one more for tca ± root); fraction
 // bits so that the t error bound (≈ 60·D·2^-F, docs/simd.md) is at most 1/64 of the
-// smallest feature, never coarser than 2^-10; the user's overrides win.
+// smallest feature, never coarser than 2^-10, and so that t (s L.F, 1 + L + F bits) fits
+// the 64-bit word the host reads per pixel (a far scene gets fewer fraction bits: wider
+// bounds, more uncertain pixels recomputed on the host); the user's overrides win. Widths
+// the pass cannot hold are a UserError naming the farthest object, never an abort.
 void ChooseWidths(PrimaryPlan& plan, const SceneRange& range, const FormatOverrides& o) {
   plan.distIntBits = o.intBits >= 0 ? o.intBits : IntBitsFor(range.farthest) + 1;
-  const int planned = std::clamp(CeilLog2(64.0 * 60.0 * range.farthest / range.rMin), 10, 40);
+  const int wanted = std::clamp(CeilLog2(64.0 * 60.0 * range.farthest / range.rMin), 10, 40);
+  const int planned = std::max(10, std::min(wanted, kMaxMatrixWordBits - 1 - plan.distIntBits));
   plan.fracBits = o.fracBits >= 0 ? o.fracBits : planned;
   plan.dirFracBits = o.dirFracBits >= 0 ? o.dirFracBits : plan.fracBits;
+  const std::string where = range.farthestObject
+      ? fmt::format("{}: the {} {:.4g} from the eye; ", range.farthestObject->where.ToString(),
+                    ShapeKindName(range.farthestObject->Kind()), range.farthest)
+      : std::string();
   if (plan.fracBits > 56 || plan.dirFracBits > 60 || plan.distIntBits > 40)
-    throw UserError(fmt::format("formats too wide for the primary pass: {} integer bits, {} fraction "
+    throw UserError(fmt::format("{}formats too wide for the primary pass: {} integer bits, {} fraction "
                                 "bits, {} direction fraction bits (limits 40, 56, 60)",
-                                plan.distIntBits, plan.fracBits, plan.dirFracBits));
+                                where, plan.distIntBits, plan.fracBits, plan.dirFracBits));
+  if (1 + plan.distIntBits + plan.fracBits > kMaxMatrixWordBits)
+    throw UserError(fmt::format("{}t would be s{}.{}, {} bits, more than the {} bits the host reads per "
+                                "pixel; use fewer --frac-bits or --int-bits",
+                                where, plan.distIntBits, plan.fracBits, 1 + plan.distIntBits + plan.fracBits,
+                                kMaxMatrixWordBits));
+}
+
+// Every format an object's program uses must be one the operations support (1..kMaxWidth
+// bits); a scene that needs wider (a transform that shrinks an object by 1e-30, say) is a
+// UserError naming the object and the format.
+void CheckObjectFormats(const PrimaryPlan& plan, const Scene& scene) {
+  for (const ObjectPlan& o : plan.objects)
+    for (const PlannedFormat& f : o.formats)
+      if (!f.format.IsValid())
+        throw UserError(fmt::format("{}: the {}'s {} would need {} bits ({}), more than the {} the "
+                                    "array's operations support; scale or move the object",
+                                    scene.objects[o.index].where.ToString(), o.KindName(), f.quantity,
+                                    f.format.Width(), f.format.Name(), fixed::kMaxWidth));
+  for (const PlannedFormat& f : plan.formats)
+    if (!f.format.IsValid())
+      throw UserError(fmt::format("the primary pass's {} would need {} bits ({}), more than the {} the "
+                                  "array's operations support",
+                                  f.quantity, f.format.Width(), f.format.Name(), fixed::kMaxWidth));
 }
 
 // The pass-wide table: each quantity at the widest format an object's program uses it in.
@@ -224,6 +261,7 @@ PrimaryPlan PlanFor(const Scene& scene, const SimdOptions& options, int64_t virt
     else ++plan.alwaysUncertainObjects;
   }
   SummaryTable(plan, scene, range);
+  CheckObjectFormats(plan, scene);
   CheckMemory(plan, range, profile);
   return plan;
 }

@@ -11,6 +11,7 @@
 
 #include "hosts/simd/object.h"
 #include "hosts/simd/ops.h"
+#include "hosts/trace/intersect.h"
 
 namespace zephyr::simd {
 
@@ -21,15 +22,24 @@ using fixed::Format;
 
 namespace {
 
+// One edge function on the array: e = ĝ·d with ĝ = normalize((p − eye) × (q − eye)) for the
+// edge's ends in the canonical order of hosts/trace/intersect.h, so two polygons sharing
+// the edge compute the same e bit for bit. The group's inside is e >= 0 where `owned`, else
+// e < 0: the tracer's shared-edge rule (InsideAlongRay), so a ray through the edge is inside
+// exactly one of the two faces and no crack opens between them.
+struct EdgeFunction {
+  Vec3 g;
+  bool owned = true;
+};
+
 // A polygon in world space, its unit normal and the eye's signed distance.
 struct WorldPolygon {
   std::vector<Vec3> v;
   Vec3 normal;
   double eyeDistance = 0;  // n̂·(v0 − eye)
-  bool convex = true;
-  // Edge groups: inside a group iff every edge function is > 0 (oriented on the host);
-  // a convex polygon is one group, a concave one a fan of triangles (even-odd = parity).
-  std::vector<std::vector<Vec3>> groups;  // unit edge normals ĝ per group
+  // Edge groups (PolygonEdgeGroups: a convex polygon is one group, a concave one a fan of
+  // triangles, even-odd = parity): inside a group iff every edge function says inside.
+  std::vector<std::vector<EdgeFunction>> groups;
   bool degenerate = false;
 };
 
@@ -48,36 +58,20 @@ WorldPolygon MakeWorldPolygon(const Primitive& p, const Vec3& eye) {
     const Vec3 &a = w.v[i], &b = w.v[(i + 1) % n];
     nn += Vec3{(a.y - b.y) * (a.z + b.z), (a.z - b.z) * (a.x + b.x), (a.x - b.x) * (a.y + b.y)};
   }
-  w.normal = Normalize(nn);
+  w.normal = Normalize(ScaledDown(nn));
   w.eyeDistance = Dot(w.normal, w.v[0] - eye);
-  const double sigma = w.eyeDistance >= 0 ? 1 : -1;
-  for (size_t i = 0; i < n; ++i) {
-    const Vec3 e0 = w.v[(i + 1) % n] - w.v[i], e1 = w.v[(i + 2) % n] - w.v[(i + 1) % n];
-    if (Dot(Cross(e0, e1), w.normal) < 0) w.convex = false;
-  }
-  // ĝ = σ·τ·normalize((a − eye) × (b − eye)): for a ray in front of the eye through the
-  // group's inside, every ĝ·d > 0 (τ: the group's winding against the polygon's normal).
-  auto edge = [&](const Vec3& a, const Vec3& b, double tau) {
-    const Vec3 g = Cross(a - eye, b - eye);
-    const double len = Length(g);
-    if (!(len > 1e-300)) {
-      w.degenerate = true;
-      return Vec3{};
+  // A ray from the eye that meets the plane in front has sign(n̂·d) = σ, the facing the
+  // tracer's rule uses.
+  const int sigma = w.eyeDistance >= 0 ? 1 : -1;
+  for (const PolygonEdgeGroup& group : PolygonEdgeGroups(w.v, w.normal)) {
+    std::vector<EdgeFunction> g;
+    for (const PolygonEdge& e : group) {
+      const Vec3 c = Cross(w.v[e.p] - eye, w.v[e.q] - eye);
+      const double len = Length(c);
+      if (!(len > 1e-300)) w.degenerate = true;  // the eye on the edge's line
+      g.push_back({len > 1e-300 ? c / len : Vec3{}, e.side * sigma > 0});
     }
-    return g * (sigma * tau / len);
-  };
-  if (w.convex) {
-    std::vector<Vec3> g;
-    for (size_t i = 0; i < n; ++i) g.push_back(edge(w.v[i], w.v[(i + 1) % n], 1));
     w.groups.push_back(g);
-  } else {
-    for (size_t i = 1; i + 1 < n; ++i) {
-      const Vec3 area = Cross(w.v[i] - w.v[0], w.v[i + 1] - w.v[0]);
-      const double tau = Dot(area, w.normal);
-      if (tau == 0) continue;  // a collinear fan triangle covers nothing
-      const double s = tau > 0 ? 1 : -1;
-      w.groups.push_back({edge(w.v[0], w.v[i], s), edge(w.v[i], w.v[i + 1], s), edge(w.v[i + 1], w.v[0], s)});
-    }
   }
   if (w.groups.empty()) w.degenerate = true;
   return w;
@@ -103,18 +97,21 @@ class PolygonProgram final : public ObjectProgram {
   Candidate Run(Machine& m, const Multi (&d)[3]) const override {
     const int F = pf_.fracBits;
     const Format unit = Format::Signed(1, F);
-    // Inside: parity over the groups of (every edge function ĝ·d > 0); each edge function is
-    // a linear form in d with uni coefficients. Uncertain: some group neither clearly inside
-    // (all > band) nor clearly outside (one < −band).
+    // Inside: parity over the groups of (every edge function on its inside: e >= 0 for an
+    // owned edge, e < 0 for the other side); each edge function is a linear form in d with
+    // uni coefficients. Uncertain: some group neither clearly inside (every e beyond the
+    // band on its inside) nor clearly outside (one beyond the band on its outside).
     const Multi band = Broadcast(m, Tight(b_.grazeBand, F)), zero = Zero(m);
     const Multi negBand = Broadcast(m, fixed::Neg(Tight(b_.grazeBand, F), Format::Signed(1, F)));
     Multi inside, edgeUncertain;
-    for (const std::vector<Vec3>& group : w_.groups) {
+    for (const std::vector<EdgeFunction>& group : w_.groups) {
       Multi in, clearIn, clearOut;
-      for (const Vec3& g : group) {
-        const Fixed cc[3] = {Tight(g.x, F), Tight(g.y, F), Tight(g.z, F)};
+      for (const EdgeFunction& g : group) {
+        const Fixed cc[3] = {Tight(g.g.x, F), Tight(g.g.y, F), Tight(g.g.z, F)};
         const Multi e = Dot3(d, cc, unit);
-        Multi pos = zero < e, posClear = band < e, negClear = e < negBand;
+        Multi pos = g.owned ? (zero <= e) : (e < zero);
+        Multi posClear = g.owned ? (band < e) : (e < negBand);
+        Multi negClear = g.owned ? (e < negBand) : (band < e);
         in = in.Empty() ? pos : (in && pos);
         clearIn = clearIn.Empty() ? posClear : (clearIn && posClear);
         clearOut = clearOut.Empty() ? negClear : (clearOut || negClear);
