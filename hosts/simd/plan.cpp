@@ -275,8 +275,9 @@ PrimaryPlan PlanPrimaryPass(const Scene& scene, const SimdOptions& options) {
 PrimaryPlan PlanRefinePass(const Scene& scene, const SimdOptions& options, const PrimaryPlan& first,
                            int64_t pixels, int extraBits) {
   SimdOptions wide = options;
-  wide.formats = {std::min(first.fracBits + extraBits, 56), std::min(first.dirFracBits + extraBits, 60),
-                  first.distIntBits};
+  // As many more bits as still fit t's 64-bit word (a far scene may have none to add).
+  const int fracBits = std::min({first.fracBits + extraBits, 56, kMaxMatrixWordBits - 1 - first.distIntBits});
+  wide.formats = {fracBits, std::min(first.dirFracBits + extraBits, 60), first.distIntBits};
   return PlanFor(scene, wide, std::max<int64_t>(pixels, 1), first.pass.Ulp());
 }
 
