@@ -63,7 +63,7 @@ TEST(SimdFaults, FormatsBeyondTheOperationsAreClearErrors) {
       "v\nfrom 0 0 10\nat 0 0 0\nup 0 1 0\nangle 30\nhither 0\nresolution 8 8\nb 0 0 0\nl 0 0 10\n"
       "f 1 1 1 1 0 0 0 0\ns 0 0 0 1\ns 0 0 -1e100 1e99\n", "far.nff");
   const std::string e = ErrorOf(farther);
-  EXPECT_NE(e.find("far.nff:11:1: the sphere"), std::string::npos) << e;
+  EXPECT_NE(e.find("far.nff:12:1: the sphere"), std::string::npos) << e;
   EXPECT_NE(e.find("formats too wide"), std::string::npos) << e;
   // An ellipsoid shrunk by 1e-30: world size 1, but its own coordinates need ~200 bits.
   const Scene shrunk = ParseNffOrThrow(

@@ -99,9 +99,11 @@ double FloorBrightness(const std::string& blockerMaterial) {
 
 TEST(TraceShade, TransparentBlockersAttenuateShadowsPerSurface) {
   const double open = FloorBrightness("f 1 1 1 1 0 0 0 1\n transform 1 0 0 100 0 1 0 0 0 0 1 0\n");
-  EXPECT_NEAR(open, 0.5, 1e-12);  // Kd · N·L · colour · light, N·L = 1
-  EXPECT_NEAR(FloorBrightness("f 1 1 1 1 0 0 0 1\n"), 0, 1e-12);                 // opaque
-  EXPECT_NEAR(FloorBrightness("f 1 1 1 0 0 0 0.5 1.5\n"), 0.5 * 0.25, 1e-12);     // two surfaces
+  // One light without a colour: intensity 1/2 and an ambient term 1/2 (docs/scene-format.md).
+  // Ambient Kd · C · 1/2 = 0.25 (never shadowed); the light adds Kd · N·L · 1/2 = 0.25.
+  EXPECT_NEAR(open, 0.25 + 0.25, 1e-12);
+  EXPECT_NEAR(FloorBrightness("f 1 1 1 1 0 0 0 1\n"), 0.25, 1e-12);                     // opaque
+  EXPECT_NEAR(FloorBrightness("f 1 1 1 0 0 0 0.5 1.5\n"), 0.25 + 0.25 * 0.25, 1e-12);  // two surfaces
 }
 
 TEST(TraceShade, RefractionAndTotalInternalReflection) {
