@@ -99,29 +99,40 @@ charts: setup ## Run the experiment sweeps and draw the charts under docs/result
 
 # The NFF reader under libFuzzer with AddressSanitizer and UBSan (Debian's clang-14).
 # `make fuzz` runs FUZZ_RUNS inputs; `make test` runs a few seconds of it (fuzz-smoke).
-FUZZ_CXX  ?= clang++-14
+# One object per source under $(BUILD)/fuzz/obj/ (built -j, again only when a source or a
+# header it includes changes); ccache is used for clang too when CXX names it.
+FUZZ_CXX  ?= $(if $(filter ccache,$(firstword $(CXX))),ccache )clang++-14
 FUZZ_RUNS ?= 1000000
 FUZZ_BIN  := $(BUILD)/fuzz/nff_fuzz
 # The reader, the host tracer and the SIMD planner (with the arithmetic and array it
-# plans for); not the pass itself, which runs the array and is far too slow per input.
+# plans for); not the pass itself, which runs the array and is far too slow per input,
+# nor the OpenMP layer blocks (bitserial/blocks.cpp) the planner never calls.
 FUZZ_SRCS := tests/fuzz/nff_fuzz.cpp hosts/scene/nff.cpp hosts/scene/scene.cpp \
              hosts/scene/geometry.cpp hosts/trace/tracer.cpp hosts/trace/sphere_kernels.cpp \
-             $(wildcard fixed/*.cpp bitserial/*.cpp) \
+             $(filter-out $(OPENMP_SRCS),$(wildcard fixed/*.cpp bitserial/*.cpp)) \
              $(addprefix hosts/simd/,plan.cpp bounds.cpp ops.cpp sphere.cpp ellipsoid.cpp polygon.cpp cone.cpp)
+FUZZ_OBJS := $(FUZZ_SRCS:%.cpp=$(BUILD)/fuzz/obj/%.o)
+FUZZ_SAN  := -fno-sanitize-recover=all
 FUZZ_RUN   = mkdir -p $(BUILD)/fuzz/corpus && $(FUZZ_BIN) -max_len=4096 -timeout=10 \
              $(BUILD)/fuzz/corpus tests/fuzz/corpus
-$(FUZZ_BIN): $(FUZZ_SRCS) $(wildcard hosts/*/*.h fixed/*.h)
+$(BUILD)/fuzz/obj/%.o: %.cpp
 	$(call say,FUZZCXX,$@)
 	@mkdir -p $(@D)
-	$(Q)$(FUZZ_CXX) -std=c++20 -O1 -g -I. -fsanitize=fuzzer,address,undefined \
-	  -fno-sanitize-recover=all $(FUZZ_SRCS) -o $@ $$(pkg-config --cflags --libs libhwy fmt)
+	$(Q)$(FUZZ_CXX) -std=c++20 -O1 -g -I. -fsanitize=fuzzer-no-link,address,undefined $(FUZZ_SAN) \
+	  -MMD -MP $$(pkg-config --cflags libhwy fmt) -c $< -o $@
+$(FUZZ_BIN): $(FUZZ_OBJS)
+	$(call say,FUZZLD,$@)
+	$(Q)$(FUZZ_CXX) -fsanitize=fuzzer,address,undefined $(FUZZ_SAN) $^ -o $@ \
+	  $$(pkg-config --libs libhwy fmt)
+-include $(FUZZ_OBJS:.o=.d)
 
 fuzz: ## Fuzz the NFF reader, tracer and SIMD planner: FUZZ_RUNS inputs (default 10^6) under ASan+UBSan
-	$(Q)$(MAKE) --no-print-directory $(FUZZ_BIN)
+	$(Q)$(MAKE) --no-print-directory -j$(JOBS) $(FUZZ_BIN)
 	$(Q)$(FUZZ_RUN) -runs=$(FUZZ_RUNS)
 
 fuzz-smoke: # a few seconds of fuzzing, part of `make test` (skipped without clang)
-	$(Q)if command -v $(FUZZ_CXX) >/dev/null; then $(MAKE) --no-print-directory $(FUZZ_BIN) && \
+	$(Q)if command -v $(lastword $(FUZZ_CXX)) >/dev/null; then \
+	  $(MAKE) --no-print-directory -j$(JOBS) $(FUZZ_BIN) && \
 	  $(FUZZ_RUN) -max_total_time=5 2>&1 | tail -n 3; test $${PIPESTATUS[0]} -eq 0; \
 	  else echo "fuzz-smoke: $(FUZZ_CXX) not found, skipped"; fi
 
