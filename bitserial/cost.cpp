@@ -10,6 +10,10 @@ namespace zephyr::bitserial {
 namespace {
 MicroOp Read(Space s) { return s == Space::Internal ? MicroOp::ReadInternal : MicroOp::ReadExternal; }
 MicroOp Write(Space s) { return s == Space::Internal ? MicroOp::WriteInternal : MicroOp::WriteExternal; }
+// k reads of operand o's bits: PE memory, or free for a uni (the controller supplies them).
+void AddRead(MicroOpCounts& c, const Operand& o, int64_t k = 1) {
+  if (!o.uni) c.Add(Read(o.space), k);
+}
 
 // An operand laid on the exact result's bit positions: its bit 0 sits at `offset`.
 struct Placed {
@@ -36,7 +40,7 @@ MicroOpCounts AlignedPass(const std::vector<Placed>& ops, const fixed::Format& e
   const int top = lo + wo;  // first position above the output
   for (int p = 0; p < std::max(top, 0); ++p) {
     for (const Placed& o : ops)
-      if (o.Has(p)) c.Add(Read(o.op.space));
+      if (o.Has(p)) AddRead(c, o.op);
     c.Add(MicroOp::AluStep);
     if (p >= lo) c.Add(Write(out.space));
   }
@@ -48,7 +52,7 @@ MicroOpCounts AlignedPass(const std::vector<Placed>& ops, const fixed::Format& e
     const int extra = std::max(w - top, 1);
     for (int p = top; p < top + extra; ++p) {
       for (const Placed& o : ops)
-        if (o.Has(p)) c.Add(Read(o.op.space));
+        if (o.Has(p)) AddRead(c, o.op);
       c.Add(MicroOp::AluStep);
     }
   }
@@ -212,7 +216,7 @@ MicroOpCounts CompareCost(Operand a, Operand b, Space outSpace) {
   c.Add(MicroOp::FlagOp);
   for (int p = 0; p < e.Width(); ++p) {
     for (const Placed& o : ops)
-      if (o.Has(p)) c.Add(Read(o.op.space));
+      if (o.Has(p)) AddRead(c, o.op);
     c.Add(MicroOp::AluStep);
   }
   c.Add(Write(outSpace));
@@ -234,7 +238,7 @@ MicroOpCounts MinMaxCost(Operand a, Operand b, Operand out, fixed::Policy p) {
   std::vector<Placed> ops = {{a, Offset(e, a.format)}, {b, Offset(e, b.format)}};
   for (int q = 0; q < e.Width(); ++q) {
     for (const Placed& o : ops)
-      if (o.Has(q)) c.Add(Read(o.op.space));
+      if (o.Has(q)) AddRead(c, o.op);
     c.Add(MicroOp::AluStep);
   }
   fixed::Format u = UnionFormat(a.format, b.format);
@@ -302,27 +306,33 @@ MicroOpCounts DivCost(Operand a, Operand b, Operand out, fixed::Policy p) {
     c.Add(MicroOp::AluStep, w);
     c.Add(MicroOp::WriteInternal, w);
   };
-  if (a.format.isSigned) magnitude(a);
-  if (b.format.isSigned) magnitude(b);
-  const MicroOp readA = a.format.isSigned ? MicroOp::ReadInternal : Read(a.space);
-  const MicroOp readB = b.format.isSigned ? MicroOp::ReadInternal : Read(b.space);
-  // b == 0: an OR over b's bits, latched.
-  c.Add(Read(b.space), wb);
-  c.Add(MicroOp::AluStep, wb);
-  c.Add(MicroOp::FlagOp);
+  // A uni's magnitude and whether it is 0 come from the host.
+  if (a.format.isSigned && !a.uni) magnitude(a);
+  if (b.format.isSigned && !b.uni) magnitude(b);
+  auto readA = [&](int64_t k = 1) {
+    if (!a.uni) c.Add(a.format.isSigned ? MicroOp::ReadInternal : Read(a.space), k);
+  };
+  auto readB = [&] {
+    if (!b.uni) c.Add(b.format.isSigned ? MicroOp::ReadInternal : Read(b.space));
+  };
+  if (!b.uni) {  // b == 0: an OR over b's bits, latched.
+    c.Add(Read(b.space), wb);
+    c.Add(MicroOp::AluStep, wb);
+    c.Add(MicroOp::FlagOp);
+  }
   // The skipped leading quotient bits leave the dividend's top bits as the remainder.
-  c.Add(readA, s.skipped);
+  readA(s.skipped);
   c.Add(MicroOp::AccumulatorWrite, s.skipped);
   const int lowA = std::max(s.shift, 0);  // dividend bits below this are zero
   for (int i = s.steps - 1; i >= 0; --i) {
     c.Add(MicroOp::FlagOp);  // set the carry: R' + ~D + 1
     for (int q = 0; q <= d; ++q) {
       if (q == 0) {
-        if (i >= lowA) c.Add(readA);  // bring down dividend bit i
+        if (i >= lowA) readA();  // bring down dividend bit i
       } else {
         c.Add(MicroOp::AccumulatorRead);  // remainder bit q-1
       }
-      if (q >= s.divisorZeros && q < d) c.Add(readB);
+      if (q >= s.divisorZeros && q < d) readB();
       c.Add(MicroOp::AluStep);
       if (q < d) c.Add(MicroOp::AccumulatorWrite);  // the difference; bit d is its sign
     }
@@ -337,8 +347,8 @@ MicroOpCounts DivCost(Operand a, Operand b, Operand out, fixed::Policy p) {
     c.Add(MicroOp::AccumulatorRead, d);
     c.Add(MicroOp::AluStep, d);
     c.Add(MicroOp::FlagOp);  // R == 0
-    if (a.format.isSigned) c.Add(Read(a.space));
-    if (b.format.isSigned) c.Add(Read(b.space));
+    if (a.format.isSigned) AddRead(c, a);
+    if (b.format.isSigned) AddRead(c, b);
     c.Add(MicroOp::AluStep);
     c.Add(MicroOp::FlagOp);  // the quotient's sign
     c.Add(MicroOp::ReadInternal, m);
@@ -348,7 +358,7 @@ MicroOpCounts DivCost(Operand a, Operand b, Operand out, fixed::Policy p) {
   c += AlignedPass({{Operand{s.quotient, Space::Internal}, 0}}, s.quotient, out, p);
   // Where b == 0: the end of the range on a's side (written under the latched mask).
   c.Add(MicroOp::FlagOp);
-  if (a.format.isSigned) c.Add(Read(a.space));
+  if (a.format.isSigned) AddRead(c, a);
   c.Add(Write(out.space), wo);
   (void)wa;
   return c;
@@ -411,7 +421,7 @@ MicroOpCounts LogicCost(Operand a, bool binary, Space outSpace) {
 
 MicroOpCounts CopyCost(Operand a, Operand out) {
   MicroOpCounts c;
-  c.Add(Read(a.space), a.format.Width());
+  AddRead(c, a, a.format.Width());
   c.Add(Write(out.space), out.format.Width());
   return c;
 }

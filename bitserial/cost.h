@@ -31,9 +31,13 @@ struct MicroOpCounts {
 };
 
 // An operand as the schedule sees it: its format and where it lives.
+// A uni operand (`uni`) is a host value whose bits the controller supplies with each
+// instruction, as the multiplier bits of a multiply by a uni constant: reading one costs
+// nothing, and what the host knows of it (its sign, whether it is 0) costs no pass.
 struct Operand {
   fixed::Format format;
   Space space = Space::Internal;
+  bool uni = false;
 };
 
 // The exact-result formats (docs/bitserial.md, "How the engine works", exactness).

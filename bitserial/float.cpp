@@ -68,8 +68,9 @@ class Serial {
   Planes Zeros(int n) const { return Planes(n, Zero()); }
 
   void Place(const Multi& x) {
-    for (int i = 0; i < x.Width(); ++i)
-      loc_[x.Plane(i)] = x.GetSpace() == Space::Internal ? Loc::Internal : Loc::External;
+    const Loc loc = x.IsUni() ? Loc::Const
+                    : x.GetSpace() == Space::Internal ? Loc::Internal : Loc::External;
+    for (int i = 0; i < x.Width(); ++i) loc_[x.Plane(i)] = loc;
   }
   Word* New(Loc loc) {
     Word* p = m_.AcquirePlanes(1);
@@ -1033,6 +1034,32 @@ Multi ToFixed(const MultiFloat& a, fixed::Format out, fixed::Policy policy) {
   mach.Charge("ftofixed", s.Counts());
   return r;
 }
+
+namespace {
+MultiFloat Constant(Machine& m, const UniFloat& u) {
+  return WrapFloat(Multi::Constant(m, fixed::Fixed{fixed::Format::Unsigned(u.format.Width(), 0),
+                                                   fixed::BigInt(u.bits & u.format.Mask())}),
+                   u.format);
+}
+}  // namespace
+
+#define ZEPHYR_FLOAT_UNI(Result, Op)                                                     \
+  Result Op(const MultiFloat& a, const UniFloat& b) {                                    \
+    return Op(a, Constant(a.GetMachine(), b));                                           \
+  }                                                                                      \
+  Result Op(const UniFloat& a, const MultiFloat& b) {                                    \
+    return Op(Constant(b.GetMachine(), a), b);                                           \
+  }
+ZEPHYR_FLOAT_UNI(MultiFloat, Add)
+ZEPHYR_FLOAT_UNI(MultiFloat, Sub)
+ZEPHYR_FLOAT_UNI(MultiFloat, Mul)
+ZEPHYR_FLOAT_UNI(MultiFloat, Div)
+ZEPHYR_FLOAT_UNI(MultiFloat, Min)
+ZEPHYR_FLOAT_UNI(MultiFloat, Max)
+ZEPHYR_FLOAT_UNI(Multi, Less)
+ZEPHYR_FLOAT_UNI(Multi, LessEqual)
+ZEPHYR_FLOAT_UNI(Multi, Equal)
+#undef ZEPHYR_FLOAT_UNI
 
 const std::vector<std::string>& FloatOpNames() {
   static const std::vector<std::string> names = {"fadd", "fsub", "fmul", "fdiv", "fsqrt", "fmin",

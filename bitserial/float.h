@@ -86,6 +86,28 @@ Multi Equal(const MultiFloat& a, const MultiFloat& b);
 MultiFloat ToFloat(const Multi& a, const fixed::FloatFormat& f);
 Multi ToFixed(const MultiFloat& a, fixed::Format out, fixed::Policy p = {});
 
+// A uni float on either side of every binary operation and comparison: the same result as
+// with the uni broadcast, its bits supplied by the controller (free to read, as
+// Operand::uni; the passes over them still run).
+MultiFloat Add(const MultiFloat& a, const UniFloat& b);
+MultiFloat Add(const UniFloat& a, const MultiFloat& b);
+MultiFloat Sub(const MultiFloat& a, const UniFloat& b);
+MultiFloat Sub(const UniFloat& a, const MultiFloat& b);
+MultiFloat Mul(const MultiFloat& a, const UniFloat& b);
+MultiFloat Mul(const UniFloat& a, const MultiFloat& b);
+MultiFloat Div(const MultiFloat& a, const UniFloat& b);
+MultiFloat Div(const UniFloat& a, const MultiFloat& b);
+MultiFloat Min(const MultiFloat& a, const UniFloat& b);
+MultiFloat Min(const UniFloat& a, const MultiFloat& b);
+MultiFloat Max(const MultiFloat& a, const UniFloat& b);
+MultiFloat Max(const UniFloat& a, const MultiFloat& b);
+Multi Less(const MultiFloat& a, const UniFloat& b);
+Multi Less(const UniFloat& a, const MultiFloat& b);
+Multi LessEqual(const MultiFloat& a, const UniFloat& b);
+Multi LessEqual(const UniFloat& a, const MultiFloat& b);
+Multi Equal(const MultiFloat& a, const UniFloat& b);
+Multi Equal(const UniFloat& a, const MultiFloat& b);
+
 // The float operations `FloatOpCycles` and `zephyr cycles --op` know, each charged under
 // its own name: fadd fsub fmul fdiv fsqrt fmin fmax fcompare (Less) ftofixed ffromfixed.
 const std::vector<std::string>& FloatOpNames();

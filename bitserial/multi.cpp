@@ -245,8 +245,21 @@ Multi::Multi(const Multi& o)
   std::memcpy(planes_, o.planes_, sizeof(Word) * Width() * machine_->WordsPerPlane());
 }
 
+Multi Multi::Constant(Machine& machine, const fixed::Fixed& value) {
+  Multi r;
+  r.machine_ = &machine;
+  r.format_ = value.format;
+  r.uni_ = true;
+  r.alloc_.name = "uni";
+  r.planes_ = machine.AcquirePlanes(r.Width());
+  for (int i = 0; i < r.Width(); ++i)
+    std::memcpy(r.Plane(i), value.Bit(i) ? machine.OnesPlane() : machine.ZeroPlane(),
+                sizeof(Word) * machine.WordsPerPlane());
+  return r;
+}
+
 Multi::Multi(Multi&& o) noexcept
-    : machine_(o.machine_), format_(o.format_), alloc_(o.alloc_), planes_(o.planes_) {
+    : machine_(o.machine_), format_(o.format_), alloc_(o.alloc_), planes_(o.planes_), uni_(o.uni_) {
   o.machine_ = nullptr;
   o.planes_ = nullptr;
 }
@@ -284,6 +297,7 @@ Multi& Multi::operator=(Multi&& o) {
     bool hadName = !Empty();
     Release();
     machine_ = o.machine_, format_ = o.format_, alloc_ = o.alloc_, planes_ = o.planes_;
+    uni_ = o.uni_;
     o.machine_ = nullptr, o.planes_ = nullptr;
     (void)name, (void)hadName;
     return *this;
@@ -295,7 +309,7 @@ Multi::~Multi() { Release(); }
 
 void Multi::Release() {
   if (!machine_) return;
-  machine_->Memory().Free(alloc_.id);
+  if (!uni_) machine_->Memory().Free(alloc_.id);
   machine_->ReleasePlanes(planes_, Width());
   machine_ = nullptr;
   planes_ = nullptr;
@@ -462,6 +476,38 @@ Multi Mul(const Multi& a, const Uni& b, Format out, Policy p) {
     }
   MulInto(a, rows, shifts, subs, ProductFormat(a.Format(), b.value.format), r, p);
   return r;
+}
+
+Multi Add(const Multi& a, const Uni& b, Format out, Policy p) {
+  return Add(a, Multi::Constant(a.GetMachine(), b.value), out, p);
+}
+Multi Add(const Uni& a, const Multi& b, Format out, Policy p) {
+  return Add(Multi::Constant(b.GetMachine(), a.value), b, out, p);
+}
+Multi Sub(const Multi& a, const Uni& b, Format out, Policy p) {
+  return Sub(a, Multi::Constant(a.GetMachine(), b.value), out, p);
+}
+Multi Sub(const Uni& a, const Multi& b, Format out, Policy p) {
+  return Sub(Multi::Constant(b.GetMachine(), a.value), b, out, p);
+}
+Multi Min(const Multi& a, const Uni& b, Format out, Policy p) {
+  return Min(a, Multi::Constant(a.GetMachine(), b.value), out, p);
+}
+Multi Min(const Uni& a, const Multi& b, Format out, Policy p) {
+  return Min(Multi::Constant(b.GetMachine(), a.value), b, out, p);
+}
+Multi Max(const Multi& a, const Uni& b, Format out, Policy p) {
+  return Max(a, Multi::Constant(a.GetMachine(), b.value), out, p);
+}
+Multi Max(const Uni& a, const Multi& b, Format out, Policy p) {
+  return Max(Multi::Constant(b.GetMachine(), a.value), b, out, p);
+}
+Multi Mul(const Uni& a, const Multi& b, Format out, Policy p) { return Mul(b, a, out, p); }
+Multi Div(const Multi& a, const Uni& b, Format out, Policy p) {
+  return Div(a, Multi::Constant(a.GetMachine(), b.value), out, p);
+}
+Multi Div(const Uni& a, const Multi& b, Format out, Policy p) {
+  return Div(Multi::Constant(b.GetMachine(), a.value), b, out, p);
 }
 
 Multi Square(const Multi& a, Format out, Policy p) {
@@ -710,6 +756,17 @@ Multi Equal(const Multi& a, const Multi& b) {
   return r;
 }
 
+Multi Less(const Multi& a, const Uni& b) { return Less(a, Multi::Constant(a.GetMachine(), b.value)); }
+Multi Less(const Uni& a, const Multi& b) { return Less(Multi::Constant(b.GetMachine(), a.value), b); }
+Multi LessEqual(const Multi& a, const Uni& b) {
+  return LessEqual(a, Multi::Constant(a.GetMachine(), b.value));
+}
+Multi LessEqual(const Uni& a, const Multi& b) {
+  return LessEqual(Multi::Constant(b.GetMachine(), a.value), b);
+}
+Multi Equal(const Multi& a, const Uni& b) { return Equal(a, Multi::Constant(a.GetMachine(), b.value)); }
+Multi Equal(const Uni& a, const Multi& b) { return Equal(Multi::Constant(b.GetMachine(), a.value), b); }
+
 static Multi LogicOf(LogicOp op, const Multi& a, const Multi* b, const char* name) {
   CheckBool(a, name);
   if (b) CheckBool(*b, name), CheckSameMachine(a, *b);
@@ -731,6 +788,11 @@ Multi operator*(const Multi& a, const Multi& b) {
   return Mul(a, b, ProductFormat(a.Format(), b.Format()));
 }
 Multi operator-(const Multi& a) { return Neg(a, NegFormat(a.Format())); }
+Multi operator+(const Multi& a, const Uni& b) { return Add(a, b, SumFormat(a.Format(), b.value.format)); }
+Multi operator-(const Multi& a, const Uni& b) { return Sub(a, b, DiffFormat(a.Format(), b.value.format)); }
+Multi operator*(const Multi& a, const Uni& b) {
+  return Mul(a, b, ProductFormat(a.Format(), b.value.format));
+}
 
 // ---- where ----------------------------------------------------------------------------------
 

@@ -40,6 +40,11 @@ class Multi {
   // above but not zero-filled first (the fill cost as much as a 32-bit add's kernel).
   struct Uninitialised {};
   Multi(Machine& machine, fixed::Format format, std::string name, Uninitialised);
+  // A uni value as an operand: its bits are supplied by the controller with each
+  // instruction (no PE memory is allocated, reading it costs nothing; Operand::uni). The
+  // operations taking a Uni use one; a program would rather Broadcast a value it keeps.
+  static Multi Constant(Machine& machine, const fixed::Fixed& value);
+  bool IsUni() const { return uni_; }
   Multi(const Multi& other);  // a copy (charged)
   Multi(Multi&& other) noexcept;
   // Assignment writes the active PEs only (converting with the default policy if the
@@ -54,7 +59,7 @@ class Multi {
   int Width() const { return format_.Width(); }
   Space GetSpace() const { return alloc_.space; }
   const Allocation& GetAllocation() const { return alloc_; }
-  Operand AsOperand() const { return {format_, alloc_.space}; }
+  Operand AsOperand() const { return {format_, alloc_.space, uni_}; }
   const Word* Plane(int i) const { return planes_ + i * machine_->WordsPerPlane(); }
   Word* Plane(int i) { return planes_ + i * machine_->WordsPerPlane(); }
 
@@ -76,6 +81,7 @@ class Multi {
   fixed::Format format_;
   Allocation alloc_;
   Word* planes_ = nullptr;
+  bool uni_ = false;
 };
 
 // ---- arithmetic (each as the fixed/ function of the same name) ----------------------------
@@ -88,6 +94,20 @@ Multi Max(const Multi& a, const Multi& b, fixed::Format out, fixed::Policy p = {
 Multi Mul(const Multi& a, const Multi& b, fixed::Format out, fixed::Policy p = {});
 Multi Mul(const Multi& a, const Uni& b, fixed::Format out, fixed::Policy p = {});
 Multi Square(const Multi& a, fixed::Format out, fixed::Policy p = {});
+// Uni operands (MultiC mixed uni and multi in every binary operation and comparison): the
+// same result as with the uni broadcast into a multi; the uni's bits cost no memory read
+// (Operand::uni). Mul(Multi, Uni) below has its own schedule (rows only for one bits).
+Multi Add(const Multi& a, const Uni& b, fixed::Format out, fixed::Policy p = {});
+Multi Add(const Uni& a, const Multi& b, fixed::Format out, fixed::Policy p = {});
+Multi Sub(const Multi& a, const Uni& b, fixed::Format out, fixed::Policy p = {});
+Multi Sub(const Uni& a, const Multi& b, fixed::Format out, fixed::Policy p = {});
+Multi Min(const Multi& a, const Uni& b, fixed::Format out, fixed::Policy p = {});
+Multi Min(const Uni& a, const Multi& b, fixed::Format out, fixed::Policy p = {});
+Multi Max(const Multi& a, const Uni& b, fixed::Format out, fixed::Policy p = {});
+Multi Max(const Uni& a, const Multi& b, fixed::Format out, fixed::Policy p = {});
+Multi Mul(const Uni& a, const Multi& b, fixed::Format out, fixed::Policy p = {});
+Multi Div(const Multi& a, const Uni& b, fixed::Format out, fixed::Policy p = {});
+Multi Div(const Uni& a, const Multi& b, fixed::Format out, fixed::Policy p = {});
 // Restoring division, one quotient bit per step (docs/bitserial.md). As fixed::Div: the
 // exact quotient rounded and fitted; where b == 0 the result is out's largest value if
 // a >= 0, its smallest if a < 0, and the PE's DivideByZero flag is set (not Overflow).
@@ -109,6 +129,12 @@ fixed::Format BoolFormat();
 Multi Less(const Multi& a, const Multi& b);
 Multi LessEqual(const Multi& a, const Multi& b);
 Multi Equal(const Multi& a, const Multi& b);
+Multi Less(const Multi& a, const Uni& b);
+Multi Less(const Uni& a, const Multi& b);
+Multi LessEqual(const Multi& a, const Uni& b);
+Multi LessEqual(const Uni& a, const Multi& b);
+Multi Equal(const Multi& a, const Uni& b);
+Multi Equal(const Uni& a, const Multi& b);
 Multi And(const Multi& a, const Multi& b);
 Multi Or(const Multi& a, const Multi& b);
 Multi Xor(const Multi& a, const Multi& b);
@@ -127,6 +153,15 @@ inline Multi operator==(const Multi& a, const Multi& b) { return Equal(a, b); }
 inline Multi operator&&(const Multi& a, const Multi& b) { return And(a, b); }
 inline Multi operator||(const Multi& a, const Multi& b) { return Or(a, b); }
 inline Multi operator!(const Multi& a) { return Not(a); }
+// With a uni on either side (exact result formats as above).
+Multi operator+(const Multi& a, const Uni& b);
+Multi operator-(const Multi& a, const Uni& b);
+Multi operator*(const Multi& a, const Uni& b);
+inline Multi operator<(const Multi& a, const Uni& b) { return Less(a, b); }
+inline Multi operator<=(const Multi& a, const Uni& b) { return LessEqual(a, b); }
+inline Multi operator>(const Multi& a, const Uni& b) { return Less(b, a); }
+inline Multi operator>=(const Multi& a, const Uni& b) { return LessEqual(b, a); }
+inline Multi operator==(const Multi& a, const Uni& b) { return Equal(a, b); }
 
 // ---- activity: where / elsewhere ---------------------------------------------------------
 // RAII: while a WhereScope lives, only PEs where `mask` (a 1-bit multi) is 1 are active;
