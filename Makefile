@@ -48,10 +48,12 @@ LIB_SRCS  := $(sort $(shell find $(ROOMS) -name '*.cpp') hosts/cmd/command.cpp)
 LIB_SRCS  := $(filter-out hosts/cmd/main.cpp,$(LIB_SRCS))
 TEST_SRCS := $(sort $(wildcard $(TEST_GLOB)))
 BENCH_SRCS:= $(sort $(wildcard tools/bench/*.cpp))
+EXAMPLE_SRCS := $(sort $(wildcard tools/examples/*.cpp))
 
 LIB_OBJS  := $(LIB_SRCS:%.cpp=$(BUILD)/obj/%.o)
 TEST_OBJS := $(TEST_SRCS:%.cpp=$(BUILD)/obj/%.o)
 BENCH_BINS:= $(BENCH_SRCS:tools/bench/%.cpp=$(BIN)/bench_%)
+EXAMPLE_BINS := $(EXAMPLE_SRCS:tools/examples/%.cpp=$(BIN)/example_%)
 
 ZEPHYR := $(BIN)/zephyr
 TESTS  := $(BIN)/zephyr_tests
@@ -66,10 +68,10 @@ help: ## List the targets
 setup: ## Install any missing Debian packages (idempotent; quick when all are there)
 	$(Q)bash tools/setup.sh
 
-all: setup ## Build the zephyr program, the tests and the benchmarks
+all: setup ## Build the zephyr program, the tests, the benchmarks and the example programs
 	$(Q)$(MAKE) --no-print-directory -j$(JOBS) binaries
 
-binaries: $(ZEPHYR) $(TESTS) $(BENCH_BINS)
+binaries: $(ZEPHYR) $(TESTS) $(BENCH_BINS) $(EXAMPLE_BINS)
 
 test: setup ## Build and run every test (GoogleTest; FILTER=... to select)
 	$(Q)$(MAKE) --no-print-directory -j$(JOBS) $(TESTS) $(ZEPHYR)
@@ -170,7 +172,12 @@ $(TESTS): $(LIB_OBJS) $(TEST_OBJS) | $(BIN)
 
 # Bench objects are made through a pattern chain; keep them (make would delete them as
 # intermediates and recompile every time).
-.SECONDARY: $(BENCH_SRCS:%.cpp=$(BUILD)/obj/%.o)
+.SECONDARY: $(BENCH_SRCS:%.cpp=$(BUILD)/obj/%.o) $(EXAMPLE_SRCS:%.cpp=$(BUILD)/obj/%.o)
+
+# The worked programs of docs/programming.md, each build/bin/example_NAME.
+$(BIN)/example_%: $(BUILD)/obj/tools/examples/%.o $(LIB_OBJS) | $(BIN)
+	$(call say,LINK,$@)
+	$(Q)$(CXX) $(ALL_CXXFLAGS) $^ -o $@ $(LDLIBS_ALL)
 
 # A benchmark may link extra libraries named in a `// LIBS: ...` line at its top.
 $(BIN)/bench_%: $(BUILD)/obj/tools/bench/%.o $(LIB_OBJS) | $(BIN)

@@ -469,6 +469,18 @@ MicroOpCounts MeshShiftCost(Operand a, int distance) {
   return c;
 }
 
+MicroOpCounts VirtualMeshShiftCost(Operand a, int layers, int block, int distance) {
+  ZEPHYR_CHECK(block >= 1 && layers % block == 0);
+  MicroOpCounts c;
+  const int64_t w = a.format.Width();
+  AddRead(c, a, w * layers);
+  c.Add(Write(a.space), w * layers);
+  // Hermite: over the block's positions i, the source PE is floor((i - d) / b) PEs away,
+  // and those distances sum to |d|; layers / block layers sit at each position.
+  c.Add(MicroOp::MeshHop, w * std::abs(distance) * (layers / block));
+  return c;
+}
+
 MicroOpCounts WhereCost(Operand mask) {
   MicroOpCounts c;
   c.Add(Read(mask.space));

@@ -95,6 +95,12 @@ enum class ReduceKind { Or, And, Xor, Sum, Max, Min };
 const char* ReduceName(ReduceKind k);
 MicroOpCounts ReduceCost(ReduceKind kind, Operand a);
 MicroOpCounts MeshShiftCost(Operand a, int distance);
+// A shift by `distance` along an axis of the virtual mesh (multi.h) with the block mapping:
+// each physical PE holds `layers` virtual PEs, `block` of them along the axis. Summed over
+// every layer: each layer's w bits are read and written once (from another layer of the
+// same PE's memory, or from a neighbouring PE), and w·|distance|·layers/block bits cross
+// the physical mesh (docs/bitserial.md, "The virtual mesh").
+MicroOpCounts VirtualMeshShiftCost(Operand a, int layers, int block, int distance);
 MicroOpCounts WhereCost(Operand mask);  // read the mask, load the activity flag
 MicroOpCounts ActivityCost();           // elsewhere / end of scope: one activity load
 

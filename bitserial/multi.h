@@ -221,4 +221,21 @@ fixed::Fixed ReduceMin(const Multi& a);
 // outside the mesh receives 0 (no wrap-around); every virtual-PE layer is its own mesh.
 Multi MeshShift(const Multi& a, int axis, int distance);
 
+// ---- the virtual mesh: MultiC's shapes ------------------------------------------------------
+// A shape declared over the machine's virtual PEs (1, 2 or 3 extents, x fastest; virtual PE
+// v = x + X·(y + Y·z)); its Size() must be the machine's virtual PEs. The shift moves across
+// the whole virtual space: out(c) = a(c - distance·e_axis), 0 where that is outside the
+// shape — pixel (x, y) of a 384×384 image goes to (x+1, y) whatever layer holds it.
+// Mapping (docs/bitserial.md, "The virtual mesh"): blocks. The physical mesh (the machine's
+// shape; for a 1-D shape its PEs as one chain) tiles the virtual one, each physical PE
+// holding a b_0 × b_1 (× b_2) block of neighbouring virtual PEs, b_i = V_i / P_i, one per
+// layer. A move stays in the PE's memory (another layer) except at the block's edge, where
+// it crosses to the neighbouring PE: charged over all layers by VirtualMeshShiftCost.
+// UserError: a shape whose size is not the machine's, whose rank differs from the physical
+// mesh's (except 1-D) or whose extents are not multiples of it; a layer block (the shift
+// needs every layer); an axis outside the shape.
+Multi MeshShift(const Multi& a, const MeshShape& shape, int axis, int distance);
+// The block extents of `shape` on machine m (b_i above); UserError as MeshShift.
+std::vector<int> VirtualBlock(const Machine& m, const MeshShape& shape);
+
 }  // namespace zephyr::bitserial

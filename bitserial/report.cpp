@@ -15,6 +15,17 @@ void CycleReport::Charge(const std::string& op, const MicroOpCounts& counts) {
   }
 }
 
+void CycleReport::ChargeWhole(const std::string& op, const MicroOpCounts& total) {
+  auto cls = total.ByClass(profile_);
+  OpStats& s = ops_[op];
+  s.calls += 1;
+  s.whole += total;
+  for (int i = 0; i < kCycleClassCount; ++i) {  // stored per layer, as every charge
+    s.byClass[i] += cls[i] / layers_;
+    byClass_[i] += cls[i] / layers_;
+  }
+}
+
 void CycleReport::Clear() {
   byClass_ = {};
   ops_.clear();
@@ -24,7 +35,8 @@ bool CycleReport::SameCharges(const CycleReport& o) const {
   if (layers_ != o.layers_ || byClass_ != o.byClass_ || ops_.size() != o.ops_.size()) return false;
   for (auto a = ops_.begin(), b = o.ops_.begin(); a != ops_.end(); ++a, ++b)
     if (a->first != b->first || a->second.calls != b->second.calls ||
-        a->second.counts.n != b->second.counts.n || a->second.byClass != b->second.byClass)
+        a->second.counts.n != b->second.counts.n || a->second.whole.n != b->second.whole.n ||
+        a->second.byClass != b->second.byClass)
       return false;
   return true;
 }
@@ -77,7 +89,8 @@ nlohmann::json CycleReport::Json() const {
     o["byClass"] = oc;
     json mo = json::object();
     for (int i = 0; i < kMicroOpCount; ++i)
-      if (s.counts.n[i]) mo[MicroOpName(static_cast<MicroOp>(i))] = s.counts.n[i] * layers_;
+      if (s.counts.n[i] || s.whole.n[i])
+        mo[MicroOpName(static_cast<MicroOp>(i))] = s.counts.n[i] * layers_ + s.whole.n[i];
     o["microOps"] = mo;
     ops[name] = o;
   }

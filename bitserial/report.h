@@ -23,6 +23,9 @@ class CycleReport {
 
   // Charges one call of `op` whose per-layer micro-op counts are `counts`.
   void Charge(const std::string& op, const MicroOpCounts& counts);
+  // Charges one call of `op` whose micro-ops differ from layer to layer (a move across the
+  // virtual mesh, multi.h): `total` is summed over every layer, not per layer.
+  void ChargeWhole(const std::string& op, const MicroOpCounts& total);
   void Clear();
   // The same calls and micro-op counts of every op (the same instruction stream).
   bool SameCharges(const CycleReport& other) const;
@@ -44,7 +47,8 @@ class CycleReport {
  private:
   struct OpStats {
     int64_t calls = 0;
-    MicroOpCounts counts;
+    MicroOpCounts counts;  // per layer
+    MicroOpCounts whole;   // over all layers (ChargeWhole)
     std::array<double, kCycleClassCount> byClass{};
   };
   MachineProfile profile_;
