@@ -207,7 +207,8 @@ SMPI_CXXFLAGS = -std=c++20 -Wall -Wextra -Wno-unused-parameter -I. \
 SMPI_LIBS = $(shell pkg-config --libs libhwy libpng fmt 2>/dev/null) -lpthread
 # zephyr-smpi is for `render` (and `testbed`): the other commands stay out of it.
 SMPI_SRCS := $(filter-out hosts/cmd/accuracy.cpp hosts/cmd/cycles.cpp hosts/cmd/stability.cpp \
-               hosts/cmd/mpi_check.cpp hosts/scene/gen.cpp hosts/scene/pov.cpp,$(LIB_SRCS))
+               hosts/cmd/mpi_check.cpp hosts/cmd/gen.cpp hosts/cmd/export_pov.cpp \
+               hosts/cmd/plan.cpp hosts/scene/gen.cpp hosts/scene/pov.cpp,$(LIB_SRCS))
 SMPI_OBJS := $(SMPI_SRCS:%.cpp=$(SMPI_BUILD)/obj/%.o) $(SMPI_BUILD)/obj/hosts/cmd/main.o
 
 .PHONY: smpi

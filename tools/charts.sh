@@ -74,7 +74,7 @@ done
 RUNS=$OUT/runs.csv
 echo "method,objects,children,frame,rep,host_s,time_s,model_s,simd_host_s,shade_s,bytes_p2c,bytes_c2p,pixels,frames_total,frames_sent,frames_skipped" >"$RUNS"
 
-# The figures, by the keys the reports carry (hosts/methods/render.cpp, render_simd.cpp, dist.cpp):
+# The figures, by the keys the reports carry (hosts/methods/render.cpp, simd.cpp, hosts/farm/parent.cpp):
 #   host_s       .phases.render: wall seconds of the render phase on this host (dist/hetero:
 #                MPI starts before it, so start-up is not included; the children's stop is)
 #   time_s       the method's time as the paper measures it: seq/simd the render phase;

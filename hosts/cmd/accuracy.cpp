@@ -15,10 +15,10 @@
 
 #include "fixed/check.h"
 #include "hosts/cmd/command.h"
+#include "hosts/cmd/simd_flags.h"
 #include "hosts/trace/exact.h"
 #include "hosts/trace/image.h"
 #include "hosts/scene/nff.h"
-#include "hosts/methods/render.h"
 #include "hosts/simd/pass.h"
 
 namespace zephyr::simd {
@@ -31,7 +31,7 @@ CommandRegistration reg("accuracy", [](CLI::App& program) {
       "accuracy", "Compare the SIMD primary pass (or the sequential tracer) with an exact (128-bit) reference");
   auto scene = std::make_shared<std::string>();
   auto sample = std::make_shared<int64_t>(0);
-  auto o = std::make_shared<RenderOptions>();
+  auto flags = std::make_shared<SimdFlags>();
   auto json = std::make_shared<bool>(false);
   auto method = std::make_shared<std::string>("simd");
   auto precision = std::make_shared<std::string>();
@@ -39,21 +39,16 @@ CommandRegistration reg("accuracy", [](CLI::App& program) {
   cmd->add_option("--method", *method, "simd (default: the SIMD primary pass) or seq (the sequential tracer)");
   cmd->add_option("--precision", *precision, "--method seq: float or double (default double)");
   cmd->add_option("--sample", *sample, "Random sample of this many pixels (default: every pixel)");
-  cmd->add_option("--frac-bits", o->extra["frac-bits"], "Fraction bits of lengths, t and directions");
-  cmd->add_option("--dir-frac-bits", o->extra["dir-frac-bits"], "Fraction bits of the directions only");
-  cmd->add_option("--int-bits", o->extra["int-bits"], "Integer bits of distances");
-  cmd->add_option("--uncertain", o->extra["uncertain"], "recompute (default), refine, keep or fail");
+  flags->AddTo(*cmd, "--method simd: ");
   cmd->add_flag("--json", *json, "Machine-readable output");
-  cmd->callback([scene, sample, o, json, method, precision] {
+  cmd->callback([scene, sample, flags, json, method, precision] {
     if (*method != "simd" && *method != "seq")
       throw UserError("--method: expected simd or seq, got '" + *method + "'");
     const bool simd = *method == "simd";
     if (simd && !precision->empty())
       throw UserError("--precision applies to --method seq (the SIMD pass is fixed point)");
-    if (!simd)
-      for (const char* flag : {"frac-bits", "dir-frac-bits", "int-bits", "uncertain"})
-        if (!o->extra[flag].empty())
-          throw UserError(std::string("--") + flag + " applies to --method simd only");
+    if (!simd && !flags->Given().empty())
+      throw UserError(flags->Given().front() + " applies to --method simd only");
     TraceOptions seqOptions;
     seqOptions.precision = ParsePrecision(precision->empty() ? "double" : *precision);
     const Scene s = ReadNffFile(*scene);
@@ -62,7 +57,7 @@ CommandRegistration reg("accuracy", [](CLI::App& program) {
     PrimaryPass pass;
     std::unique_ptr<Tracer> seqTracer;
     if (simd) {
-      pass = RunPrimaryPass(s, SimdOptionsFrom(*o));
+      pass = RunPrimaryPass(s, flags->Options());
     } else {
       seqTracer = Tracer::Create(s, seqOptions);
     }

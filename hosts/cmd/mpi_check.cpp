@@ -221,11 +221,11 @@ void RunCheck(CheckArgs& a) {
     return job;
   };
   a.farm.checkpointPath = CheckpointPathFor(a.out);
-  auto result = RunFramedMethod(o.mode, factory, buildJob, a.farm);
-  if (!result) return;  // a child
-  WritePfm(a.out, o.width, o.height, result->image);
-  WriteJson(a.report, result->report);
-  RemoveCheckpoint(result->checkpointPath);  // only now: the outputs are on disk
+  if (ServeIfChild(o.mode, factory)) return;  // a child: served frames, no output
+  const FramedResult result = RenderFrames(buildJob(), a.farm);
+  WritePfm(a.out, o.width, o.height, result.image);
+  WriteJson(a.report, result.report);
+  RemoveCheckpoint(result.checkpointPath);  // only now: the outputs are on disk
 }
 
 CommandRegistration reg("mpi-check", [](CLI::App& program) {

@@ -7,9 +7,13 @@
 // pixel is — it moves bytes — so dist (whole tracing in the child), hetero (secondary rays
 // from the parent's SIMD primary pass) and the `mpi-check` test pattern share it.
 //
-//   std::optional<FramedResult> r = RunFramedMethod("dist", factory, buildJob, options);
-//   if (!r) return;  // a child: it served frames and has no output of its own
-//   ... write r->image and r->report ...
+//   if (ServeIfChild("dist", factory)) return;  // a child: served frames, has no output
+//   FramedResult r = RenderFrames(job, options);  // the parent
+//   ... write r.image and r.report ...
+//
+// Files: farm.h (this interface), child.cpp (the child loop), parent.cpp (the parent: queue,
+// losses, checkpoint, report), frame.h (frames and the queue), protocol.h (messages),
+// session.h (MPI), checkpoint.h, test_fault.h (the tests' fault injection).
 #pragma once
 
 #include <cstddef>
@@ -75,23 +79,17 @@ struct FramedResult {
   std::string checkpointPath;
 };
 
-// The whole method: starts MPI (≥ 2 ranks or UserError); on a child serves frames and
-// returns nullopt; on the parent builds the job (only there: children never read the scene)
-// and renders it. After a UserError on the parent the children are still released (at exit)
-// so the job ends.
-std::optional<FramedResult> RunFramedMethod(const std::string& method,
-                                            const FrameWorkFactory& factory,
-                                            const std::function<FramedJob()>& buildJob,
-                                            const FramedOptions& options);
+// The one way into a farm child. Starts MPI and checks there is a parent and at least one
+// child (UserError naming `method` otherwise). On a child rank (≥ 1) it builds the child's
+// FrameWork from the parent's set-up message with `factory`, renders frames until the
+// parent says stop (or reports a failure to it) and returns true: the process has no output
+// of its own. On the parent (rank 0) it returns false at once.
+bool ServeIfChild(const std::string& method, const FrameWorkFactory& factory);
 
-// The pieces RunFramedMethod is made of.
-// Starts MPI and checks there is a parent and at least one child.
-MpiSession& StartFramedMethod(const std::string& method);
-// The child loop (ranks ≥ 1): returns when the parent says stop, or after reporting a failure.
-void ServeFrames(const FrameWorkFactory& factory);
-// The parent (rank 0). Throws UserError when the job cannot finish (all children lost,
-// a malformed message, a child's failure, a checkpoint that cannot be written); finished
-// frames stay in the checkpoint, which is never deleted here.
+// The parent (rank 0): hands the job's frames out and collects them. UserError when MPI has
+// fewer than 2 ranks or the job cannot finish (all children lost, a malformed message, a
+// child's failure, a checkpoint that cannot be written); finished frames stay in the
+// checkpoint, which is never deleted here (FramedResult::checkpointPath).
 FramedResult RenderFrames(const FramedJob& job, const FramedOptions& options);
 
 }  // namespace zephyr

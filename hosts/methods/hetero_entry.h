@@ -3,7 +3,7 @@
 // A hetero work message carries, for each pixel of the frame, only what a child cannot
 // recompute: the first object, t as the shader starts from it, and the flags. The primary
 // direction is recomputed by the child from the pixel's (x, y), the camera and the plan's
-// direction fraction bits exactly as hosts/simd/pass.cpp's host side decodes the matrix.
+// direction fraction bits with the pass's own quantisation (hosts/simd/direction.h).
 //
 //   hetero::PutEntry(pass.matrix.hits[i], pass.matrix.flags[i], bytes);      // parent
 //   PrimaryHit hit = hetero::GetEntry(bytes, objectCount, flags);             // child

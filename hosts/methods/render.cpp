@@ -1,57 +1,44 @@
-// hosts/methods/render.cpp — `zephyr render`: options, the method table, the outputs.
+// hosts/methods/render.cpp — the method table, reading the scene, writing the outputs.
 #include "hosts/methods/render.h"
 
-#include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
-#include <map>
 
 #include "fixed/check.h"
-#include "hosts/cmd/command.h"
 #include "hosts/io/output_file.h"
-#include "hosts/scene/nff.h"
+#include "hosts/methods/methods.h"
 #include "hosts/methods/phases.h"
+#include "hosts/scene/nff.h"
 #include "hosts/testbed/testbed.h"
 
 namespace zephyr {
 
 namespace {
-struct MethodEntry {
-  std::string description;
-  RenderMethod run;
-  RenderServeInstead serveInstead;
-  RenderCheckOptions checkOptions;
+
+// The table of methods (docs/background.md, "The four methods").
+constexpr RenderMethodEntry kMethods[] = {
+    {"seq", "sequential: the host traces every ray in floating point", RenderSeq},
+    {"simd",
+     "SIMD/sequential: primary rays on the emulated array in fixed point, secondary rays on "
+     "the host",
+     RenderSimd},
+    {"dist",
+     "distributed: under mpirun, children trace whole F×F frames handed out on demand "
+     "(bit-identical to seq)",
+     RenderDist, DistChildEntry, CheckDistOptions},
+    {"hetero",
+     "heterogeneous: the SIMD primary pass at the parent, children shade the frames with a hit "
+     "(under mpirun; bit-identical to simd)",
+     RenderHetero, HeteroChildEntry, CheckHeteroOptions},
 };
-std::map<std::string, MethodEntry>& Methods() {
-  static std::map<std::string, MethodEntry> methods;
-  return methods;
-}
+
 }  // namespace
-
-RenderMethodRegistration::RenderMethodRegistration(std::string name, std::string description,
-                                                   RenderMethod method,
-                                                   RenderServeInstead serveInstead,
-                                                   RenderCheckOptions checkOptions) {
-  Methods().emplace(std::move(name),
-                    MethodEntry{std::move(description), std::move(method), std::move(serveInstead),
-                                std::move(checkOptions)});
-}
-
-namespace {
-std::vector<std::function<void(CLI::App&, RenderOptions&)>>& FlagAdders() {
-  static std::vector<std::function<void(CLI::App&, RenderOptions&)>> adders;
-  return adders;
-}
-}  // namespace
-
-RenderFlagRegistration::RenderFlagRegistration(
-    std::function<void(CLI::App& command, RenderOptions& options)> add) {
-  FlagAdders().push_back(std::move(add));
-}
 
 std::vector<std::string> RenderMethodNames() {
   std::vector<std::string> names;
-  for (const auto& [name, entry] : Methods()) names.push_back(name);
+  for (const RenderMethodEntry& m : kMethods) names.push_back(m.name);
+  std::sort(names.begin(), names.end());
   return names;
 }
 
@@ -91,18 +78,19 @@ void CheckRenderOutputs(const RenderOptions& options) {
 }
 
 RenderOutput RunRender(const RenderOptions& options) {
-  auto it = Methods().find(options.method);
-  if (it == Methods().end()) {
+  auto it = std::find_if(std::begin(kMethods), std::end(kMethods),
+                         [&](const RenderMethodEntry& m) { return options.method == m.name; });
+  if (it == std::end(kMethods)) {
     std::string known;
     for (const auto& name : RenderMethodNames()) known += (known.empty() ? "" : ", ") + name;
     throw UserError("--method: unknown method '" + options.method + "' (known: " + known + ")");
   }
   RenderOutput out;
-  if (it->second.serveInstead && it->second.serveInstead(options)) return out;
-  // Every output and flag is checked before the scene is read: nothing is computed for an
+  if (it->child) it->child(options);  // a child rank serves frames and ends there
+  // Every output and option is checked before the scene is read: nothing is computed for an
   // output that could not be written.
   CheckRenderOutputs(options);
-  if (it->second.checkOptions) it->second.checkOptions(options);
+  if (it->check) it->check(options);
   out.report["method"] = options.method;
   Scene scene;
   {
@@ -118,9 +106,9 @@ RenderOutput RunRender(const RenderOptions& options) {
                            {"sphere_test", SphereTestName(options.trace.sphereTest)}};
   {
     PhaseTimer timer(out.report, "render");
-    it->second.run(scene, options, out);
+    it->render(scene, options, out);
   }
-  testbed::AddModelledTime(options, scene, out);  // --testbed: modelled 1992 seconds
+  testbed::AddModelledTime(options.testbed, options.method, scene, out.report);  // --testbed: modelled 1992 seconds
   ZEPHYR_CHECK(out.image.width == c.width && out.image.height == c.height);
   try {
     if (!options.out.empty()) {
@@ -148,81 +136,4 @@ RenderOutput RunRender(const RenderOptions& options) {
   return out;
 }
 
-// One line a user reads after a render: what was made, how long it took, where it went;
-// for the distributed methods also frames and bytes (the JSON report has every figure).
-std::string RenderSummary(const RenderOptions& options, const RenderOutput& out) {
-  char line[512];
-  const nlohmann::json& r = out.report;
-  double seconds = r.contains("phases") && r["phases"].contains("render")
-                       ? r["phases"]["render"].get<double>()
-                       : 0.0;
-  std::snprintf(line, sizeof line, "%s: %dx%d, %zu objects, rendered in %.3f s", options.method.c_str(),
-                out.image.width, out.image.height, r["scene"]["objects"].get<size_t>(), seconds);
-  std::string s = line;
-  if (r.contains("distributed")) {
-    const nlohmann::json& d = r["distributed"];
-    const nlohmann::json& bytes = d["traffic"];
-    auto total = [&](const char* way) {
-      const nlohmann::json& t = bytes[way]["total"];
-      return t["payloadBytes"].get<double>() + t["envelopeBytes"].get<double>();
-    };
-    std::snprintf(line, sizeof line,
-                  "; %d children, %d frames sent, %d skipped, %.0f bytes to children, %.0f back",
-                  d["children"].get<int>(), d["frames"]["sent"].get<int>(),
-                  d["frames"]["skipped"].get<int>(), total("parentToChildren"),
-                  total("childrenToParent"));
-    s += line;
-  }
-  if (!options.out.empty()) s += "\n  image  " + options.out;
-  if (!options.report.empty()) s += "\n  report " + options.report;
-  if (!options.dumpPrimary.empty()) s += "\n  primary hits " + options.dumpPrimary;
-  return s;
-}
-
-namespace {
-
-CommandRegistration reg("render", [](CLI::App& program) {
-  auto* cmd = program.add_subcommand("render", "Ray-trace a scene with one of the methods");
-  auto o = std::make_shared<RenderOptions>();
-  auto positional = std::make_shared<std::string>();
-  auto precision = std::make_shared<std::string>("double");
-  auto sphereTest = std::make_shared<std::string>("hb");
-  auto noProgress = std::make_shared<bool>(false);
-  std::string methods;
-  for (const auto& name : RenderMethodNames()) methods += (methods.empty() ? "" : ", ") + name;
-  cmd->add_option("--method", o->method, "Method: " + methods)->capture_default_str();
-  cmd->add_option("--scene", o->scenePath, "NFF scene file");
-  cmd->add_option("scene", *positional, "NFF scene file (same as --scene)");
-  std::vector<CLI::Option*> outputs = {
-      cmd->add_option("--out", o->out, "Output PNG"),
-      cmd->add_option("--report", o->report, "JSON report: time per phase, rays, tests"),
-      cmd->add_option("--dump-primary", o->dumpPrimary, "CSV of primary hits: x,y,dx,dy,dz,object,t,flags")};
-  cmd->add_option("--depth", o->trace.depth, "Ray-tree depth limit (1 = primary rays only)")
-      ->capture_default_str();
-  cmd->add_option("--precision", *precision, "Host tracer scalar: float or double")->capture_default_str();
-  cmd->add_option("--sphere-test", *sphereTest, "Sphere test form: hb (Hearn-Baker) or naive")
-      ->capture_default_str();
-  cmd->add_flag("--no-progress", *noProgress, "No progress bar even on a terminal");
-  for (const auto& add : FlagAdders()) add(*cmd, *o);
-  cmd->callback([o, positional, precision, sphereTest, noProgress, outputs] {
-    RenderOptions options = *o;
-    for (CLI::Option* flag : outputs)  // `--out ''` is a mistake, not "no output"
-      if (flag->count() > 0 && flag->as<std::string>().empty())
-        throw UserError(flag->get_name() + ": empty path (give a file name, or leave the flag out)");
-    if (!positional->empty()) {
-      if (!options.scenePath.empty() && options.scenePath != *positional)
-        throw UserError("render: give the scene once (either --scene or a positional file)");
-      options.scenePath = *positional;
-    }
-    if (options.scenePath.empty()) throw UserError("render: no scene (use --scene FILE)");
-    options.trace.precision = ParsePrecision(*precision);
-    options.trace.sphereTest = ParseSphereTest(*sphereTest);
-    options.progress = !*noProgress && StderrIsTerminal();
-    RenderOutput out = RunRender(options);
-    if (!out.report.contains("method")) return;  // an MPI child: the parent reports
-    std::printf("%s\n", RenderSummary(options, out).c_str());
-  });
-});
-
-}  // namespace
 }  // namespace zephyr

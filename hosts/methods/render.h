@@ -1,38 +1,47 @@
-// hosts/methods/render.h — the `render` command and the table of methods it dispatches to.
+// hosts/methods/render.h — rendering a scene file with one of the four methods, and the table
+// of methods (seq, simd, dist, hetero; docs/background.md, "The four methods").
 //
-// A method is a function that fills a RenderOutput from a scene and the shared options.
-// Each method registers itself beside its own code with a file-scope RenderMethodRegistration
-// (seq in hosts/methods/seq.cpp, simd in hosts/methods/simd.cpp, dist and hetero in
-// hosts/methods/dist_hetero.cpp), so a new method is one entry in one new file; the command itself
-// knows no method.
+// A method is a function that fills a RenderOutput from a scene and the options. The table
+// (hosts/methods/render.cpp) names each method once; each method's code is in its own file
+// (seq.cpp, simd.cpp, dist.cpp, hetero.cpp). Options are typed: those every method shares,
+// then one struct per family of methods (the SIMD pass's, the frame farm's). The command
+// line that fills them is hosts/cmd/render.cpp.
 #pragma once
 
-#include <functional>
-#include <map>
+#include <cstdint>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
-#include "hosts/trace/image.h"
 #include "hosts/scene/scene.h"
+#include "hosts/simd/pass.h"
+#include "hosts/trace/image.h"
 #include "hosts/trace/tracer.h"
-
-namespace CLI { class App; }
 
 namespace zephyr {
 
-// Options every method shares (flags of `zephyr render`). Method-specific flags belong to
-// the method (e.g. read from `extra`, filled by options the method adds to the command).
+// The options of dist and hetero (the frame farm; docs/distributed.md).
+struct DistOptions {
+  int frameSize = 64;                // --frame: F×F frames (UserError if < 1)
+  bool resume = false;               // --resume: render only the frames missing from OUT.frames
+  double childTimeoutSeconds = 60;   // --child-timeout: a silent child holding frames is lost
+  int framesInFlight = 2;            // --in-flight: frames handed to a child before it answers
+};
+
 struct RenderOptions {
   std::string method = "seq";
   std::string scenePath;
   std::string out;          // PNG path ("" = none)
   std::string report;       // JSON report path ("" = none)
   std::string dumpPrimary;  // CSV of primary hits ("" = none)
-  TraceOptions trace;       // depth, precision, sphere test
+  TraceOptions trace;       // depth, precision, sphere test (every method shades on the host)
   bool progress = true;     // progress bar when stderr is a terminal
-  std::map<std::string, std::string> extra;  // method-specific flags, by flag name
+  simd::SimdOptions simd;   // simd and hetero: formats, uncertain pixels, machine profile
+  DistOptions dist;         // dist and hetero
+  // --testbed: the modelled system whose seconds the report gives ("" = none; the names are
+  // testbed::TestbedNames(), docs/testbed.md). UserError for an unknown name.
+  std::string testbed;
 };
 
 // One primary-ray record per pixel for --dump-primary; `flags` is method-specific (0 = plain
@@ -51,39 +60,15 @@ struct RenderOutput {
   std::vector<std::string> removeWhenWritten;
 };
 
-using RenderMethod =
-    std::function<void(const Scene& scene, const RenderOptions& options, RenderOutput& out)>;
-
-// Runs before the scene is read. A method whose process may be a helper of another (an MPI
-// child of dist/hetero) serves there and returns true: RunRender then reads no scene file —
-// on a cluster the file exists only where the parent runs — and writes no outputs.
-using RenderServeInstead = std::function<bool(const RenderOptions& options)>;
-
-// Runs on the process that writes the outputs, after RunRender's own checks of the output
-// paths and before the scene is read or any work starts: the method's check of its own
-// flags and of what it cannot do with the shared ones (e.g. dist has no --dump-primary, its
-// checkpoint must not be another output). Throws UserError.
-using RenderCheckOptions = std::function<void(const RenderOptions& options)>;
-
-struct RenderMethodRegistration {
-  RenderMethodRegistration(std::string name, std::string description, RenderMethod method,
-                           RenderServeInstead serveInstead = nullptr,
-                           RenderCheckOptions checkOptions = nullptr);
-};
-
-// A method's own flags: `add` puts options on the render command, storing their values in
-// options.extra (e.g. hosts/methods/simd.cpp adds --frac-bits).
-struct RenderFlagRegistration {
-  explicit RenderFlagRegistration(std::function<void(CLI::App& command, RenderOptions& options)> add);
-};
-
-// The registered method names, sorted.
+// The registered method names, in the table's order (seq, simd, dist, hetero).
 std::vector<std::string> RenderMethodNames();
 
-// Checks every output path and the method's flags (CheckRenderOutputs, then the method's
-// RenderCheckOptions), reads the scene and runs the method, then writes --out, --dump-primary
-// and --report, each atomically, and only then deletes RenderOutput::removeWhenWritten.
-// Returns the output too (tests use it).
+// Checks every output path and the method's options (CheckRenderOutputs, then the method's
+// own check), reads the scene and runs the method, then writes --out, --dump-primary and
+// --report, each atomically, and only then deletes RenderOutput::removeWhenWritten.
+// Returns the output too (tests use it). UserError for an unknown method, a bad scene or an
+// unwritable output. A method that runs under MPI (dist, hetero) serves frames in its child
+// processes before any scene is read and ends them there: this returns only on the parent.
 RenderOutput RunRender(const RenderOptions& options);
 
 // Refuses, before any work: an output path that cannot be written (CheckOutputPath), an

@@ -1,13 +1,11 @@
 // hosts/methods/seq.cpp — the sequential method (paper §2): the host traces every ray,
 // primary and secondary, testing every object.
-#include "hosts/methods/render.h"
+#include "hosts/methods/methods.h"
 #include "hosts/methods/phases.h"
 
 namespace zephyr {
 
-namespace {
-
-void RenderSequential(const Scene& scene, const RenderOptions& options, RenderOutput& out) {
+void RenderSeq(const Scene& scene, const RenderOptions& options, RenderOutput& out) {
   const Camera& c = scene.camera;
   const auto tracer = Tracer::Create(scene, options.trace);
   TraceStats stats;
@@ -22,8 +20,4 @@ void RenderSequential(const Scene& scene, const RenderOptions& options, RenderOu
   out.report.update(stats.ToJson());
 }
 
-RenderMethodRegistration reg("seq", "sequential: the host traces every ray in floating point",
-                             RenderSequential);
-
-}  // namespace
 }  // namespace zephyr

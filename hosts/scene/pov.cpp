@@ -1,14 +1,12 @@
-// hosts/scene/pov.cpp — `zephyr export-pov`: our scene as POV-Ray 3.7 SDL.
+// hosts/scene/pov.cpp — our scene as POV-Ray 3.7 SDL (`zephyr export-pov` is
+// hosts/cmd/export_pov.cpp).
 #include "hosts/scene/pov.h"
 
-#include <CLI/CLI.hpp>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 
 #include "fixed/check.h"
-#include "hosts/cmd/command.h"
-#include "hosts/io/output_file.h"
 #include "hosts/scene/nff.h"
 
 namespace zephyr {
@@ -107,31 +105,4 @@ std::string PovrayCommand(const std::string& pov, const std::string& png, int wi
          std::to_string(height) + " -A File_Gamma=1.0 Output_Alpha=off";
 }
 
-namespace {
-
-CommandRegistration reg("export-pov", [](CLI::App& program) {
-  auto* cmd = program.add_subcommand("export-pov", "Write a scene as POV-Ray 3.7 SDL (a reference renderer)");
-  auto scene = std::make_shared<std::string>();
-  auto out = std::make_shared<std::string>();
-  auto depth = std::make_shared<int>(5);
-  cmd->add_option("scene", *scene, "NFF scene file")->required();
-  cmd->add_option("--out", *out, "Output .pov file (default: standard output)");
-  cmd->add_option("--depth", *depth, "Trace depth (POV-Ray max_trace_level)")->capture_default_str();
-  cmd->callback([scene, out, depth] {
-    if (*depth < 1 || *depth > 64) throw UserError("--depth: expected 1..64");
-    if (!out->empty() && SameFile(*out, *scene))
-      throw UserError("--out " + *out + ": is the scene file being exported; choose another name");
-    const Scene s = ReadNffFile(*scene);
-    const std::string text = ExportPov(s, *depth);
-    if (out->empty()) {
-      std::fwrite(text.data(), 1, text.size(), stdout);
-    } else {
-      WriteOutputFile(*out, "POV-Ray file", text);
-      std::fprintf(stderr, "render it with: %s\n",
-                   PovrayCommand(*out, "out.png", s.camera.width, s.camera.height).c_str());
-    }
-  });
-});
-
-}  // namespace
 }  // namespace zephyr

@@ -11,6 +11,7 @@
 
 #include "bitserial/multi.h"
 #include "fixed/check.h"
+#include "hosts/simd/direction.h"
 #include "hosts/simd/object.h"
 #include "hosts/simd/ops.h"
 
@@ -59,7 +60,7 @@ void LoadDirections(ArrayMatrix& a, const PrimaryRays& rays, const PrimaryPlan& 
   for (int64_t pe = 0; pe < plan.virtualPes; ++pe) {
     const int64_t pixel = pixels.empty() ? pe : pixels[pe];
     const Vec3 dir = rays.At(int(pixel % plan.width), int(pixel / plan.width)).direction;
-    for (int k = 0; k < 3; ++k) raw[k][pe] = std::llround(std::ldexp(dir[k], plan.dirFracBits));
+    for (int k = 0; k < 3; ++k) raw[k][pe] = QuantiseDirection(dir[k], plan.dirFracBits);
   }
   for (int k = 0; k < 3; ++k) a.d[k].LoadRaw(raw[k]);
 }
@@ -158,9 +159,7 @@ void DecodeMatrix(PrimaryPass& pass, const MatrixRaw& raw) {
   out.flags.assign(plan.virtualPes, 0);
   for (int64_t pe = 0; pe < plan.virtualPes; ++pe) {
     PrimaryHit& h = out.hits[pe];
-    h.direction = Normalize(Vec3{std::ldexp(double(raw.d[0][pe]), -plan.dirFracBits),
-                                 std::ldexp(double(raw.d[1][pe]), -plan.dirFracBits),
-                                 std::ldexp(double(raw.d[2][pe]), -plan.dirFracBits)});
+    h.direction = DecodeDirection(raw.d[0][pe], raw.d[1][pe], raw.d[2][pe], plan.dirFracBits);
     h.object = int(raw.object[pe]) - 1;
     h.t = h.object >= 0 ? std::ldexp(double(raw.t[pe]), -plan.fracBits) : 0.0;
     uint32_t& fl = out.flags[pe];

@@ -20,10 +20,6 @@
 #include "hosts/simd/plan.h"
 #include "hosts/trace/tracer.h"
 
-namespace zephyr {
-struct RenderOptions;  // hosts/methods/render.h
-}
-
 namespace zephyr::simd {
 
 // Per-pixel flag bits (--dump-primary's flags column).
@@ -61,11 +57,6 @@ struct PrimaryPass {
 
 // Fraction bits the refine pass adds to the planned widths (docs/simd.md, "Refine pass").
 inline constexpr int kRefineExtraBits = 8;
-
-// The simd flags of a render command (--frac-bits, --dir-frac-bits, --int-bits,
-// --uncertain, --machine) from RenderOptions::extra; UserError on a bad value or a width
-// below kMinFracBits / kMinIntBits (the message says the minimum).
-SimdOptions SimdOptionsFrom(const RenderOptions& options);
 
 // The array part of the method: every primary ray's first hit, with the uncertain pixels
 // handled by options.uncertain (kFail throws UserError with the counts).

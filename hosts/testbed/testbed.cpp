@@ -1,14 +1,10 @@
 #include "hosts/testbed/testbed.h"
 
-#include <CLI/CLI.hpp>
 #include <cstdio>
-#include <fstream>
 #include <map>
 
 #include "bitserial/profile.h"
 #include "fixed/check.h"
-#include "hosts/cmd/command.h"
-#include "hosts/methods/render.h"
 #include "hosts/simd/pass.h"
 
 #ifdef ZEPHYR_SMPI
@@ -86,33 +82,32 @@ std::vector<std::string> TestbedNames() {
   return names;
 }
 
-void AddModelledTime(const RenderOptions& options, const Scene& scene, RenderOutput& out) {
-  auto it = options.extra.find("testbed");
-  if (it == options.extra.end() || it->second.empty()) return;
-  nlohmann::json& r = out.report;
+void AddModelledTime(const std::string& testbedName, const std::string& method,
+                     const Scene& scene, nlohmann::json& r) {
+  if (testbedName.empty()) return;
   nlohmann::json t;
-  if (options.method == "dist" || options.method == "hetero") {
+  if (method == "dist" || method == "hetero") {
     if (!Simulated())
-      throw UserError("--testbed with --method " + options.method +
+      throw UserError("--testbed with --method " + method +
                       " runs on a simulated network: build/bin/zephyr-smpi under smpirun "
                       "(`make smpi`; docs/testbed.md)");
-    t["testbed"] = it->second;
+    t["testbed"] = testbedName;
     t["modelledSeconds"] = SimulatedNow();
     t["clock"] = "SimGrid (simulated seconds from MPI start to the finished image at the parent)";
     r["testbed"] = t;
     return;
   }
-  const Testbed& bed = TestbedNamed(it->second);
+  const Testbed& bed = TestbedNamed(testbedName);
   const HostProfile& host = HostProfileNamed(bed.parentProfile);
   TraceStats stats;
   try {
     stats = TraceStats::FromJson(r);
   } catch (const nlohmann::json::exception&) {
-    throw UserError("--testbed: method '" + options.method + "' does not report counted work");
+    throw UserError("--testbed: method '" + method + "' does not report counted work");
   }
   t["testbed"] = bed.Json();
   t["hostProfile"] = host.Json();
-  if (options.method == "simd") {
+  if (method == "simd") {
     const nlohmann::json& pass = r.at("simd");
     if (pass.at("cycles").at("profile").get<std::string>() != bed.arrayProfile)
       throw UserError("--testbed " + bed.name + ": its array is '" + bed.arrayProfile +
@@ -190,57 +185,6 @@ std::string Hostfile(int children) {
   return s;
 }
 
-namespace {
-
-void WriteText(const std::string& path, const std::string& text) {
-  std::ofstream f(path);
-  f << text;
-  if (!f.flush()) throw UserError(path + ": cannot write");
-}
-
-CommandRegistration testbedCommand("testbed", [](CLI::App& program) {
-  auto* cmd = program.add_subcommand("testbed", "The paper's 1992 testbed: host profiles, platform files");
-  cmd->require_subcommand(1);
-  auto* profiles = cmd->add_subcommand("profiles", "Print the host profiles and the work table, with sources");
-  profiles->callback([] {
-    for (const auto& name : HostProfileNames()) std::printf("%s\n", HostProfileNamed(name).Table().c_str());
-    std::printf("work table (per counted event):\n");
-    for (int e = 0; e < kWorkEvents; ++e)
-      std::printf("  %-12s %5g flops %5g instructions  %s\n", WorkEventName(WorkEvent(e)),
-                  CostOf(WorkEvent(e)).flops, CostOf(WorkEvent(e)).instructions,
-                  CostOf(WorkEvent(e)).source.c_str());
-    for (const auto& name : TestbedNames())
-      std::printf("\ntestbed %s:\n%s\n", name.c_str(), TestbedNamed(name).Json().dump(2).c_str());
-  });
-  auto* platform = cmd->add_subcommand("platform", "Write a SimGrid platform file (and hostfile) of a testbed");
-  auto bed = std::make_shared<std::string>("ufmg1992");
-  auto children = std::make_shared<int>(8);
-  auto out = std::make_shared<std::string>();
-  auto hostfile = std::make_shared<std::string>();
-  platform->add_option("--testbed", *bed, "Testbed name")->capture_default_str();
-  platform->add_option("--children", *children, "Number of child hosts")->capture_default_str();
-  platform->add_option("--out", *out, "Platform XML (default: standard output)");
-  platform->add_option("--hostfile", *hostfile, "Also write smpirun's hostfile: the parent, then the children");
-  auto bps = std::make_shared<double>(0);
-  platform->add_option("--ethernet-bps", *bps, "Override the Ethernet's bandwidth, bit/s (what-if runs)");
-  platform->callback([bed, children, out, hostfile, bps] {
-    Testbed t = TestbedNamed(*bed);
-    if (*bps < 0 || (*bps > 0 && *bps < 1e3))
-      throw UserError("--ethernet-bps: expected a bandwidth of at least 1000 bit/s");
-    if (*bps > 0) t.ethernetBandwidth = {*bps, "bit/s", "--ethernet-bps (what-if; not the paper's network)"};
-    const std::string xml = PlatformXml(t, *children);
-    if (out->empty()) std::fputs(xml.c_str(), stdout);
-    else WriteText(*out, xml);
-    if (!hostfile->empty()) WriteText(*hostfile, Hostfile(*children));
-  });
-});
-
-RenderFlagRegistration flags([](CLI::App& cmd, RenderOptions& o) {
-  cmd.add_option("--testbed", o.extra["testbed"],
-                 "Model the paper's 1992 system (ufmg1992): the report's \"testbed\" gives "
-                 "modelled seconds (dist/hetero: under smpirun, docs/testbed.md)");
-});
-}  // namespace
 
 // ---- Simulation ---------------------------------------------------------------------------
 #ifdef ZEPHYR_SMPI

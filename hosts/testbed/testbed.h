@@ -22,8 +22,6 @@
 #include "hosts/trace/tracer.h"
 
 namespace zephyr {
-struct RenderOptions;
-struct RenderOutput;
 namespace simd {
 struct PrimaryPass;
 }
@@ -58,11 +56,14 @@ std::string Hostfile(int children);
 // True in the build made with smpicxx (zephyr-smpi), where time is SimGrid's.
 bool Simulated();
 
-// Modelled seconds of seq/simd from the counts in a finished render's report (the method's
-// TraceStats at the top level; simd's cycle report under "simd"). Adds report["testbed"]:
+// Modelled seconds on the testbed `testbedName` ("" = none: does nothing) of a finished
+// render of `scene` by `method`, from the counts in its report (the method's TraceStats at
+// the top level; simd's cycle report under "simd"). Adds report["testbed"]:
 // {"testbed", "modelledSeconds", "host": HostTime, "array": {...}}. For dist/hetero it
-// requires the simulated build and reports SimGrid's clock (UserError otherwise).
-void AddModelledTime(const RenderOptions& options, const Scene& scene, RenderOutput& out);
+// requires the simulated build and reports SimGrid's clock (UserError otherwise); UserError
+// for an unknown testbed or a method that counts no work.
+void AddModelledTime(const std::string& testbedName, const std::string& method,
+                     const Scene& scene, nlohmann::json& report);
 
 // Under simulation: charges counted host work to this rank's simulated host (its profile
 // is the platform host's "zephyr:profile" property; without one, the work's flops plus

@@ -4,6 +4,8 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <algorithm>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 
@@ -55,6 +57,20 @@ TEST(SceneNff, ReadsEveryKeyword) {
   EXPECT_EQ(pp.normals[1], (Vec3{0, 0, 1}));  // normalised
   EXPECT_EQ(scene->objects[0].where.line, 12);
   EXPECT_EQ(scene->objects[0].where.column, 1);
+}
+
+// Messages about an object name its kind and where the file defines it.
+TEST(SceneNff, DescribeObjectNamesTheFileAndLine) {
+  const std::string text = std::string(kView) + "f 1 1 1 1 0 0 0 1\ns 0 0 0 1\n\nc\n0 0 0 1\n0 0 1 1\n";
+  std::vector<std::string> errors;
+  auto scene = ParseNff(text, "d.nff", errors);
+  ASSERT_TRUE(scene) << errors[0];
+  const int viewLines = int(std::count(kView, kView + std::strlen(kView), '\n'));
+  EXPECT_EQ(DescribeObject(*scene, 0), "object 0 (sphere, d.nff:" + std::to_string(viewLines + 2) + ":1)");
+  EXPECT_EQ(DescribeObject(*scene, 1), "object 1 (cone, d.nff:" + std::to_string(viewLines + 4) + ":1)");
+  Scene built;  // no file: no location
+  built.objects.push_back(Primitive{});
+  EXPECT_EQ(DescribeObject(built, 0), "object 0 (sphere)");
 }
 
 TEST(SceneNff, TransformAppliesToFollowingObjectsUntilIdentity) {
@@ -288,9 +304,10 @@ TEST(SceneNff, WriteThenReadIsExact) {
   }
 }
 
+// The SPD samples the repository ships (balls, jacks, lattice, tetra; the fuzz seed corpus).
 TEST(SceneNff, ReadsEverySpdSample) {
-  const std::filesystem::path dir = "../shared/scenes";
-  if (!std::filesystem::exists(dir)) GTEST_SKIP() << "no ../shared/scenes in this clone";
+  const std::filesystem::path dir = "tests/fuzz/corpus";
+  ASSERT_TRUE(std::filesystem::exists(dir)) << "run from the repository's top folder";
   int read = 0;
   for (const auto& entry : std::filesystem::directory_iterator(dir)) {
     if (entry.path().extension() != ".nff") continue;
@@ -298,7 +315,7 @@ TEST(SceneNff, ReadsEverySpdSample) {
     EXPECT_GT(s.objects.size(), 0u) << entry.path();
     ++read;
   }
-  EXPECT_GE(read, 5);
+  EXPECT_GE(read, 5);  // 4 SPD samples and the showcase
 }
 
 TEST(SceneGen, RandomSpheresAreDeterministicAndLeaveBackground) {

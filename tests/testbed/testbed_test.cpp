@@ -34,7 +34,7 @@ RenderOutput Render(const std::string& scene, const std::string& method, const s
   o.method = method;
   o.scenePath = scene;
   o.progress = false;
-  o.extra["testbed"] = bed;
+  o.testbed = bed;
   return RunRender(o);
 }
 
@@ -112,12 +112,9 @@ TEST(TestbedModel, BadTestbedAndUnsimulatedFarmAreUserErrors) {
     EXPECT_NE(std::string(e.what()).find("cray1"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("ufmg1992"), std::string::npos) << e.what();
   }
-  RenderOptions o;
-  o.method = "dist";
-  o.extra["testbed"] = "ufmg1992";
-  RenderOutput out;
+  nlohmann::json report;
   try {
-    testbed::AddModelledTime(o, ReadNffFile(scene), out);
+    testbed::AddModelledTime("ufmg1992", "dist", ReadNffFile(scene), report);
     FAIL() << "dist with --testbed outside SimGrid must be refused";
   } catch (const UserError& e) {
     EXPECT_NE(std::string(e.what()).find("zephyr-smpi"), std::string::npos) << e.what();

@@ -1,5 +1,6 @@
-#include "hosts/farm/farm.h"
-
+// hosts/farm/parent.cpp — the farm's parent (rank 0): the frame queue, handing frames out on
+// demand, losing and replacing children, the checkpoint, and the report (docs/distributed.md,
+// "Accounting" and "Faults, timeouts, resume").
 #include <fmt/core.h>
 #include <signal.h>
 #include <sys/resource.h>
@@ -7,56 +8,25 @@
 
 #include <algorithm>
 #include <cerrno>
-#include <chrono>
 #include <cstdio>
-#include <cstdlib>
 #include <deque>
-#include <thread>
 
 #include "fixed/check.h"
 #include "hosts/farm/checkpoint.h"
+#include "hosts/farm/common.h"
+#include "hosts/farm/farm.h"
 
 namespace zephyr {
 
-namespace {
+using namespace farm;
 
-using Clock = std::chrono::steady_clock;
-double SecondsSince(Clock::time_point t) {
-  return std::chrono::duration<double>(Clock::now() - t).count();
-}
+namespace {
 
 double CpuSeconds() {  // this process, user + system
   rusage u;
   ::getrusage(RUSAGE_SELF, &u);
   return double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) +
          1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
-}
-
-std::span<const std::byte> Bytes(const std::string& s) {
-  return std::as_bytes(std::span(s.data(), s.size()));
-}
-std::string Text(std::span<const std::byte> b) {
-  return std::string(reinterpret_cast<const char*>(b.data()), b.size());
-}
-
-// Test-only fault injection, read by the children: ZEPHYR_TEST_FAULT="what:rank:n" makes
-// child `rank`, on receiving its (n+1)-th frame, "kill" itself with SIGKILL, "hang" (sleep
-// forever) or send "garbage" instead of a result. The tests use it to kill a child for real.
-struct Fault {
-  std::string what;
-  int rank = -1, afterFrames = 0;
-};
-Fault ReadFault() {
-  Fault fault;
-  const char* spec = std::getenv("ZEPHYR_TEST_FAULT");
-  if (!spec) return fault;
-  char what[16] = {};
-  if (std::sscanf(spec, "%15[a-z]:%d:%d", what, &fault.rank, &fault.afterFrames) != 3)
-    throw UserError(std::string("ZEPHYR_TEST_FAULT: expected what:rank:frames, got ") + spec);
-  fault.what = what;
-  if (fault.what != "kill" && fault.what != "hang" && fault.what != "garbage")
-    throw UserError("ZEPHYR_TEST_FAULT: unknown fault '" + fault.what + "'");
-  return fault;
 }
 
 std::string FrameList(const std::vector<int>& ids) {
@@ -67,145 +37,6 @@ std::string FrameList(const std::vector<int>& ids) {
   }
   return s;
 }
-
-}  // namespace
-
-std::optional<FramedResult> RunFramedMethod(const std::string& method,
-                                            const FrameWorkFactory& factory,
-                                            const std::function<FramedJob()>& buildJob,
-                                            const FramedOptions& options) {
-  MpiSession& mpi = StartFramedMethod(method);
-  if (mpi.Rank() != 0) {
-    ServeFrames(factory);
-    return std::nullopt;
-  }
-  FramedJob job = buildJob();  // a UserError here still releases the children at exit
-  return RenderFrames(job, options);
-}
-
-MpiSession& StartFramedMethod(const std::string& method) {
-  MpiSession& mpi = MpiSession::Get();
-  if (mpi.Size() < 2)
-    throw UserError("--method " + method +
-                    " needs at least 2 MPI ranks (a parent and one "
-                    "child) but runs on " +
-                    std::to_string(mpi.Size()) +
-                    "; launch it with `mpirun -np K+1 zephyr render ...` or `make run WORKERS=K`");
-  return mpi;
-}
-
-// ---------------------------------------------------------------------------------------
-// The child.
-
-void ServeFrames(const FrameWorkFactory& factory) {
-  MpiSession& mpi = MpiSession::Get();
-  ZEPHYR_CHECK(mpi.Rank() != 0);
-  TrafficAccount sent, received;
-  const Fault fault = ReadFault();
-  auto fail = [&](const std::string& why) {
-    mpi.Send(0, {.kind = MessageKind::kFailed}, Bytes(why), sent);
-    mpi.FlushSends(3600);
-  };
-  auto next = [&]() {
-    for (;;)
-      if (auto m = mpi.Receive(0, received, 3600)) return *m;
-  };
-
-  ReceivedMessage first = next();
-  if (first.header.kind == MessageKind::kStop) {  // nothing for this child
-    if (first.header.aux == kStopWithoutFinalize) mpi.LeaveWithoutFinalize();
-    return;
-  }
-  if (first.header.kind != MessageKind::kSetup)
-    return fail(std::string("expected a setup message first, got ") +
-                MessageKindName(first.header.kind));
-  auto start = Clock::now();
-  std::unique_ptr<FrameWork> work;
-  try {
-    work = factory(Text(first.payload));
-  } catch (const UserError& e) {
-    return fail(std::string("set-up failed: ") + e.what());
-  }
-  const double setupSeconds = SecondsSince(start);
-  nlohmann::json ready = {{"pid", long(::getpid())}, {"host", mpi.Host()}};
-  mpi.Send(0, {.kind = MessageKind::kReady}, Bytes(ready.dump()), sent);
-
-  double busy = 0;
-  std::uint64_t frames = 0, pixels = 0;
-  std::vector<std::byte> out;
-  auto loopStart = Clock::now();
-  for (;;) {
-    ReceivedMessage m = next();
-    if (m.header.kind == MessageKind::kStop) {
-      if (m.header.aux == kStopWithoutFinalize) mpi.LeaveWithoutFinalize();
-      break;
-    }
-    if (m.header.kind != MessageKind::kWork)
-      return fail(std::string("unexpected ") + MessageKindName(m.header.kind) + " message");
-    Frame frame;
-    try {
-      frame = ReadRect(m.payload, m.header.frameId);
-    } catch (const UserError& e) {
-      return fail(e.what());
-    }
-    const bool inside = frame.id >= 0 && frame.width >= 1 && frame.height >= 1 && frame.x0 >= 0 &&
-                        frame.y0 >= 0 && frame.x0 <= work->ImageWidth() - frame.width &&
-                        frame.y0 <= work->ImageHeight() - frame.height;
-    if (!inside)
-      return fail("malformed work message: frame " + std::to_string(frame.id) +
-                  " is not inside the image");
-    const std::size_t sliceBytes = frame.PixelCount() * work->SliceBytesPerPixel();
-    if (m.payload.size() != kRectBytes + sliceBytes)
-      return fail("malformed work message: frame " + std::to_string(frame.id) + " carries " +
-                  std::to_string(m.payload.size() - kRectBytes) + " matrix bytes, expected " +
-                  std::to_string(sliceBytes));
-    if (fault.rank == mpi.Rank() && frames == std::uint64_t(fault.afterFrames)) {
-      if (fault.what == "kill") ::raise(SIGKILL);
-      if (fault.what == "hang") std::this_thread::sleep_for(std::chrono::hours(1));
-      if (fault.what == "garbage") {
-        std::byte junk[3] = {};
-        mpi.Send(0, {.kind = MessageKind::kResult, .frameId = frame.id}, junk, sent);
-        continue;
-      }
-    }
-    auto t = Clock::now();
-    out.assign(kRectBytes + frame.PixelCount() * work->BytesPerPixel(), std::byte{0});
-    out.resize(0);
-    AppendRect(frame, out);
-    out.resize(kRectBytes + frame.PixelCount() * work->BytesPerPixel());
-    try {
-      work->RenderFrame(frame, std::span(m.payload).subspan(kRectBytes),
-                        std::span(out).subspan(kRectBytes));
-    } catch (const UserError& e) {
-      return fail("frame " + std::to_string(frame.id) + ": " + e.what());
-    }
-    const double seconds = SecondsSince(t);
-    busy += seconds;
-    ++frames;
-    pixels += frame.PixelCount();
-    mpi.Send(
-        0, {.kind = MessageKind::kResult, .frameId = frame.id, .aux = std::uint64_t(seconds * 1e9)},
-        out, sent);
-  }
-  const double loopSeconds = SecondsSince(loopStart);
-  // The stats message counts itself among the sent bytes: its size is known before sending
-  // only up to the digits of the numbers, so count it first, then measure.
-  nlohmann::json stats = {{"frames", frames},
-                          {"pixels", pixels},
-                          {"setupSeconds", setupSeconds},
-                          {"busySeconds", busy},
-                          {"idleSeconds", std::max(0.0, loopSeconds - busy)},
-                          {"received", received.ToJson()},
-                          {"work", work->Stats()}};
-  stats["sent"] = sent.ToJson();  // everything before this stats message
-  mpi.Send(0, {.kind = MessageKind::kStats}, Bytes(stats.dump()), sent);
-  mpi.FlushSends(3600);
-}
-
-// ---------------------------------------------------------------------------------------
-// The parent.
-
-namespace {
 
 struct ChildState {
   int rank = 0;
@@ -611,6 +442,7 @@ nlohmann::json Parent::Report() const {
 }  // namespace
 
 FramedResult RenderFrames(const FramedJob& job, const FramedOptions& options) {
+  StartFarm(job.method);
   Parent parent(job, options);
   return parent.Run();
 }

@@ -1,0 +1,104 @@
+// hosts/cmd/render.cpp — `zephyr render`: the typed options of every method from the command
+// line (the SIMD flags shared with plan and accuracy: hosts/cmd/simd_flags.h), then
+// RunRender (hosts/methods/render.h) and a one-line summary.
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <memory>
+#include <vector>
+
+#include "fixed/check.h"
+#include "hosts/cmd/command.h"
+#include "hosts/cmd/simd_flags.h"
+#include "hosts/methods/phases.h"
+#include "hosts/methods/render.h"
+
+namespace zephyr {
+// One line a user reads after a render: what was made, how long it took, where it went;
+// for the distributed methods also frames and bytes (the JSON report has every figure).
+namespace {
+
+std::string RenderSummary(const RenderOptions& options, const RenderOutput& out) {
+  char line[512];
+  const nlohmann::json& r = out.report;
+  double seconds = r.contains("phases") && r["phases"].contains("render")
+                       ? r["phases"]["render"].get<double>()
+                       : 0.0;
+  std::snprintf(line, sizeof line, "%s: %dx%d, %zu objects, rendered in %.3f s", options.method.c_str(),
+                out.image.width, out.image.height, r["scene"]["objects"].get<size_t>(), seconds);
+  std::string s = line;
+  if (r.contains("distributed")) {
+    const nlohmann::json& d = r["distributed"];
+    const nlohmann::json& bytes = d["traffic"];
+    auto total = [&](const char* way) {
+      const nlohmann::json& t = bytes[way]["total"];
+      return t["payloadBytes"].get<double>() + t["envelopeBytes"].get<double>();
+    };
+    std::snprintf(line, sizeof line,
+                  "; %d children, %d frames sent, %d skipped, %.0f bytes to children, %.0f back",
+                  d["children"].get<int>(), d["frames"]["sent"].get<int>(),
+                  d["frames"]["skipped"].get<int>(), total("parentToChildren"),
+                  total("childrenToParent"));
+    s += line;
+  }
+  if (!options.out.empty()) s += "\n  image  " + options.out;
+  if (!options.report.empty()) s += "\n  report " + options.report;
+  if (!options.dumpPrimary.empty()) s += "\n  primary hits " + options.dumpPrimary;
+  return s;
+}
+
+CommandRegistration reg("render", [](CLI::App& program) {
+  auto* cmd = program.add_subcommand("render", "Ray-trace a scene with one of the methods");
+  auto o = std::make_shared<RenderOptions>();
+  auto positional = std::make_shared<std::string>();
+  auto precision = std::make_shared<std::string>("double");
+  auto sphereTest = std::make_shared<std::string>("hb");
+  auto noProgress = std::make_shared<bool>(false);
+  std::string methods;
+  for (const auto& name : RenderMethodNames()) methods += (methods.empty() ? "" : ", ") + name;
+  cmd->add_option("--method", o->method, "Method: " + methods)->capture_default_str();
+  cmd->add_option("--scene", o->scenePath, "NFF scene file");
+  cmd->add_option("scene", *positional, "NFF scene file (same as --scene)");
+  std::vector<CLI::Option*> outputs = {
+      cmd->add_option("--out", o->out, "Output PNG"),
+      cmd->add_option("--report", o->report, "JSON report: time per phase, rays, tests"),
+      cmd->add_option("--dump-primary", o->dumpPrimary, "CSV of primary hits: x,y,dx,dy,dz,object,t,flags")};
+  cmd->add_option("--depth", o->trace.depth, "Ray-tree depth limit (1 = primary rays only)")
+      ->capture_default_str();
+  cmd->add_option("--precision", *precision, "Host tracer scalar: float or double")->capture_default_str();
+  cmd->add_option("--sphere-test", *sphereTest, "Sphere test form: hb (Hearn-Baker) or naive")
+      ->capture_default_str();
+  cmd->add_flag("--no-progress", *noProgress, "No progress bar even on a terminal");
+  auto simdFlags = std::make_shared<SimdFlags>();
+  simdFlags->AddTo(*cmd, "simd: ");
+  cmd->add_option("--frame", o->dist.frameSize, "dist/hetero: frame size F (F×F frames; default 64)");
+  cmd->add_flag("--resume", o->dist.resume,
+                "dist/hetero: render only the frames missing from OUT.frames (the checkpoint)");
+  cmd->add_option("--child-timeout", o->dist.childTimeoutSeconds,
+                  "dist/hetero: seconds a child may hold frames without answering (default 60)");
+  cmd->add_option("--in-flight", o->dist.framesInFlight,
+                  "dist/hetero: frames handed to a child before it returns one (default 2)");
+  cmd->add_option("--testbed", o->testbed,
+                  "Model the paper's 1992 system (ufmg1992): the report's \"testbed\" gives "
+                  "modelled seconds (dist/hetero: under smpirun, docs/testbed.md)");
+  cmd->callback([o, positional, precision, sphereTest, noProgress, simdFlags, outputs] {
+    RenderOptions options = *o;
+    for (CLI::Option* flag : outputs)  // `--out ''` is a mistake, not "no output"
+      if (flag->count() > 0 && flag->as<std::string>().empty())
+        throw UserError(flag->get_name() + ": empty path (give a file name, or leave the flag out)");
+    if (!positional->empty()) {
+      if (!options.scenePath.empty() && options.scenePath != *positional)
+        throw UserError("render: give the scene once (either --scene or a positional file)");
+      options.scenePath = *positional;
+    }
+    if (options.scenePath.empty()) throw UserError("render: no scene (use --scene FILE)");
+    options.trace.precision = ParsePrecision(*precision);
+    options.trace.sphereTest = ParseSphereTest(*sphereTest);
+    options.progress = !*noProgress && StderrIsTerminal();
+    options.simd = simdFlags->Options();
+    RenderOutput out = RunRender(options);
+    std::printf("%s\n", RenderSummary(options, out).c_str());
+  });
+});
+
+}  // namespace
+}  // namespace zephyr

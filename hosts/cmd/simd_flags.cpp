@@ -1,0 +1,53 @@
+#include "hosts/cmd/simd_flags.h"
+
+#include <CLI/CLI.hpp>
+#include <string>
+
+#include "fixed/check.h"
+
+namespace zephyr {
+
+void SimdFlags::AddTo(CLI::App& command, const std::string& helpPrefix, bool withUncertain) {
+  auto bits = [&](const char* name, int& value, const char* help) {
+    added_.push_back(command.add_option(name, value, helpPrefix + help)
+                         ->check(CLI::NonNegativeNumber)
+                         ->option_text("UINT"));
+  };
+  bits("--frac-bits", options_.formats.fracBits,
+       "fraction bits of lengths, t and directions (default: planned per scene)");
+  bits("--dir-frac-bits", options_.formats.dirFracBits, "fraction bits of the directions only");
+  bits("--int-bits", options_.formats.intBits, "integer bits of distances");
+  if (withUncertain)
+    added_.push_back(command.add_option(
+        "--uncertain", uncertain_,
+        helpPrefix + "uncertain pixels: recompute (default, in double on the host), refine (a second, "
+                     "wider array pass on them first), keep, fail"));
+  added_.push_back(command.add_option("--machine", options_.profile,
+                                      helpPrefix + "machine profile (wavetracer, mpp)"));
+}
+
+simd::SimdOptions SimdFlags::Options() const {
+  simd::SimdOptions o = options_;
+  // A width given below what the error bounds are tested at (docs/simd.md) is refused here,
+  // before any work; unset widths (-1) are the planner's choice.
+  auto atLeast = [](const char* flag, int value, int minimum, const char* unit) {
+    if (value >= 0 && value < minimum)
+      throw UserError(std::string(flag) + " " + std::to_string(value) + ": the SIMD pass needs at least " +
+                      std::to_string(minimum) + " " + unit +
+                      " (the narrowest width its error bounds are tested at, docs/simd.md)");
+  };
+  atLeast("--frac-bits", o.formats.fracBits, simd::kMinFracBits, "fraction bits");
+  atLeast("--dir-frac-bits", o.formats.dirFracBits, simd::kMinFracBits, "direction fraction bits");
+  atLeast("--int-bits", o.formats.intBits, simd::kMinIntBits, "integer bits");
+  if (!uncertain_.empty()) o.uncertain = simd::ParseUncertainPolicy(uncertain_);
+  return o;
+}
+
+std::vector<std::string> SimdFlags::Given() const {
+  std::vector<std::string> names;
+  for (const CLI::Option* option : added_)
+    if (option->count() > 0) names.push_back(option->get_name());
+  return names;
+}
+
+}  // namespace zephyr

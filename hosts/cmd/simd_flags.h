@@ -1,0 +1,41 @@
+// hosts/cmd/simd_flags.h — the SIMD primary pass's flags, declared once and shared by
+// `zephyr render`, `zephyr plan` and `zephyr accuracy` (docs/simd.md, "The planner").
+//
+//   SimdFlags flags;
+//   flags.AddTo(*cmd, "simd: ");            // --frac-bits --dir-frac-bits --int-bits
+//                                           // --machine [--uncertain]
+//   simd::SimdOptions o = flags.Options();  // in the command's callback
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "hosts/simd/pass.h"
+
+namespace CLI {
+class App;
+class Option;
+}  // namespace CLI
+
+namespace zephyr {
+
+class SimdFlags {
+ public:
+  // Adds the flags to `command`; `helpPrefix` starts each help line (render says "simd: ",
+  // as its flags serve several methods). --uncertain only when `withUncertain` (`plan`
+  // prints formats and has no pixels to be uncertain about).
+  void AddTo(CLI::App& command, const std::string& helpPrefix, bool withUncertain = true);
+  // The options the flags give (the defaults where none was given). UserError for an
+  // unknown --uncertain policy, or a width below simd::kMinFracBits / kMinIntBits (the
+  // message says the minimum); an unknown machine profile name is refused by the pass.
+  simd::SimdOptions Options() const;
+  // The names of the flags given on the command line ("--frac-bits", ...).
+  std::vector<std::string> Given() const;
+
+ private:
+  simd::SimdOptions options_;
+  std::string uncertain_;
+  std::vector<CLI::Option*> added_;
+};
+
+}  // namespace zephyr

@@ -1,0 +1,28 @@
+// hosts/farm/test_fault.h — test-only fault injection for the farm's children, so the tests
+// can kill, hang or corrupt a real child process under mpirun (tests/farm/mpi_launch.h).
+//
+// ZEPHYR_TEST_FAULT="what:rank:n" (passed with `mpirun -x`) makes child `rank`, on receiving
+// its (n+1)-th frame, "kill" itself with SIGKILL, "hang" (sleep for an hour) or answer with
+// "garbage" (a 3-byte result) instead of the frame. Unset, nothing happens.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+
+namespace zephyr::farm {
+
+class TestFault {
+ public:
+  // The fault the environment asks for, if any; UserError when ZEPHYR_TEST_FAULT is malformed.
+  static std::optional<TestFault> FromEnvironment();
+  // Called by child `rank` before it renders a frame, after `framesDone` frames: kills or
+  // hangs the process when the fault strikes there; true when it should send garbage instead.
+  bool StrikeSendsGarbage(int rank, std::uint64_t framesDone) const;
+
+ private:
+  std::string what_;
+  int rank_ = -1, afterFrames_ = 0;
+};
+
+}  // namespace zephyr::farm

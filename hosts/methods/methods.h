@@ -1,0 +1,42 @@
+// hosts/methods/methods.h — the four methods' entry points, for the table in
+// hosts/methods/render.cpp (not for other rooms: they go through RunRender).
+#pragma once
+
+#include "hosts/methods/render.h"
+
+namespace zephyr {
+
+// Fills out.image (and out.primary when options.dumpPrimary is set) and adds the method's
+// sections to out.report.
+using RenderMethod = void (*)(const Scene& scene, const RenderOptions& options,
+                              RenderOutput& out);
+
+// For the methods that run under MPI: called before the scene is read. On a child rank it
+// serves frames and ends the process (on a cluster the scene file exists only where the
+// parent runs); on the parent it returns. UserError for fewer than 2 ranks or bad options.
+using RenderChildEntry = void (*)(const RenderOptions& options);
+
+// Runs on the process that writes the outputs, after RunRender's checks of the output paths
+// and before the scene is read or any work starts: the method's check of its own options and
+// of what it cannot do with the shared ones (e.g. dist has no --dump-primary; the checkpoint
+// must not be another output). Throws UserError.
+using RenderCheckOptions = void (*)(const RenderOptions& options);
+
+struct RenderMethodEntry {
+  const char* name;
+  const char* description;
+  RenderMethod render;
+  RenderChildEntry child = nullptr;   // nullptr: the method runs in one process
+  RenderCheckOptions check = nullptr;  // nullptr: nothing beyond the shared checks
+};
+
+void RenderSeq(const Scene& scene, const RenderOptions& options, RenderOutput& out);      // seq.cpp
+void RenderSimd(const Scene& scene, const RenderOptions& options, RenderOutput& out);     // simd.cpp
+void RenderDist(const Scene& scene, const RenderOptions& options, RenderOutput& out);     // dist.cpp
+void DistChildEntry(const RenderOptions& options);                                        // dist.cpp
+void CheckDistOptions(const RenderOptions& options);                                      // dist.cpp
+void RenderHetero(const Scene& scene, const RenderOptions& options, RenderOutput& out);   // hetero.cpp
+void HeteroChildEntry(const RenderOptions& options);                                      // hetero.cpp
+void CheckHeteroOptions(const RenderOptions& options);                                    // hetero.cpp
+
+}  // namespace zephyr
