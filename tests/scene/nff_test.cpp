@@ -59,20 +59,6 @@ TEST(SceneNff, ReadsEveryKeyword) {
   EXPECT_EQ(scene->objects[0].where.column, 1);
 }
 
-// Messages about an object name its kind and where the file defines it.
-TEST(SceneNff, DescribeObjectNamesTheFileAndLine) {
-  const std::string text = std::string(kView) + "f 1 1 1 1 0 0 0 1\ns 0 0 0 1\n\nc\n0 0 0 1\n0 0 1 1\n";
-  std::vector<std::string> errors;
-  auto scene = ParseNff(text, "d.nff", errors);
-  ASSERT_TRUE(scene) << errors[0];
-  const int viewLines = int(std::count(kView, kView + std::strlen(kView), '\n'));
-  EXPECT_EQ(DescribeObject(*scene, 0), "object 0 (sphere, d.nff:" + std::to_string(viewLines + 2) + ":1)");
-  EXPECT_EQ(DescribeObject(*scene, 1), "object 1 (cone, d.nff:" + std::to_string(viewLines + 4) + ":1)");
-  Scene built;  // no file: no location
-  built.objects.push_back(Primitive{});
-  EXPECT_EQ(DescribeObject(built, 0), "object 0 (sphere)");
-}
-
 TEST(SceneNff, TransformAppliesToFollowingObjectsUntilIdentity) {
   const std::string text = std::string(kView) + "f 1 1 1 1 0 0 0 1\n"
       "transform 2 0 0 1  0 1 0 2  0 0 1 3\ns 0 0 0 1\ns 1 1 1 1\n"
