@@ -31,6 +31,40 @@ TEST(BitserialMemory, ExactFillWorksOneBitMoreFails) {
   EXPECT_FALSE(ErrorOf([&] { mem.Allocate("auto", 1); }).empty());
 }
 
+// First fit at its boundaries, for every layer count that leaves room for the layout: a freed
+// gap takes a request of exactly its size (at its address) but not one bit more; a request
+// goes to the first gap in address order that holds it, past smaller ones; the last bit of
+// the capacity is usable and the next is not; freeing everything gives the whole space back.
+TEST(BitserialMemory, FirstFitAtItsBoundaries) {
+  for (int layers = 1; layers <= 64; ++layers) {
+    PeMemory mem(2048, 32 * 1024 * 8, layers);
+    const int64_t cap = mem.Capacity(Space::Internal);
+    ASSERT_EQ(cap, 2048 / layers) << layers;
+    const std::string at = " with " + std::to_string(layers) + " layers";
+    // Layout: a(1) b(g1) c(1) d(g2) e(rest), g1 < g2, then b and d freed: two gaps.
+    const int64_t g1 = std::max<int64_t>(1, cap / 8), g2 = g1 + 1, rest = cap - 2 - g1 - g2;
+    ASSERT_GE(rest, 1) << at;
+    const Allocation a = mem.Allocate("a", 1, Space::Internal), b = mem.Allocate("b", g1, Space::Internal),
+                     c = mem.Allocate("c", 1, Space::Internal), d = mem.Allocate("d", g2, Space::Internal),
+                     e = mem.Allocate("e", rest, Space::Internal);
+    EXPECT_EQ(e.address + e.bits, cap) << at;  // the last bit is usable...
+    EXPECT_FALSE(ErrorOf([&] { mem.Allocate("over", 1, Space::Internal); }).empty()) << at;  // ...the next not
+    mem.Free(b.id), mem.Free(d.id);
+    // One bit more than both gaps fits nowhere.
+    EXPECT_FALSE(ErrorOf([&] { mem.Allocate("tooBig", g2 + 1, Space::Internal); }).empty()) << at;
+    // g2 bits skip the smaller first gap; then g1 bits fill the first gap exactly.
+    const Allocation x = mem.Allocate("x", g2, Space::Internal);
+    EXPECT_EQ(x.address, d.address) << at;
+    const Allocation y = mem.Allocate("y", g1, Space::Internal);
+    EXPECT_EQ(y.address, b.address) << at;
+    EXPECT_EQ(mem.Used(Space::Internal), cap) << at;
+    // Without a space a request that no internal gap holds goes external.
+    EXPECT_EQ(mem.Allocate("spill", 1).space, Space::External) << at;
+    for (const Allocation& z : {a, c, e, x, y}) mem.Free(z.id);
+    EXPECT_EQ(mem.Allocate("all", cap, Space::Internal).address, 0) << at;
+  }
+}
+
 TEST(BitserialMemory, VirtualLayersSplitTheMemory) {
   Machine m(Profile("wavetracer"), 384 * 384);
   EXPECT_EQ(m.Layers(), 18);
