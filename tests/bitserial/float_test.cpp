@@ -435,3 +435,25 @@ TEST(BitserialFloat, DivideAndSquareRootLoopsClosedForms) {
 
 }  // namespace
 }  // namespace zephyr::bitserial
+
+namespace zephyr::bitserial {
+namespace {
+
+TEST(BitserialFloat, CyclesCommandKnowsEveryFloatOp) {
+  // `zephyr cycles --op OP` prints the cycles FloatOpCycles counts, for every float op; the
+  // conversions take the fixed side from --bits/--frac.
+  for (const std::string& op : FloatOpNames()) {
+    const char* args[] = {"zephyr", "cycles", "--op", op.c_str(), "--float", "e5m10",
+                          "--bits", "16", "--frac", "4", "--json"};
+    testing::internal::CaptureStdout();
+    EXPECT_EQ(RunZephyr(11, args), 0) << op;
+    const nlohmann::json j = nlohmann::json::parse(testing::internal::GetCapturedStdout());
+    const double want = FloatOpCycles(Profile("wavetracer"), op, FloatFormat{5, 10, true},
+                                      Space::Internal, fixed::Format::Signed(11, 4));
+    EXPECT_GT(want, 0) << op;
+    EXPECT_EQ(j["cycles"].get<double>(), want) << op;
+  }
+}
+
+}  // namespace
+}  // namespace zephyr::bitserial
