@@ -34,7 +34,7 @@ ALL_CXXFLAGS = -std=c++20 -Wall -Wextra -Wno-unused-parameter -I. $(DEPCFLAGS) $
 LDLIBS_ALL   = $(DEPLIBS) -fopenmp -lpthread
 # OpenMP (GCC's libgomp) in the files that use it: layer blocks and the host recompute run
 # on every core (bitserial/blocks.h). Other files are compiled without it.
-OPENMP_SRCS := bitserial/blocks.cpp
+OPENMP_SRCS := bitserial/blocks.cpp hosts/simd/pass.cpp
 $(OPENMP_SRCS:%.cpp=$(BUILD)/obj/%.o): ALL_CXXFLAGS += -fopenmp
 
 # Every .cpp in the library rooms is part of the engine; mains live apart.

@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 #include <string>
 
+#include "bitserial/blocks.h"
 #include "fixed/check.h"
 
 namespace zephyr {
@@ -24,6 +25,10 @@ void SimdFlags::AddTo(CLI::App& command, const std::string& helpPrefix, bool wit
                      "wider array pass on them first), keep, fail"));
   added_.push_back(command.add_option("--machine", options_.profile,
                                       helpPrefix + "machine profile (wavetracer, mpp)"));
+  added_.push_back(command.add_option("--threads", options_.threads,
+                                      helpPrefix + "host threads emulating the array and recomputing uncertain "
+                                                   "pixels (default or 0: every core; the results do not depend on it)")
+                       ->option_text("N"));
 }
 
 simd::SimdOptions SimdFlags::Options() const {
@@ -40,6 +45,7 @@ simd::SimdOptions SimdFlags::Options() const {
   atLeast("--dir-frac-bits", o.formats.dirFracBits, simd::kMinFracBits, "direction fraction bits");
   atLeast("--int-bits", o.formats.intBits, simd::kMinIntBits, "integer bits");
   if (!uncertain_.empty()) o.uncertain = simd::ParseUncertainPolicy(uncertain_);
+  if (o.threads != 0) bitserial::CheckThreads(o.threads);  // 0: not given, every core
   return o;
 }
 

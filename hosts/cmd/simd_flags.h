@@ -3,7 +3,7 @@
 //
 //   SimdFlags flags;
 //   flags.AddTo(*cmd, "simd: ");            // --frac-bits --dir-frac-bits --int-bits
-//                                           // --machine [--uncertain]
+//                                           // [--uncertain] --machine --threads
 //   simd::SimdOptions o = flags.Options();  // in the command's callback
 #pragma once
 
@@ -26,8 +26,9 @@ class SimdFlags {
   // prints formats and has no pixels to be uncertain about).
   void AddTo(CLI::App& command, const std::string& helpPrefix, bool withUncertain = true);
   // The options the flags give (the defaults where none was given). UserError for an
-  // unknown --uncertain policy, or a width below simd::kMinFracBits / kMinIntBits (the
-  // message says the minimum); an unknown machine profile name is refused by the pass.
+  // unknown --uncertain policy, a width below simd::kMinFracBits / kMinIntBits (the
+  // message says the minimum) or --threads outside 1..1024; an unknown machine profile
+  // name is refused by the pass.
   simd::SimdOptions Options() const;
   // The names of the flags given on the command line ("--frac-bits", ...).
   std::vector<std::string> Given() const;

@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "bitserial/blocks.h"
 #include "bitserial/multi.h"
 #include "fixed/check.h"
 #include "hosts/simd/direction.h"
@@ -51,16 +52,17 @@ struct ArrayMatrix {
   Multi object, t, d[3], grazing, nearTie;
 };
 
-// The host computes each pixel's eye ray and loads the directions (one plane per bit): PE k
-// takes pixel pixels[k], or pixel k when `pixels` is empty (row-major).
-void LoadDirections(ArrayMatrix& a, const PrimaryRays& rays, const PrimaryPlan& plan,
+// The host computes each pixel's eye ray and loads the directions (one plane per bit) into
+// the machine's PEs (a layer block's own, from m.FirstPe()): PE k takes pixel pixels[k], or
+// pixel k when `pixels` is empty (row-major).
+void LoadDirections(Machine& m, ArrayMatrix& a, const PrimaryRays& rays, const PrimaryPlan& plan,
                     const std::vector<int64_t>& pixels) {
   std::vector<int64_t> raw[3];
-  for (auto& r : raw) r.resize(plan.virtualPes);
-  for (int64_t pe = 0; pe < plan.virtualPes; ++pe) {
-    const int64_t pixel = pixels.empty() ? pe : pixels[pe];
+  for (auto& r : raw) r.resize(m.VirtualPes());
+  for (int64_t i = 0; i < m.VirtualPes(); ++i) {
+    const int64_t pe = m.FirstPe() + i, pixel = pixels.empty() ? pe : pixels[pe];
     const Vec3 dir = rays.At(int(pixel % plan.width), int(pixel / plan.width)).direction;
-    for (int k = 0; k < 3; ++k) raw[k][pe] = QuantiseDirection(dir[k], plan.dirFracBits);
+    for (int k = 0; k < 3; ++k) raw[k][i] = QuantiseDirection(dir[k], plan.dirFracBits);
   }
   for (int k = 0; k < 3; ++k) a.d[k].LoadRaw(raw[k]);
 }
@@ -107,23 +109,32 @@ void SetFlags(Machine& m, const Fixed& tMax, ArrayMatrix& a, const Trackers& k) 
   a.nearTie = (k.otherLow <= limit) && (k.otherLow < none);
 }
 
-// The matrix as the host reads it (charged to the host link), and the per-PE flags.
+// The matrix as the host reads it (charged to the host link), and the per-PE flags, over
+// every PE of the pass (each layer block writes its own PEs).
 struct MatrixRaw {
+  explicit MatrixRaw(int64_t pes)
+      : object(pes), t(pes), d{std::vector<int64_t>(pes), std::vector<int64_t>(pes), std::vector<int64_t>(pes)},
+        grazing(pes), nearTie(pes), overflow(pes) {}
   std::vector<int64_t> object, t, d[3], grazing, nearTie;
-  std::vector<bool> overflow;  // overflow or divide by zero (Invalid: √ of a miss)
+  std::vector<uint8_t> overflow;  // overflow or divide by zero (Invalid: √ of a miss)
 };
 
-MatrixRaw ReadMatrix(Machine& m, const ArrayMatrix& a) {
-  MatrixRaw r{a.object.ReadRaw(), a.t.ReadRaw(), {a.d[0].ReadRaw(), a.d[1].ReadRaw(), a.d[2].ReadRaw()},
-              a.grazing.ReadRaw(), a.nearTie.ReadRaw(), {}};
+void ReadMatrix(Machine& m, const ArrayMatrix& a, MatrixRaw& r) {
+  const int64_t first = m.FirstPe();
+  auto read = [first](const Multi& x, std::vector<int64_t>& to) {
+    const std::vector<int64_t> raw = x.ReadRaw();
+    std::copy(raw.begin(), raw.end(), to.begin() + first);
+  };
+  read(a.object, r.object), read(a.t, r.t);
+  for (int k = 0; k < 3; ++k) read(a.d[k], r.d[k]);
+  read(a.grazing, r.grazing), read(a.nearTie, r.nearTie);
   m.Charge("hostRead", bitserial::HostTransferCost(1));  // the overflow flags
-  r.overflow.resize(m.VirtualPes());
-  for (int64_t pe = 0; pe < m.VirtualPes(); ++pe) r.overflow[pe] = m.Overflow(pe) || m.DivideByZero(pe);
-  return r;
+  for (int64_t pe = 0; pe < m.VirtualPes(); ++pe) r.overflow[first + pe] = m.Overflow(pe) || m.DivideByZero(pe);
 }
 
 // One run of the program on the array: the matrix as read, the cycle report and timing.
 struct ArrayRun {
+  explicit ArrayRun(int64_t pes) : raw(pes) {}
   MatrixRaw raw;
   nlohmann::json cycles;
   std::string cycleTable;
@@ -131,11 +142,11 @@ struct ArrayRun {
 };
 
 // The cycle report, memory and timing of the array part.
-void ReportCycles(ArrayRun& pass, Machine& m) {
-  const bitserial::CycleReport& report = m.Report();
+void ReportCycles(ArrayRun& pass, const bitserial::BlockedRun& run, const bitserial::MachineProfile& profile) {
+  const bitserial::CycleReport& report = run.report;
   pass.modelledSeconds = report.ModelledSeconds();
   pass.cycles = report.Json();
-  const bitserial::PeMemory& mem = m.Memory();
+  const bitserial::PeMemory& mem = run.memory;
   pass.cycles["memory"] = {
       {"internal", {{"peakBitsPerPe", mem.PeakUsed(Space::Internal)}, {"capacityBitsPerPe", mem.Capacity(Space::Internal)}}},
       {"external", {{"peakBitsPerPe", mem.PeakUsed(Space::External)}, {"capacityBitsPerPe", mem.Capacity(Space::External)}}}};
@@ -146,7 +157,7 @@ void ReportCycles(ArrayRun& pass, Machine& m) {
                                 "modelled time {:.4f} s at {:g} MHz; host time {:.4f} s; real-time factor {:.2f}\n",
                                 mem.PeakUsed(Space::Internal), mem.Capacity(Space::Internal),
                                 mem.PeakUsed(Space::External), mem.Capacity(Space::External),
-                                pass.modelledSeconds, m.Profile().clockHz / 1e6, pass.hostSeconds,
+                                pass.modelledSeconds, profile.clockHz / 1e6, pass.hostSeconds,
                                 pass.modelledSeconds / pass.hostSeconds);
 }
 
@@ -173,7 +184,8 @@ void DecodeMatrix(PrimaryPass& pass, const MatrixRaw& raw) {
 }
 
 // Uncertain pixels by the policy: fail with the counts, keep, or recompute in double.
-void HandleUncertain(PrimaryPass& pass, const Scene& scene, const PrimaryRays& rays, UncertainPolicy policy) {
+void HandleUncertain(PrimaryPass& pass, const Scene& scene, const PrimaryRays& rays, UncertainPolicy policy,
+                     int threads) {
   PrimaryMatrix& out = pass.matrix;
   const int64_t uncertain = std::count_if(out.flags.begin(), out.flags.end(), [](uint32_t f) { return f != 0; });
   if (policy == UncertainPolicy::kFail && uncertain > 0)
@@ -183,35 +195,48 @@ void HandleUncertain(PrimaryPass& pass, const Scene& scene, const PrimaryRays& r
   TraceOptions trace;
   trace.depth = 1;
   const auto tracer = Tracer::Create(scene, trace);
-  TraceStats stats;
-  for (int64_t pe = 0; pe < pass.plan.virtualPes; ++pe) {
-    if (!out.flags[pe]) continue;
+  std::vector<int64_t> flagged;
+  flagged.reserve(uncertain);
+  for (int64_t pe = 0; pe < int64_t(out.flags.size()); ++pe)
+    if (out.flags[pe]) flagged.push_back(pe);
+  // Each pixel on its own (the tracer is read-only): the same hits whatever the thread count.
+  const int64_t n = int64_t(flagged.size());
+#pragma omp parallel for schedule(dynamic, 64) num_threads(threads)
+  for (int64_t i = 0; i < n; ++i) {
+    const int64_t pe = flagged[i];
+    TraceStats stats;
     out.hits[pe] = tracer->FirstHit(rays.At(int(pe % out.width), int(pe / out.width)), stats);
     out.flags[pe] |= kRecomputed;
-    ++pass.recomputedPixels;
   }
+  pass.recomputedPixels += n;
 }
 
 }  // namespace
 
 namespace {
 
-// The program over the plan's PEs (pixel pixels[k] in PE k; every pixel when empty).
+// The program over the plan's PEs (pixel pixels[k] in PE k; every pixel when empty), run
+// whole on each layer block in turn (bitserial/blocks.h): no operation of the pass crosses
+// layers, so the matrix, the flags and the cycle report are those of op-by-op execution.
 ArrayRun RunArray(const Scene& scene, const PrimaryPlan& plan, const SimdOptions& options, const PrimaryRays& rays,
                   const std::vector<int64_t>& pixels) {
-  ArrayRun run;
+  ArrayRun run(plan.virtualPes);
   const auto start = std::chrono::steady_clock::now();
-  Machine m(MachineProfileOf(options), plan.virtualPes);
-  ArrayMatrix matrix(m, plan);
-  LoadDirections(matrix, rays, plan, pixels);
-  const Fixed tMax{plan.t, plan.t.MaxRaw()};
-  matrix.t = Broadcast(m, tMax);
-  Trackers trackers(m, tMax);
-  for (const ObjectPlan& object : plan.objects) FoldCandidate(m, object, plan, matrix, trackers);
-  SetFlags(m, tMax, matrix, trackers);
-  run.raw = ReadMatrix(m, matrix);
+  const bitserial::MachineProfile profile = MachineProfileOf(options);
+  const bitserial::BlockedRun blocked = bitserial::RunLayerBlocks(
+      profile, plan.virtualPes, {.blockLayers = options.blockLayers, .threads = options.threads},
+      [&](Machine& m) {
+        ArrayMatrix matrix(m, plan);
+        LoadDirections(m, matrix, rays, plan, pixels);
+        const Fixed tMax{plan.t, plan.t.MaxRaw()};
+        matrix.t = Broadcast(m, tMax);
+        Trackers trackers(m, tMax);
+        for (const ObjectPlan& object : plan.objects) FoldCandidate(m, object, plan, matrix, trackers);
+        SetFlags(m, tMax, matrix, trackers);
+        ReadMatrix(m, matrix, run.raw);
+      });
   run.hostSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  ReportCycles(run, m);
+  ReportCycles(run, blocked, profile);
   return run;
 }
 
@@ -262,7 +287,8 @@ PrimaryPass RunPrimaryPass(const Scene& scene, const SimdOptions& options) {
   const auto hostStart = std::chrono::steady_clock::now();
   DecodeMatrix(pass, run.raw);
   if (options.uncertain == UncertainPolicy::kRefine) Refine(pass, scene, options, rays);
-  HandleUncertain(pass, scene, rays, options.uncertain);
+  HandleUncertain(pass, scene, rays, options.uncertain,
+                  options.threads > 0 ? options.threads : bitserial::HardwareThreads());
   pass.recomputeSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - hostStart).count();
   return pass;
 }

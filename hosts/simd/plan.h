@@ -49,6 +49,13 @@ struct SimdOptions {
   std::vector<std::string> profileOverrides;  // "readExternal=3", ...
   FormatOverrides formats;
   UncertainPolicy uncertain = UncertainPolicy::kRecompute;
+  // Host threads (--threads) for the array's layer blocks and the host recompute of
+  // uncertain pixels; 0 = every core. Results and reports do not depend on it.
+  int threads = 0;
+  // Virtual-PE layers the emulator runs the whole program on at a time
+  // (bitserial/blocks.h); 0 = bitserial::DefaultBlockLayers(), at least the pass's layers =
+  // op by op over the whole machine. Results and reports do not depend on it.
+  int blockLayers = 0;
 };
 
 // The machine profile the options name, with their overrides (UserError on a bad one).
