@@ -66,8 +66,16 @@ struct Affine {
   // Applies the transpose of the linear part (normals use the inverse-transpose: a normal
   // n in object space maps to (A⁻¹)ᵀ n, i.e. inverse.ApplyTransposed(n)).
   Vec3 ApplyTransposed(const Vec3& v) const;
-  double Determinant() const;  // of the linear part
-  // The inverse map. Callers must check that Determinant() is not (nearly) zero.
+  double Determinant() const;  // of the linear part (may overflow or underflow)
+  // A power of two 2^k with max |A_ij| <= 2^k < 2 max |A_ij| over the linear part A (1 when
+  // A is zero): A / LinearScale() has entries in [-1, 1], exactly (only the exponent moves).
+  double LinearScale() const;
+  // det(A / LinearScale()): the determinant free of the matrix's scale, |value| <= 6, so a
+  // uniform scale of 1e-152 or 1e120 is as regular as the identity (issue 11). Near 0 (below
+  // 1e-12) the map is singular to double precision.
+  double RelativeDeterminant() const;
+  // The inverse map, computed on A / LinearScale() so that no intermediate overflows or
+  // underflows. Callers must check that RelativeDeterminant() is not (nearly) zero.
   Affine Inverse() const;
   Affine operator*(const Affine& b) const;  // (this ∘ b)(p) = this(b(p))
   bool IsIdentity() const;

@@ -190,14 +190,17 @@ class NffParser {
       fromAt_ = k;
       cam.where = SourceLocation{file_, k.line, k.column};
       cam.from = Triple("the eye position 'from x y z'");
+      readFrom_ = true;
     } else if (w == "at") {
       Once(seenAt_, k);
       atAt_ = k;
       cam.at = Triple("the look-at point 'at x y z'");
+      readAt_ = true;
     } else if (w == "up") {
       Once(seenUp_, k);
       upAt_ = k;
       cam.up = Triple("the up vector 'up x y z'");
+      readUp_ = true;
     } else if (w == "angle") {
       Once(seenAngle_, k);
       cam.angleDegrees = Number("the field of view 'angle degrees'");
@@ -350,12 +353,15 @@ class NffParser {
     Affine a;
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 4; ++c) a.m[r][c] = Number("a 'transform' matrix entry (12 numbers, row by row)");
-    double scale = 0;
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c) scale = std::max(scale, std::abs(a.m[r][c]));
-    const double det = a.Determinant();
-    if (!(scale > 0) || !(std::abs(det) > 1e-12 * scale * scale * scale) || !std::isfinite(det))
-      Fail(k, "singular transform: the 3x3 part has determinant " + std::to_string(det));
+    // Judged free of the matrix's scale: a uniform 1e-152 is as regular as the identity
+    // (its plain determinant, 1e-456, underflows to 0; issue 11).
+    const double det = a.RelativeDeterminant();
+    if (!(std::abs(det) > 1e-12)) {
+      char what[160];
+      std::snprintf(what, sizeof what, "singular transform: the 3x3 part divided by its largest entry "
+                                       "has determinant %.3g (expected |det| > 1e-12)", det);
+      Fail(k, what);
+    }
     if (a.IsIdentity()) transform_.reset(); else transform_ = a;
   }
 
@@ -378,7 +384,7 @@ class NffParser {
                           {seenResolution_, "'resolution'"},     {seenBackground_, "'b' (background)"}};
     for (const Need& n : needs)
       if (!n.seen) errors_.push_back(end + "missing " + std::string(n.what));
-    if (seenFrom_ && seenAt_ && seenUp_) {
+    if (readFrom_ && readAt_ && readUp_) {  // not when one of them was malformed (its own error)
       // Reported at the item's own line. Both vectors are scaled by their largest component
       // first, so the test cannot overflow.
       const Camera& c = scene_.camera;
@@ -414,6 +420,7 @@ class NffParser {
   int current_ = -1;
   std::optional<Affine> transform_;
   Token fromAt_, atAt_, upAt_;  // where the view items were given
+  bool readFrom_ = false, readAt_ = false, readUp_ = false;  // ... and read whole
   bool seenV_ = false, seenFrom_ = false, seenAt_ = false, seenUp_ = false, seenAngle_ = false,
        seenHither_ = false, seenResolution_ = false, seenBackground_ = false, seenMaterial_ = false;
 };

@@ -106,6 +106,16 @@ TEST(SceneNff, RejectsBadScenes) {
   EXPECT_TRUE(has(Errors(std::string(kView) + f + "p 4\n0 0 0\n1 0 0\n1 1 0.5\n0 1 0\n"), "non-planar"));
   EXPECT_TRUE(has(Errors(std::string(kView) + f + "p 2\n0 0 0\n1 0 0\n"), "integer from 3"));
   EXPECT_TRUE(has(Errors(std::string(kView) + f + "transform 1 0 0 0 2 0 0 0 0 0 0 0\ns 0 0 0 1\n"), "singular transform"));
+  // Singular or not does not depend on the matrix's scale (issue 11): tiny and huge uniform
+  // scales are regular, a rank-2 map is singular at any scale.
+  for (const char* k : {"1e-120", "1e-152", "1e100", "1e120"}) {
+    const std::string e(k);
+    std::vector<std::string> errors;
+    EXPECT_TRUE(ParseNff(std::string(kView) + f + "transform " + e + " 0 0 0 0 " + e + " 0 0 0 0 " + e + " 0\n" +
+                         "transform identity\ns 0 0 0 1\n", "t.nff", errors)) << k << ": " << errors[0];
+    EXPECT_TRUE(has(Errors(std::string(kView) + f + "transform " + e + " 0 0 0 0 " + e + " 0 0 " + e + " 0 0 0\n"
+                           "s 0 0 0 1\n"), "singular transform")) << k;
+  }
   EXPECT_TRUE(has(Errors(std::string(kView) + f + "c 0 0 0 1 0 0 0 1\n"), "different points"));
   EXPECT_TRUE(has(Errors(std::string(kView) + f + "s 0 0 0\n"), "unexpected end of file"));
   EXPECT_TRUE(has(Errors("b 0 0 0\nv\nfrom 0 0 1\nat 0 0 0\nup 0 1 0\nangle 30\nhither 0\nresolution 100000 5\n"),
@@ -231,6 +241,12 @@ TEST(SceneNff, ViewErrorsPointAtTheirOwnLine) {
   EXPECT_NE(one(Errors(view("0 0 5", "0 0 0", "0 0 0"))).find("t.nff:5:1: the view's 'up' is zero"), std::string::npos);
   EXPECT_NE(one(Errors(view("0 0 5", "0 0 0", "0 0 -2"))).find("t.nff:5:1: the view's 'up' is parallel"),
             std::string::npos);
+  // A malformed 'from' or 'up' is its own error only: no second one about the view built
+  // from its unread values.
+  EXPECT_NE(one(Errors(view("0 0 x", "0 0 0", "0 1 0"))).find("t.nff:3:10: expected a number for the eye"),
+            std::string::npos);
+  EXPECT_NE(one(Errors(view("0 0 5", "0 0 0", "0 0 ?"))).find("t.nff:5:8: expected a number for the up"),
+            std::string::npos);
   std::vector<std::string> errors;  // huge and tiny vectors are fine: the test is scaled
   EXPECT_TRUE(ParseNff(view("0 0 5", "0 0 0", "0 1e300 0"), "t.nff", errors));
   EXPECT_TRUE(ParseNff(view("0 0 5", "0 0 0", "0 1e-300 0"), "t.nff", errors));
@@ -252,7 +268,21 @@ TEST(SceneNff, ValuesWhoseSquaresOverflowAreRejectedWithTheirLine) {
             std::string::npos);
   EXPECT_NE(first(Errors(std::string(kView) + f + "c 0 0 0 1e151 0 0 1e140 1e151\n")).find("t.nff:10:1: cone"),
             std::string::npos);
+  // A transform that shrinks a huge sphere to size 1: in its own coordinates the sphere
+  // (1e152) and the eye (1e153) lie past 1e150 and their squares overflow, though the
+  // world-space sphere is small. The transform itself is regular (not "singular": its plain
+  // determinant, 1e-456, underflows, but the test is free of the matrix's scale).
+  EXPECT_NE(first(Errors(std::string(kView) + f + "transform 1e-152 0 0 0 0 1e-152 0 0 0 0 1e-152 0\n"
+                         "s 0 0 0 1e152\n")).find("t.nff:11:1: sphere (in its own coordinates"),
+            std::string::npos);
+  // The sphere itself within the limit in its own coordinates (radius 1e148, 1 in the world)
+  // but a light 1000 away lies at 1e151 there: what the object meets is checked too.
+  EXPECT_NE(first(Errors(std::string(kView) + f + "l 0 0 1000\ntransform 1e-148 0 0 0 0 1e-148 0 0 0 0 1e-148 0\n"
+                         "s 0 0 0 1e148\n")).find("t.nff:12:1: sphere (in its own coordinates"),
+            std::string::npos);
   std::vector<std::string> errors;
+  EXPECT_TRUE(ParseNff(std::string(kView) + f + "l 0 0 1\ntransform 1e-148 0 0 0 0 1e-148 0 0 0 0 1e-148 0\n"
+                       "s 0 0 0 1e148\n", "t.nff", errors)) << first(errors);
   EXPECT_TRUE(ParseNff("b 0 0 0\nv\nfrom 0 0 1e140\nat 0 0 0\nup 0 1 0\nangle 30\nhither 0\nresolution 5 5\n" + f +
                        "s 0 0 0 1e139\nl 0 1e140 1e140\n", "t.nff", errors)) << first(errors);
 }

@@ -83,6 +83,21 @@ TEST(TraceIntersect, TransformedPrimitivesAndConesAndPolygons) {
   EXPECT_FALSE(IntersectObject(s, 3, {5, 1, 5}, {0, 0, -1}));
 }
 
+// Issue 11: a transform's inverse is computed free of its scale, so a unit sphere written as
+// a sphere of radius 1e120 shrunk by 1e-120 (or 1e-120 grown by 1e120) is traced as the
+// unit sphere: their determinants (1e-360, 1e360) over- or underflow double.
+TEST(TraceIntersect, TinyAndHugeTransformScalesTraceAsTheirWorldShape) {
+  for (const auto& [e, r] : {std::pair<std::string, std::string>{"1e-120", "1e120"}, {"1e120", "1e-120"}}) {
+    const std::string& k = e;
+    const Scene s = TinyScene("f 1 1 1 1 0 0 0 1\ntransform " + e + " 0 0 0  0 " + e + " 0 0  0 0 " + e + " -5\n"
+                              "s 0 0 0 " + r + "\n");
+    ASSERT_TRUE(IntersectObject(s, 0, {0, 0, 10}, {0, 0, -1})) << k;
+    EXPECT_NEAR(*IntersectObject(s, 0, {0, 0, 10}, {0, 0, -1}), 14, 1e-9) << k;
+    EXPECT_NEAR(*IntersectObject(s, 0, {0, 0.5, 10}, {0, 0, -1}), 15 - std::sqrt(0.75), 1e-9) << k;
+    EXPECT_FALSE(IntersectObject(s, 0, {0, 1.01, 10}, {0, 0, -1})) << k;
+  }
+}
+
 // A floor lit from straight above, with a blocker between a floor point and the light.
 double FloorBrightness(const std::string& blockerMaterial) {
   const Scene s = ParseNffOrThrow(
