@@ -1,5 +1,7 @@
 #include "bitserial/profile.h"
 
+#include <cmath>
+
 #include <fmt/format.h>
 
 #include <cstdlib>
@@ -92,8 +94,8 @@ const std::map<std::string, Table (*)()>& Registry() {
 double ParseNumber(const std::string& text, const std::string& what) {
   char* end = nullptr;
   double v = std::strtod(text.c_str(), &end);
-  if (text.empty() || end != text.c_str() + text.size() || !(v >= 0))
-    throw UserError(fmt::format("{}: expected a non-negative number, got '{}'", what, text));
+  if (text.empty() || end != text.c_str() + text.size() || !(v >= 0) || !std::isfinite(v))
+    throw UserError(fmt::format("{}: expected a finite non-negative number, got '{}'", what, text));
   return v;
 }
 }  // namespace
@@ -186,9 +188,20 @@ void MachineProfile::Override(const std::string& assignment) {
     throw UserError(fmt::format("profile override '{}': expected name=value", assignment));
   std::string key = assignment.substr(0, eq);
   double v = ParseNumber(assignment.substr(eq + 1), "profile override '" + assignment + "'");
-  if (key == "clockHz" && v > 0) { clockHz = v; return; }
-  if (key == "internalBitsPerPe") { internalBitsPerPe = static_cast<int64_t>(v); return; }
-  if (key == "externalBitsPerPe") { externalBitsPerPe = static_cast<int64_t>(v); return; }
+  if (key == "clockHz") {
+    if (!(v > 0)) throw UserError(fmt::format("profile override '{}': expected a clock above 0 Hz", assignment));
+    clockHz = v;
+    return;
+  }
+  if (key == "internalBitsPerPe" || key == "externalBitsPerPe") {
+    // A whole number of bits, at most 2^40 per PE (far beyond any machine; the cast to
+    // int64_t stays defined).
+    if (v != std::floor(v) || v > 0x1p40)
+      throw UserError(fmt::format("profile override '{}': expected a whole number of bits from 0 to 2^40",
+                                  assignment));
+    (key == "internalBitsPerPe" ? internalBitsPerPe : externalBitsPerPe) = static_cast<int64_t>(v);
+    return;
+  }
   if (key == "floatSubnormals") {
     floatSubnormals = v != 0;
     floatNote = "overridden at run time";

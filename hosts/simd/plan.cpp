@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <tuple>
 
 #include "fixed/check.h"
 #include "hosts/simd/object.h"
@@ -141,6 +142,13 @@ void ChooseWidths(PrimaryPlan& plan, const SceneRange& range, const FormatOverri
       ? fmt::format("{}: the {} {:.4g} from the eye; ", range.farthestObject->where.ToString(),
                     ShapeKindName(range.farthestObject->Kind()), range.farthest)
       : std::string();
+  // A width the user gave is named as the flag it came from (not as the scene's fault).
+  for (const auto& [flag, given, limit] : {std::tuple{"--frac-bits", o.fracBits, 56},
+                                           std::tuple{"--dir-frac-bits", o.dirFracBits, 60},
+                                           std::tuple{"--int-bits", o.intBits, 40}})
+    if (given > limit)
+      throw UserError(fmt::format("{} {}: more than the {} bits the primary pass supports (docs/simd.md)",
+                                  flag, given, limit));
   if (plan.fracBits > 56 || plan.dirFracBits > 60 || plan.distIntBits > 40)
     throw UserError(fmt::format("{}formats too wide for the primary pass: {} integer bits, {} fraction "
                                 "bits, {} direction fraction bits (limits 40, 56, 60)",
@@ -249,7 +257,9 @@ PrimaryPlan PlanFor(const Scene& scene, const SimdOptions& options, int64_t virt
   plan.pass.fracBits = plan.fracBits;
   plan.pass.dirFracBits = plan.dirFracBits;
   plan.pass.t = plan.t;
-  plan.pass.hither = std::max(cam.hither, 0.0);
+  // A hither beyond every object hides them all; held to just past the farthest one (t never
+  // exceeds it) so that it fits the pass's formats: `hither 1e30` once aborted the pass.
+  plan.pass.hither = std::min(std::max(cam.hither, 0.0), 2 * range.farthest + 1);
   plan.pass.nominalUlp = nominalUlp;
   // Each object's bounds, formats and program, derived from these formats (docs/simd.md,
   // "Error bounds").

@@ -206,6 +206,13 @@ TEST(BitserialCycles, ProfilesAreDataAndCheckedByName) {
   EXPECT_EQ(p.Cost(MicroOp::ReadInternal), 3);
   EXPECT_THROW(p.Override("warpDrive=1"), UserError);
   EXPECT_THROW(p.Override("readInternal=fast"), UserError);
+  // Issue 11: every value a flag can give is checked: no infinite cost or clock, no clock of
+  // 0 Hz, memory sizes whole and in range (1e30 bits once became a negative size).
+  for (const char* bad : {"readInternal=inf", "clockHz=0", "clockHz=inf", "internalBitsPerPe=1e30",
+                          "externalBitsPerPe=2.5", "internalBitsPerPe=-1", "readInternal=nan"})
+    EXPECT_THROW(p.Override(bad), UserError) << bad;
+  p.Override("externalBitsPerPe=4096");
+  EXPECT_EQ(p.externalBitsPerPe, 4096);
   EXPECT_THROW(Profile("cray"), UserError);
   std::map<std::string, std::pair<double, std::string>> table = {
       {"clockHz", {1e6, ""}}, {"physicalPes", {64, ""}}, {"internalBitsPerPe", {8, ""}},

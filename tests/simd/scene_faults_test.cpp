@@ -58,6 +58,14 @@ TEST(SimdFaults, FormatsBeyondTheOperationsAreClearErrors) {
   wide.formats.intBits = 40;
   EXPECT_NE(ErrorOf(s, wide).find("more than the 64 bits the host reads per pixel"), std::string::npos)
       << ErrorOf(s, wide);
+  // A flag past its limit is named as the flag, not blamed on the scene.
+  for (const auto& [flag, bits] : {std::pair{"--frac-bits 57", 57}, {"--dir-frac-bits 61", 61}, {"--int-bits 41", 41}}) {
+    SimdOptions o;
+    (std::string(flag).find("--frac") == 0 ? o.formats.fracBits
+     : std::string(flag).find("--dir") == 0 ? o.formats.dirFracBits : o.formats.intBits) = bits;
+    const std::string e = ErrorOf(s, o);
+    EXPECT_EQ(e.find(std::string(flag) + ": more than the "), 0u) << e;
+  }
   // An object 1e100 from the eye: its distance needs far more than 40 integer bits.
   const Scene farther = ParseNffOrThrow(
       "v\nfrom 0 0 10\nat 0 0 0\nup 0 1 0\nangle 30\nhither 0\nresolution 8 8\nb 0 0 0\nl 0 0 10\n"
@@ -72,6 +80,17 @@ TEST(SimdFaults, FormatsBeyondTheOperationsAreClearErrors) {
   const std::string f = ErrorOf(shrunk);
   EXPECT_NE(f.find("shrunk.nff:12:1: the ellipsoid's"), std::string::npos) << f;
   EXPECT_NE(f.find("more than the 128"), std::string::npos) << f;
+}
+
+// Issue 11: a hither beyond every object (here 1e30; any finite value is a valid NFF hither)
+// hides them all, on the array as in the sequential tracer — not an internal-check abort.
+TEST(SimdFaults, AHitherBeyondEveryObjectHidesThem) {
+  for (const char* hither : {"1e30", "1e300", "11"}) {
+    const Scene s = ParseNffOrThrow(std::string("v\nfrom 0 0 10\nat 0 0 0\nup 0 1 0\nangle 30\nhither ") + hither +
+                                    "\nresolution 4 4\nb 0 0 0\nl 0 0 10\nf 1 1 1 1 0 0 0 0\ns 0 0 0 1\n", "h.nff");
+    const PrimaryPass pass = RunPrimaryPass(s, {});
+    for (const auto& hit : pass.matrix.hits) EXPECT_EQ(hit.object, -1) << hither;
+  }
 }
 
 // The roof ridge seen edge-on: on the array itself (no host recompute) the rays of row 32
