@@ -72,12 +72,13 @@ CommandRegistration reg("accuracy", [](CLI::App& program) {
     }
     const PrimaryRays rays(c);
     const double tMin = std::max(c.hither, 0.0);
+    const std::vector<int> planes = exact::CoplanarPolygons(s);
     int64_t differ = 0, compared = 0;
     double maxErr = 0, sumErr = 0;
     TraceStats seqStats;
     for (int64_t pe : which) {
       const PrimaryRay ray = rays.At(int(pe % c.width), int(pe / c.width));
-      const auto [best, tBest] = exact::FirstHit(s, ray, tMin);
+      const auto [best, tBest] = exact::FirstHit(s, ray, tMin, planes);
       const PrimaryHit h = simd ? pass.matrix.hits[pe] : seqTracer->FirstHit(ray, seqStats);
       if (h.object != best) {
         ++differ;

@@ -71,12 +71,18 @@ void LoadDirections(Machine& m, ArrayMatrix& a, const PrimaryRays& rays, const P
 // are tied when t_j − e_j <= t_k + e_k. Each PE keeps lowBest = t − e of its current best
 // and otherLow, the least t − e of every other hit so far; a displaced best's low joins
 // otherLow. bestUnsure: the current best was itself uncertain (its e does not hold);
-// tGraze: the least tLow of an uncertain candidate.
+// tGraze: the least tLow of an uncertain candidate. bestPlane (only when some plane holds
+// several polygons): the plane class of the current best (ObjectPlan::planeClass, 0: none).
 struct Trackers {
-  Trackers(Machine& m, const Fixed& tMax)
+  Trackers(Machine& m, const Fixed& tMax, const PrimaryPlan& plan)
       : tGraze(Broadcast(m, tMax)), otherLow(Broadcast(m, tMax)), lowBest(Broadcast(m, tMax)),
-        bestUnsure(Broadcast(m, Fixed{bitserial::BoolFormat(), 0})) {}
-  Multi tGraze, otherLow, lowBest, bestUnsure;
+        bestUnsure(Broadcast(m, Fixed{bitserial::BoolFormat(), 0})) {
+    if (plan.planeClasses > 0) bestPlane = Broadcast(m, Fixed{PlaneFormat(plan), 0});
+  }
+  static Format PlaneFormat(const PrimaryPlan& plan) {
+    return Format::Unsigned(std::max(1, CeilLog2(double(plan.planeClasses) + 1)), 0);
+  }
+  Multi tGraze, otherLow, lowBest, bestUnsure, bestPlane;
 };
 
 // One object's candidate folded into the best hit so far and the trackers.
@@ -90,8 +96,15 @@ void FoldCandidate(Machine& m, const ObjectPlan& object, const PrimaryPlan& plan
   WithExpectedSaturation(m, [&] { low = Sub(c.t, Broadcast(m, Tight(e, plan.fracBits)), T, kSaturate); });
   Where(c.uncertain, [&] { k.tGraze = Min(k.tGraze, c.tLow, T); });
   const Multi closer = c.hit && (c.t < a.t);
-  Where(c.hit && !closer, [&] { k.otherLow = Min(k.otherLow, low, T); });
+  // A polygon in the best's plane has the best's t bit for bit and ties with it exactly: the
+  // lower index (the best) stays first, as in the exact reference, and it is no near tie.
+  Multi other = c.hit && !closer;
+  if (object.planeClass > 0)
+    other = other && !Equal(k.bestPlane, bitserial::Uni{Fixed{k.bestPlane.Format(), fixed::BigInt(object.planeClass)}});
+  Where(other, [&] { k.otherLow = Min(k.otherLow, low, T); });
   Where(closer, [&] {
+    if (!k.bestPlane.Empty())
+      k.bestPlane = Broadcast(m, Fixed{k.bestPlane.Format(), fixed::BigInt(object.planeClass)});
     k.otherLow = Min(k.otherLow, k.lowBest, T);
     k.lowBest = low;
     k.bestUnsure = c.uncertain;
@@ -230,7 +243,7 @@ ArrayRun RunArray(const Scene& scene, const PrimaryPlan& plan, const SimdOptions
         LoadDirections(m, matrix, rays, plan, pixels);
         const Fixed tMax{plan.t, plan.t.MaxRaw()};
         matrix.t = Broadcast(m, tMax);
-        Trackers trackers(m, tMax);
+        Trackers trackers(m, tMax, plan);
         for (const ObjectPlan& object : plan.objects) FoldCandidate(m, object, plan, matrix, trackers);
         SetFlags(m, tMax, matrix, trackers);
         ReadMatrix(m, matrix, run.raw);

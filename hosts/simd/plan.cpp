@@ -12,6 +12,7 @@
 
 #include "fixed/check.h"
 #include "hosts/simd/object.h"
+#include "hosts/trace/exact.h"
 
 namespace zephyr::simd {
 
@@ -92,13 +93,13 @@ ObjectExtent ExtentOf(const Primitive& p, const Vec3& eye) {
   return {};
 }
 
-ObjectPlan PlanObject(const Scene& scene, int index, const PassFormats& pf) {
+ObjectPlan PlanObject(const Scene& scene, int index, const PassFormats& pf, const std::vector<int>& planes) {
   const Primitive& p = scene.objects[index];
   const Vec3& eye = scene.camera.from;
   ObjectPlan plan;
   switch (p.Kind()) {
     case ShapeKind::kSphere: plan = p.transform ? PlanEllipsoid(p, eye, pf) : PlanSphere(p, eye, pf); break;
-    case ShapeKind::kPolygon: plan = PlanPolygon(p, eye, pf); break;
+    case ShapeKind::kPolygon: plan = PlanPolygon(p, eye, pf, planes[index] >= 0 ? scene.objects[planes[index]] : p); break;
     case ShapeKind::kCone: plan = PlanCone(p, eye, pf); break;
   }
   plan.index = index;
@@ -264,8 +265,15 @@ PrimaryPlan PlanFor(const Scene& scene, const SimdOptions& options, int64_t virt
   // Each object's bounds, formats and program, derived from these formats (docs/simd.md,
   // "Error bounds").
   plan.grazingFraction = 1.0 / 8;
+  const std::vector<int> planes = exact::CoplanarPolygons(scene);
+  std::vector<int> members(scene.objects.size(), 0), classOf(scene.objects.size(), 0);
+  for (int r : planes)
+    if (r >= 0) ++members[r];
+  for (size_t i = 0; i < scene.objects.size(); ++i)
+    if (planes[i] == int(i) && members[i] > 1) classOf[i] = ++plan.planeClasses;
   for (size_t i = 0; i < scene.objects.size(); ++i) {
-    plan.objects.push_back(PlanObject(scene, int(i), plan.pass));
+    plan.objects.push_back(PlanObject(scene, int(i), plan.pass, planes));
+    if (planes[i] >= 0) plan.objects.back().planeClass = classOf[planes[i]];
     const ObjectBounds& b = plan.objects.back().bounds;
     if (!b.alwaysUncertain) plan.tErrorBound = std::max(plan.tErrorBound, b.tError);
     else ++plan.alwaysUncertainObjects;

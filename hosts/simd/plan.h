@@ -89,6 +89,10 @@ struct ObjectPlan {
   ObjectBounds bounds;
   std::vector<PlannedFormat> formats;    // every format its array program uses
   std::shared_ptr<const ObjectProgram> program;
+  // 1.. for a polygon in exactly the same plane as another (exact::CoplanarPolygons; their t
+  // is bit for bit the same, and a tie between them is decided by the lowest index, as the
+  // exact reference does); 0 for every other object.
+  int planeClass = 0;
   const char* KindName() const;          // sphere, ellipsoid, polygon, cone
 };
 
@@ -115,6 +119,7 @@ struct PrimaryPlan {
   int64_t internalCapacity = 0, externalCapacity = 0;  // bits per virtual PE
   int alwaysUncertainObjects = 0;  // objects whose bounds degenerate at these widths (every
                                    // pixel that may hit them is flagged)
+  int planeClasses = 0;  // planes holding more than one polygon (ObjectPlan::planeClass)
   nlohmann::json Json() const;         // the report's plan (pass-wide)
   nlohmann::json ObjectsJson() const;  // per object: kind, bounds, formats
   std::string Text() const;            // `zephyr plan`'s output, per-object formats included

@@ -79,8 +79,15 @@ WorldPolygon MakeWorldPolygon(const Primitive& p, const Vec3& eye) {
 
 class PolygonProgram final : public ObjectProgram {
  public:
-  PolygonProgram(const Primitive& p, const Vec3& eye, const PassFormats& pf)
+  // planeOf: the polygon whose plane constants t is computed from (the lowest-index polygon
+  // in exactly the same plane, exact::CoplanarPolygons), so that polygons in one plane compute
+  // the same t bit for bit; the edges are always p's own.
+  PolygonProgram(const Primitive& p, const Vec3& eye, const PassFormats& pf, const Primitive& planeOf)
       : pf_(pf), w_(MakeWorldPolygon(p, eye)) {
+    if (&planeOf != &p) {
+      const WorldPolygon plane = MakeWorldPolygon(planeOf, eye);
+      w_.normal = plane.normal, w_.eyeDistance = plane.eyeDistance;
+    }
     Bound(eye);
   }
 
@@ -178,8 +185,8 @@ ObjectExtent PolygonExtent(const Primitive& p, const Vec3& eye) {
   return e;
 }
 
-ObjectPlan PlanPolygon(const Primitive& p, const Vec3& eye, const PassFormats& pf) {
-  return PlanOf<PolygonProgram>(p, eye, pf);
+ObjectPlan PlanPolygon(const Primitive& p, const Vec3& eye, const PassFormats& pf, const Primitive& planeOf) {
+  return PlanOf<PolygonProgram>(p, eye, pf, planeOf);
 }
 
 }  // namespace zephyr::simd

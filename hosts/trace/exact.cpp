@@ -1,6 +1,9 @@
 // hosts/trace/exact.cpp — the exact (128-bit) first-hit reference (hosts/trace/exact.h).
 #include "hosts/trace/exact.h"
 
+#include <array>
+#include <cmath>
+#include <map>
 #include <utility>
 #include <vector>
 
@@ -120,13 +123,114 @@ std::optional<Real> ObjectHit(const Scene& scene, int index, const Vec3& origin,
   return ConeHit(std::get<Cone>(p.shape), o, d, Real(tMin));
 }
 
-Hit FirstHit(const Scene& scene, const PrimaryRay& ray, double tMin) {
+namespace {
+
+using Rational = boost::multiprecision::cpp_rational;
+
+// A double as an exact rational.
+Rational Exact(double x) {
+  using boost::multiprecision::cpp_int;
+  int e = 0;
+  const double m = std::frexp(x, &e);  // x = m·2^e, |m| in [0.5, 1)
+  const cpp_int mant = cpp_int(int64_t(std::ldexp(m, 53)));
+  if (e >= 53) return Rational(cpp_int(mant << (e - 53)));
+  return Rational(mant, cpp_int(cpp_int(1) << (53 - e)));
+}
+
+struct ExactVec {
+  Rational x, y, z;
+};
+ExactVec ExactOf(const Vec3& v) { return {Exact(v.x), Exact(v.y), Exact(v.z)}; }
+ExactVec Sub(const ExactVec& a, const ExactVec& b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+ExactVec CrossE(const ExactVec& a, const ExactVec& b) {
+  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+Rational DotE(const ExactVec& a, const ExactVec& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+
+// A polygon's plane exactly: a vertex and a non-zero normal from three of its vertices (the
+// pair of edges from v0 with the largest cross product in double); none if all are collinear.
+struct ExactPlane {
+  ExactVec point, normal;
+  bool valid = false;
+};
+ExactPlane PlaneOf(const std::vector<Vec3>& v) {
+  ExactPlane p;
+  size_t bi = 0, bj = 0;
+  double best = 0;
+  for (size_t i = 1; i < v.size(); ++i)
+    for (size_t j = i + 1; j < v.size(); ++j) {
+      const double c = Length(Cross(v[i] - v[0], v[j] - v[0]));
+      if (c > best) best = c, bi = i, bj = j;
+    }
+  if (!(best > 0)) return p;
+  p.point = ExactOf(v[0]);
+  p.normal = CrossE(Sub(ExactOf(v[bi]), p.point), Sub(ExactOf(v[bj]), p.point));
+  p.valid = p.normal.x != 0 || p.normal.y != 0 || p.normal.z != 0;
+  return p;
+}
+
+}  // namespace
+
+std::vector<int> CoplanarPolygons(const Scene& scene) {
+  std::vector<int> rep(scene.objects.size(), -1);
+  // Bucket by the plane in double (unit normal with its largest component positive, offset),
+  // rounded; only polygons in one bucket are compared exactly. A plane split across buckets
+  // is only left unmerged (each polygon its own representative).
+  std::map<std::array<int64_t, 4>, std::vector<int>> buckets;
+  for (size_t i = 0; i < scene.objects.size(); ++i) {
+    const Primitive& p = scene.objects[i];
+    const Polygon* poly = std::get_if<Polygon>(&p.shape);
+    if (!poly || p.transform) continue;
+    rep[i] = int(i);
+    const std::vector<Vec3>& v = poly->vertices;
+    Vec3 nn;
+    for (size_t k = 0; k < v.size(); ++k) nn += Cross(v[k], v[(k + 1) % v.size()]);
+    const double len = Length(nn);
+    if (!(len > 0) || !std::isfinite(len)) continue;
+    Vec3 n = nn / len;
+    const double big = std::abs(n.x) >= std::abs(n.y) && std::abs(n.x) >= std::abs(n.z) ? n.x
+                       : std::abs(n.y) >= std::abs(n.z)                                   ? n.y
+                                                                                          : n.z;
+    if (big < 0) n = n * -1.0;
+    const double off = Dot(n, v[0]);
+    auto key = [](double x) { return int64_t(std::llround(x * 1e6)); };
+    if (!std::isfinite(off) || std::abs(off) > 1e9) continue;
+    buckets[{key(n.x), key(n.y), key(n.z), key(off)}].push_back(int(i));
+  }
+  for (const auto& [key, members] : buckets) {
+    if (members.size() < 2) continue;
+    std::vector<std::pair<int, ExactPlane>> planes;  // representatives of this bucket
+    for (int i : members) {
+      const std::vector<Vec3>& v = std::get<Polygon>(scene.objects[i].shape).vertices;
+      for (const auto& [r, plane] : planes) {
+        bool on = true;
+        for (const Vec3& x : v) on = on && DotE(Sub(ExactOf(x), plane.point), plane.normal) == 0;
+        if (on) {
+          rep[i] = r;
+          break;
+        }
+      }
+      if (rep[i] != i) continue;
+      ExactPlane own = PlaneOf(v);
+      if (own.valid) planes.push_back({i, std::move(own)});
+    }
+  }
+  return rep;
+}
+
+Hit FirstHit(const Scene& scene, const PrimaryRay& ray, double tMin, const std::vector<int>& planes) {
   Hit best;
   for (size_t i = 0; i < scene.objects.size(); ++i) {
     const std::optional<Real> t = ObjectHit(scene, int(i), ray.origin, ray.direction, tMin);
+    // A polygon in the best's plane ties with it whatever the last bit of t says.
+    if (t && best.object >= 0 && planes[i] >= 0 && planes[i] == planes[best.object]) continue;
     if (t && (best.object < 0 || *t < best.t)) best = {int(i), *t};
   }
   return best;
+}
+
+Hit FirstHit(const Scene& scene, const PrimaryRay& ray, double tMin) {
+  return FirstHit(scene, ray, tMin, CoplanarPolygons(scene));
 }
 
 }  // namespace zephyr::exact

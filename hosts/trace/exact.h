@@ -12,6 +12,7 @@
 #pragma once
 
 #include <optional>
+#include <vector>
 
 #include "fixed/reference.h"
 #include "hosts/scene/scene.h"
@@ -45,11 +46,22 @@ std::optional<Real> ConeHit(const Cone& cone, const RealVec& o, const RealVec& d
 std::optional<Real> ObjectHit(const Scene& scene, int index, const Vec3& origin, const Vec3& direction,
                               double tMin);
 
-// The first hit along an eye ray: the object (-1: none) and its t (lowest index on a tie).
+// Untransformed polygons in exactly the same plane (every vertex of one on the other's plane,
+// decided in rational arithmetic on the scene's double coordinates): for each object, the
+// lowest index of such a polygon (itself when it is the lowest or has none); -1 for every
+// other object. Polygons in one plane have equal real t along every ray, so which is first
+// is a tie, decided by the lowest index (the SPD teapot's handle and spout are drawn twice,
+// with two triangulations of each flat quad).
+std::vector<int> CoplanarPolygons(const Scene& scene);
+
+// The first hit along an eye ray: the object (-1: none) and its t (lowest index on a tie,
+// and always among polygons in one plane, whose 128-bit t may differ in the last bit).
+// `planes` is CoplanarPolygons(scene); without it, it is computed on every call.
 struct Hit {
   int object = -1;
   Real t = 0;
 };
+Hit FirstHit(const Scene& scene, const PrimaryRay& ray, double tMin, const std::vector<int>& planes);
 Hit FirstHit(const Scene& scene, const PrimaryRay& ray, double tMin);
 
 }  // namespace zephyr::exact

@@ -17,9 +17,10 @@ std::vector<PrimaryHit> ExactHits(const Scene& scene) {
   const PrimaryRays rays(scene.camera);
   const double tMin = std::max(scene.camera.hither, 0.0);
   std::vector<PrimaryHit> hits;
+  const std::vector<int> planes = exact::CoplanarPolygons(scene);
   for (int y = 0; y < scene.camera.height; ++y)
     for (int x = 0; x < scene.camera.width; ++x) {
-      const exact::Hit h = exact::FirstHit(scene, rays.At(x, y), tMin);
+      const exact::Hit h = exact::FirstHit(scene, rays.At(x, y), tMin, planes);
       PrimaryHit hit;
       hit.object = h.object;
       hit.t = h.object >= 0 ? double(h.t) : 0.0;
