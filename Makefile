@@ -112,6 +112,7 @@ FUZZ_BIN  := $(BUILD)/fuzz/nff_fuzz
 FUZZ_SRCS := tests/fuzz/nff_fuzz.cpp hosts/scene/nff.cpp hosts/scene/scene.cpp \
              hosts/scene/geometry.cpp hosts/trace/tracer.cpp hosts/trace/sphere_kernels.cpp \
              $(filter-out $(OPENMP_SRCS),$(wildcard fixed/*.cpp bitserial/*.cpp)) \
+             hosts/trace/exact.cpp \
              $(addprefix hosts/simd/,plan.cpp bounds.cpp ops.cpp sphere.cpp ellipsoid.cpp polygon.cpp cone.cpp)
 FUZZ_OBJS := $(FUZZ_SRCS:%.cpp=$(BUILD)/fuzz/obj/%.o)
 FUZZ_SAN  := -fno-sanitize-recover=all
