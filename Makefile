@@ -73,8 +73,10 @@ all: setup ## Build the zephyr program, the tests, the benchmarks and the exampl
 
 binaries: $(ZEPHYR) $(TESTS) $(BENCH_BINS) $(EXAMPLE_BINS)
 
+# The SimGrid tests (tests/testbed) run zephyr-smpi: `make test` builds it when SimGrid's
+# smpicxx is installed (tools/setup.sh installs simgrid and libsimgrid-dev).
 test: setup ## Build and run every test (GoogleTest; FILTER=... to select)
-	$(Q)$(MAKE) --no-print-directory -j$(JOBS) $(TESTS) $(ZEPHYR)
+	$(Q)$(MAKE) --no-print-directory -j$(JOBS) $(TESTS) $(ZEPHYR) $(if $(HAVE_SMPI),$(ZEPHYR_SMPI_BIN))
 	$(Q)$(if $(FILTER),true,$(MAKE) --no-print-directory fuzz-smoke)
 	$(Q)bash tools/test.sh $(TESTS) $(if $(FILTER),--gtest_filter='$(FILTER)')
 
@@ -205,12 +207,14 @@ ZEPHYR_SMPI_BIN := $(BIN)/zephyr-smpi
 SMPI_CXXFLAGS = -std=c++20 -Wall -Wextra -Wno-unused-parameter -I. \
   $(shell pkg-config --cflags libhwy libpng fmt 2>/dev/null) $(SMPI_OPT) \
   -DZEPHYR_SMPI -DSMPI_NO_OVERRIDE_MALLOC -include hosts/testbed/smpi_prelude.h
-SMPI_LIBS = $(shell pkg-config --libs libhwy libpng fmt 2>/dev/null) -lpthread
+SMPI_LIBS = $(shell pkg-config --libs libhwy libpng fmt 2>/dev/null) -fopenmp -lpthread
 # zephyr-smpi is for `render` (and `testbed`): the other commands stay out of it.
 SMPI_SRCS := $(filter-out hosts/cmd/accuracy.cpp hosts/cmd/cycles.cpp hosts/cmd/stability.cpp \
                hosts/cmd/mpi_check.cpp hosts/cmd/gen.cpp hosts/cmd/export_pov.cpp \
                hosts/cmd/plan.cpp hosts/scene/gen.cpp hosts/scene/pov.cpp,$(LIB_SRCS))
 SMPI_OBJS := $(SMPI_SRCS:%.cpp=$(SMPI_BUILD)/obj/%.o) $(SMPI_BUILD)/obj/hosts/cmd/main.o
+# The layer blocks use OpenMP here too (as in the ordinary build).
+$(OPENMP_SRCS:%.cpp=$(SMPI_BUILD)/obj/%.o): SMPI_CXXFLAGS += -fopenmp
 
 .PHONY: smpi
 smpi: ## Build build/bin/zephyr-smpi (dist/hetero on a simulated 1992 network under smpirun)

@@ -62,6 +62,9 @@ struct FramedJob {
   std::function<std::optional<std::vector<std::byte>>(const Frame&)> sliceFor;
   std::function<void(const Frame&, std::span<std::byte>)> fillDegenerate;
   double parentPassSeconds = 0;  // hetero: the SIMD primary pass, timed by the caller
+  // Called at the parent after a child's frame is pasted into the image (unset: nothing),
+  // e.g. to charge the parent's own work to its simulated host (docs/testbed.md).
+  std::function<void(const Frame&)> pasted;
 };
 
 struct FramedOptions {

@@ -10,6 +10,7 @@
 #include "fixed/check.h"
 #include "hosts/methods/farmed.h"
 #include "hosts/methods/methods.h"
+#include "hosts/testbed/testbed.h"
 
 namespace zephyr {
 namespace {
@@ -55,11 +56,13 @@ void DistChildEntry(const RenderOptions& options) {
 void RenderDist(const Scene& scene, const RenderOptions& options, RenderOutput& out) {
   const Camera& c = scene.camera;
   FrameGrid(c.width, c.height, options.dist.frameSize);  // a bad frame size: before any message
+  testbed::StartLinkAccounting();  // simulated testbed only
   FramedJob job;
   job.method = "dist";
   job.imageWidth = c.width, job.imageHeight = c.height, job.frameSize = options.dist.frameSize;
   job.bytesPerPixel = kPixelBytes;
   job.setup = farmed::SetupText("dist", scene, options.trace);
+  job.pasted = [](const Frame& f) { farmed::ChargeParentPixels(f.PixelCount()); };
   FramedResult result = RenderFrames(job, farmed::FarmOptions(options));
   out.image = farmed::ToImage(result.image, c.width, c.height);
   out.report["distributed"] = result.report;

@@ -111,6 +111,13 @@ nlohmann::json ChildStats::Json() const {
   return j;
 }
 
+void ChargeParentPixels(std::uint64_t pixels) {
+  if (!testbed::Simulated()) return;
+  TraceStats work;
+  work.pixels = pixels;
+  testbed::ChargeHostWork(work);
+}
+
 Image ToImage(const std::vector<std::byte>& bytes, int width, int height) {
   Image image(width, height);
   ZEPHYR_CHECK_EQ(bytes.size(), image.pixels.size() * kPixelBytes);

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -60,6 +61,11 @@ class ChildStats {
 // --frame, --in-flight, --child-timeout; --resume needs --out and an existing checkpoint
 // OUT.frames, which must be a regular file and no other input or output. UserError.
 void CheckFarmOptions(const RenderOptions& options);
+
+// The parent's own host work under the simulated testbed (docs/testbed.md): `pixels` pixels
+// handled (a frame's slice packed, or its result pasted into the image), charged as that many
+// "pixel" events of the work table to the parent's simulated host. Nothing outside it.
+void ChargeParentPixels(std::uint64_t pixels);
 
 // The farm's image bytes (kPixelBytes a pixel, row-major) as an Image.
 Image ToImage(const std::vector<std::byte>& bytes, int width, int height);

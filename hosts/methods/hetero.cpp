@@ -148,6 +148,7 @@ void HeteroChildEntry(const RenderOptions& options) {
 void RenderHetero(const Scene& scene, const RenderOptions& options, RenderOutput& out) {
   const Camera& c = scene.camera;
   FrameGrid(c.width, c.height, options.dist.frameSize);
+  testbed::StartLinkAccounting();  // simulated testbed only (before the matrix crosses SCSI)
   FramedJob job;
   job.method = "hetero";
   job.imageWidth = c.width, job.imageHeight = c.height, job.frameSize = options.dist.frameSize;
@@ -161,12 +162,20 @@ void RenderHetero(const Scene& scene, const RenderOptions& options, RenderOutput
                                 {{"dirFracBits", pass.plan.dirFracBits}});
   std::fprintf(stderr, "cycle report (SIMD primary pass):\n%s", pass.cycleTable.c_str());
   const auto tracer = Tracer::Create(scene, options.trace);
-  job.sliceFor = [&](const Frame& f) { return Slice(pass.matrix, f); };
+  // The parent's own work, charged under the simulated testbed: packing each frame's slice,
+  // shading the degenerate frames, pasting the children's frames.
+  job.sliceFor = [&](const Frame& f) {
+    auto slice = Slice(pass.matrix, f);
+    if (slice) farmed::ChargeParentPixels(f.PixelCount());
+    return slice;
+  };
+  job.pasted = [](const Frame& f) { farmed::ChargeParentPixels(f.PixelCount()); };
   // The background exactly as shading a miss gives it (bit-identical to --method simd).
   job.fillDegenerate = [&](const Frame& f, std::span<std::byte> pixels) {
-    TraceStats unused;
+    TraceStats work;
     std::vector<Vec3> block;
-    simd::ShadeRegion(*tracer, pass.matrix, f.x0, f.y0, f.width, f.height, block, unused);
+    simd::ShadeRegion(*tracer, pass.matrix, f.x0, f.y0, f.width, f.height, block, work);
+    testbed::ChargeHostWork(work);  // simulated testbed only
     std::memcpy(pixels.data(), block.data(), pixels.size());
   };
   FramedResult result = RenderFrames(job, farmed::FarmOptions(options));

@@ -9,7 +9,9 @@
 
 #ifdef ZEPHYR_SMPI
 #include <mpi.h>
+#include <simgrid/plugins/load.h>
 #include <simgrid/s4u.hpp>
+#include <xbt/config.hpp>
 #endif
 
 namespace zephyr::testbed {
@@ -53,6 +55,13 @@ ArraySplit SplitPass(const nlohmann::json& cycles) {
   return a;
 }
 
+// This rank's charged host seconds (ChargeHostWork), and the part ChargeArrayPass charged
+// (the uncertain pixels recomputed): under SMPI every rank has its own copy of globals.
+double charged = 0, passHost = 0;
+double ChargedSeconds() { return charged; }
+double PassHostSeconds() { return passHost; }
+nlohmann::json LinkBytes(double now);
+
 }  // namespace
 
 nlohmann::json Testbed::Json() const {
@@ -92,8 +101,31 @@ void AddModelledTime(const std::string& testbedName, const std::string& method,
                       " runs on a simulated network: build/bin/zephyr-smpi under smpirun "
                       "(`make smpi`; docs/testbed.md)");
     t["testbed"] = testbedName;
-    t["modelledSeconds"] = SimulatedNow();
+    const double now = SimulatedNow();
+    t["modelledSeconds"] = now;
     t["clock"] = "SimGrid (simulated seconds from MPI start to the finished image at the parent)";
+    const double pass = r.at("distributed").at("time").value("parentPassSeconds", 0.0);
+    const double hostWork = ChargedSeconds() - (method == "hetero" ? PassHostSeconds() : 0);
+    t["parent"] = SimulatedHost();
+    t["parent"]["arrayPassSeconds"] = method == "hetero" ? pass : 0.0;
+    t["parent"]["hostWorkSeconds"] = hostWork;
+    t["parent"]["hostWorkSource"] =
+        "pixels packed into slices and pasted from results (one work-table pixel each), "
+        "degenerate frames shaded; the array pass apart";
+    t["parent"]["waitingSeconds"] = now - hostWork - (method == "hetero" ? pass : 0.0);
+    nlohmann::json children = nlohmann::json::array();
+    for (const auto& c : r.at("distributed").at("perChild")) {
+      nlohmann::json j = {{"rank", c.at("rank")}, {"host", c.at("host")}};
+      if (c.contains("work") && c.at("work").contains("testbed")) {
+        const auto& s = c.at("work").at("testbed");
+        j["busySeconds"] = s.at("busySeconds");
+        j["idleSeconds"] = now - s.at("busySeconds").get<double>();
+      }
+      children.push_back(j);
+    }
+    t["children"] = children;
+    t["childrenIdleSource"] = "modelledSeconds minus the child's charged work";
+    t["links"] = LinkBytes(now);
     r["testbed"] = t;
     return;
   }
@@ -220,8 +252,40 @@ double ChargeHostWork(const TraceStats& work) {
     flops = t.flops + t.instructions;
   }
   if (flops > 0) smpi_execute_flops(flops);
+  charged += SimulatedNow() - start;
   return SimulatedNow() - start;
 }
+
+namespace {
+bool linkLoadPlugin() {
+  const std::string plugin = simgrid::config::get_value<std::string>("plugin");
+  return plugin.find("link_load") != std::string::npos;
+}
+bool linksTracked = false;
+}  // namespace
+
+void StartLinkAccounting() {
+  if (!linkLoadPlugin()) return;
+  for (simgrid::s4u::Link* link : simgrid::s4u::Engine::get_instance()->get_all_links())
+    sg_link_load_track(link);
+  linksTracked = true;
+}
+
+namespace {
+nlohmann::json LinkBytes(double now) {
+  nlohmann::json links = nlohmann::json::array();
+  if (!linksTracked) return links;
+  for (simgrid::s4u::Link* link : simgrid::s4u::Engine::get_instance()->get_all_links()) {
+    const double bytes = sg_link_get_cum_load(link);
+    // SimGrid keeps bandwidths in bytes per second.
+    links.push_back({{"link", link->get_name()},
+                     {"bytes", bytes},
+                     {"bandwidthBytesPerSecond", link->get_bandwidth()},
+                     {"busyFraction", now > 0 ? bytes / link->get_bandwidth() / now : 0.0}});
+  }
+  return links;
+}
+}  // namespace
 
 double ChargeArrayPass(const simd::PrimaryPass& pass, const Scene& scene) {
   const double start = SimulatedNow();
@@ -238,7 +302,7 @@ double ChargeArrayPass(const simd::PrimaryPass& pass, const Scene& scene) {
   // The array computes at its clock (the platform gives its speed in cycles per second).
   simgrid::s4u::this_actor::exec_init(a.arrayCycles)->set_host(arrays[0])->wait();
   if (a.scsiBytes > 0) simgrid::s4u::Comm::sendto(arrays[0], self, uint64_t(a.scsiBytes));
-  ChargeHostWork(RecomputeWork(uint64_t(pass.recomputedPixels), scene));
+  passHost += ChargeHostWork(RecomputeWork(uint64_t(pass.recomputedPixels), scene));
   return SimulatedNow() - start;
 }
 
@@ -249,6 +313,10 @@ double SimulatedNow() { return 0; }
 nlohmann::json SimulatedHost() { return nlohmann::json::object(); }
 double ChargeHostWork(const TraceStats&) { return 0; }
 double ChargeArrayPass(const simd::PrimaryPass&, const Scene&) { return 0; }
+void StartLinkAccounting() {}
+namespace {
+nlohmann::json LinkBytes(double) { return nlohmann::json::array(); }
+}  // namespace
 
 #endif
 

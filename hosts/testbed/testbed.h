@@ -60,8 +60,11 @@ bool Simulated();
 // render of `scene` by `method`, from the counts in its report (the method's TraceStats at
 // the top level; simd's cycle report under "simd"). Adds report["testbed"]:
 // {"testbed", "modelledSeconds", "host": HostTime, "array": {...}}. For dist/hetero it
-// requires the simulated build and reports SimGrid's clock (UserError otherwise); UserError
-// for an unknown testbed or a method that counts no work.
+// requires the simulated build and reports SimGrid's clock (UserError otherwise), with what
+// the simulation measured: "parent" (its charged host work and array pass, seconds),
+// "children" (per child: simulated busy and idle seconds) and "links" (per platform link:
+// bytes carried, from SimGrid's link_load plugin when simrun.sh enabled it). UserError for
+// an unknown testbed or a method that counts no work.
 void AddModelledTime(const std::string& testbedName, const std::string& method,
                      const Scene& scene, nlohmann::json& report);
 
@@ -75,6 +78,11 @@ double ChargeHostWork(const TraceStats& work);
 // host's share of the pass (uncertain pixels recomputed) on the parent. Returns the
 // simulated seconds it took (0 when not simulated).
 double ChargeArrayPass(const simd::PrimaryPass& pass, const Scene& scene);
+
+// Under simulation, at the parent before its first message: starts counting the bytes every
+// platform link carries (SimGrid's link_load plugin, `--cfg=plugin:link_load`, which
+// tools/testbed/simrun.sh sets; without it nothing is counted). Does nothing otherwise.
+void StartLinkAccounting();
 
 // The simulated seconds since the simulation started (0 when not simulated).
 double SimulatedNow();

@@ -2,22 +2,24 @@
 # tools/testbed/simrun.sh — run build/bin/zephyr-smpi under SimGrid's smpirun on a testbed
 # platform (docs/testbed.md): rank 0 on the host "parent", rank i on the i-th child host.
 #
-#   tools/testbed/simrun.sh --children K [--platform FILE] [--hostfile FILE] [--zephyr PATH] \
-#       -- render --method dist|hetero SCENE --testbed ufmg1992 --out x.png --report r.json
+#   tools/testbed/simrun.sh --children K [--testbed NAME|FILE] [--platform FILE] [--hostfile FILE] \
+#       [--zephyr PATH] -- render --method dist|hetero SCENE --testbed ufmg1992 --out x.png --report r.json
 #
-# Without --platform the ufmg1992 platform with K children is written by
-# `zephyr testbed platform` (from the host profiles). With --platform FILE the hosts are
+# Without --platform the named testbed's platform (--testbed, default ufmg1992) with K
+# children is written by `zephyr testbed platform` (from the host profiles); --testbed FILE
+# (a path to an existing file) is the same as --platform FILE. With --platform FILE the hosts are
 # taken from it (or from --hostfile): a malformed file or too few hosts is an error naming
 # the file. Computation is never measured (smpi/simulate-computation:no): the children
 # charge their counted work; SimGrid's network factors are 1 (the link figures as given).
 set -euo pipefail
 
-children="" platform="" hostfile="" zephyr=""
+children="" platform="" hostfile="" zephyr="" testbed="ufmg1992"
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --children) children="$2"; shift 2 ;;
     --platform) platform="$2"; shift 2 ;;
+    --testbed) if [[ "$2" == */* || -f "$2" ]]; then platform="$2"; else testbed="$2"; fi; shift 2 ;;
     --hostfile) hostfile="$2"; shift 2 ;;
     --zephyr) zephyr="$2"; shift 2 ;;
     --) shift; break ;;
@@ -33,7 +35,7 @@ tmp="$(mktemp -d)"
 trap 'rm -rf "$tmp"' EXIT
 if [[ -z "$platform" ]]; then
   platform="$tmp/ufmg1992.xml"
-  "$(dirname "$zephyr")/zephyr" testbed platform --children "$children" --out "$platform" \
+  "$(dirname "$zephyr")/zephyr" testbed platform --testbed "$testbed" --children "$children" --out "$platform" \
     --hostfile "$tmp/hosts"
   hostfile="${hostfile:-$tmp/hosts}"
 else
@@ -60,5 +62,5 @@ fi
 
 exec smpirun -np "$((children + 1))" -platform "$platform" -hostfile "$hostfile" \
   --cfg=smpi/simulate-computation:no --cfg=smpi/bw-factor:0:1 --cfg=smpi/lat-factor:0:1 \
-  --cfg=smpi/display-timing:no --log=root.thres:warning \
+  --cfg=smpi/display-timing:no --cfg=plugin:link_load --log=root.thres:warning \
   "$zephyr" "$@"
