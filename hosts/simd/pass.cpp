@@ -53,14 +53,15 @@ struct ArrayMatrix {
 };
 
 // The host computes each pixel's eye ray and loads the directions (one plane per bit) into
-// the machine's PEs (a layer block's own, from m.FirstPe()): PE k takes pixel pixels[k], or
-// pixel k when `pixels` is empty (row-major).
+// the machine's PEs (a layer block's own, from m.FirstPe(), of the array pass starting at
+// the plan's PE `first`): PE k takes pixel pixels[k], or pixel k when `pixels` is empty
+// (row-major).
 void LoadDirections(Machine& m, ArrayMatrix& a, const PrimaryRays& rays, const PrimaryPlan& plan,
-                    const std::vector<int64_t>& pixels) {
+                    const std::vector<int64_t>& pixels, int64_t first) {
   std::vector<int64_t> raw[3];
   for (auto& r : raw) r.resize(m.VirtualPes());
   for (int64_t i = 0; i < m.VirtualPes(); ++i) {
-    const int64_t pe = m.FirstPe() + i, pixel = pixels.empty() ? pe : pixels[pe];
+    const int64_t pe = first + m.FirstPe() + i, pixel = pixels.empty() ? pe : pixels[pe];
     const Vec3 dir = rays.At(int(pixel % plan.width), int(pixel / plan.width)).direction;
     for (int k = 0; k < 3; ++k) raw[k][i] = QuantiseDirection(dir[k], plan.dirFracBits);
   }
@@ -123,7 +124,7 @@ void SetFlags(Machine& m, const Fixed& tMax, ArrayMatrix& a, const Trackers& k) 
 }
 
 // The matrix as the host reads it (charged to the host link), and the per-PE flags, over
-// every PE of the pass (each layer block writes its own PEs).
+// every PE of the plan (each layer block of each array pass writes its own PEs).
 struct MatrixRaw {
   explicit MatrixRaw(int64_t pes)
       : object(pes), t(pes), d{std::vector<int64_t>(pes), std::vector<int64_t>(pes), std::vector<int64_t>(pes)},
@@ -132,8 +133,8 @@ struct MatrixRaw {
   std::vector<uint8_t> overflow;  // overflow or divide by zero (Invalid: √ of a miss)
 };
 
-void ReadMatrix(Machine& m, const ArrayMatrix& a, MatrixRaw& r) {
-  const int64_t first = m.FirstPe();
+void ReadMatrix(Machine& m, const ArrayMatrix& a, MatrixRaw& r, int64_t passFirst) {
+  const int64_t first = passFirst + m.FirstPe();
   auto read = [first](const Multi& x, std::vector<int64_t>& to) {
     const std::vector<int64_t> raw = x.ReadRaw();
     std::copy(raw.begin(), raw.end(), to.begin() + first);
@@ -145,7 +146,8 @@ void ReadMatrix(Machine& m, const ArrayMatrix& a, MatrixRaw& r) {
   for (int64_t pe = 0; pe < m.VirtualPes(); ++pe) r.overflow[first + pe] = m.Overflow(pe) || m.DivideByZero(pe);
 }
 
-// One run of the program on the array: the matrix as read, the cycle report and timing.
+// One run of the program on the array (every array pass): the matrix as read, the cycle
+// report and timing.
 struct ArrayRun {
   explicit ArrayRun(int64_t pes) : raw(pes) {}
   MatrixRaw raw;
@@ -154,9 +156,18 @@ struct ArrayRun {
   double hostSeconds = 0, modelledSeconds = 0;
 };
 
-// The cycle report, memory and timing of the array part.
-void ReportCycles(ArrayRun& pass, const bitserial::BlockedRun& run, const bitserial::MachineProfile& profile) {
+// One array pass's cycle report with its memory and timing, as JSON and as a table.
+struct PassReport {
+  nlohmann::json cycles;
+  std::string table;
+  double hostSeconds = 0, modelledSeconds = 0;
+};
+
+PassReport ReportCycles(const bitserial::BlockedRun& run, const bitserial::MachineProfile& profile,
+                        double hostSeconds) {
+  PassReport pass;
   const bitserial::CycleReport& report = run.report;
+  pass.hostSeconds = hostSeconds;
   pass.modelledSeconds = report.ModelledSeconds();
   pass.cycles = report.Json();
   const bitserial::PeMemory& mem = run.memory;
@@ -165,13 +176,67 @@ void ReportCycles(ArrayRun& pass, const bitserial::BlockedRun& run, const bitser
       {"external", {{"peakBitsPerPe", mem.PeakUsed(Space::External)}, {"capacityBitsPerPe", mem.Capacity(Space::External)}}}};
   pass.cycles["hostSeconds"] = pass.hostSeconds;
   pass.cycles["realTimeFactor"] = pass.modelledSeconds / pass.hostSeconds;
-  pass.cycleTable = report.Table() +
-                    fmt::format("memory per virtual PE: internal {} of {} bits, external {} of {} bits\n"
-                                "modelled time {:.4f} s at {:g} MHz; host time {:.4f} s; real-time factor {:.2f}\n",
-                                mem.PeakUsed(Space::Internal), mem.Capacity(Space::Internal),
-                                mem.PeakUsed(Space::External), mem.Capacity(Space::External),
-                                pass.modelledSeconds, profile.clockHz / 1e6, pass.hostSeconds,
-                                pass.modelledSeconds / pass.hostSeconds);
+  pass.table = report.Table() +
+               fmt::format("memory per virtual PE: internal {} of {} bits, external {} of {} bits\n"
+                           "modelled time {:.4f} s at {:g} MHz; host time {:.4f} s; real-time factor {:.2f}\n",
+                           mem.PeakUsed(Space::Internal), mem.Capacity(Space::Internal),
+                           mem.PeakUsed(Space::External), mem.Capacity(Space::External),
+                           pass.modelledSeconds, profile.clockHz / 1e6, pass.hostSeconds,
+                           pass.modelledSeconds / pass.hostSeconds);
+  return pass;
+}
+
+// Adds the numbers of `add` into `into`, key by key (integers stay integers).
+void AddInto(nlohmann::json& into, const nlohmann::json& add) {
+  if (add.is_object()) {
+    for (const auto& [key, value] : add.items()) AddInto(into[key], value);
+  } else if (into.is_null()) {
+    into = add;
+  } else if (into.is_number_integer() && add.is_number_integer()) {
+    into = into.get<int64_t>() + add.get<int64_t>();
+  } else {
+    into = into.get<double>() + add.get<double>();
+  }
+}
+
+// The report of every array pass together: one pass's as it is; several passes' summed (the
+// same keys: layers, totalCycles, modelledSeconds, byClass, byLayer, byOp, hostSeconds and
+// realTimeFactor over every pass; memory of the first, the largest) with each pass's own
+// report under "passes", which PEs (and, for the image, rows) it ran, and each pass's table.
+void CombinePasses(ArrayRun& run, const std::vector<PassReport>& passes, const PrimaryPlan& plan, bool rows) {
+  if (passes.size() == 1) {
+    run.cycles = passes[0].cycles, run.cycleTable = passes[0].table, run.modelledSeconds = passes[0].modelledSeconds;
+    return;
+  }
+  const nlohmann::json& head = passes[0].cycles;
+  nlohmann::json total = {{"profile", head["profile"]}, {"clockHz", head["clockHz"]}, {"layers", 0},
+                          {"totalCycles", 0.0}, {"modelledSeconds", 0.0}, {"byClass", nlohmann::json::object()},
+                          {"byLayer", nlohmann::json::array()}, {"byOp", nlohmann::json::object()},
+                          {"memory", head["memory"]}, {"passes", nlohmann::json::array()}};
+  for (size_t k = 0; k < passes.size(); ++k) {
+    const nlohmann::json& c = passes[k].cycles;
+    for (const char* key : {"layers", "totalCycles", "modelledSeconds", "byClass", "byOp"}) AddInto(total[key], c[key]);
+    for (const nlohmann::json& layer : c["byLayer"])
+      total["byLayer"].push_back({{"layer", total["byLayer"].size()}, {"pass", k}, {"cycles", layer["cycles"]}});
+    const int64_t first = int64_t(k) * plan.pesPerPass, pes = std::min(plan.pesPerPass, plan.virtualPes - first);
+    nlohmann::json entry = {{"pass", k}, {"firstPe", first}, {"pes", pes}, {"cycles", c}};
+    std::string what = fmt::format("virtual PEs {}..{}", first, first + pes - 1);
+    if (rows) {
+      entry["rows"] = {first / plan.width, (first + pes) / plan.width - 1};
+      what = fmt::format("rows {}..{} ({} virtual PEs)", first / plan.width, (first + pes) / plan.width - 1, pes);
+    }
+    total["passes"].push_back(entry);
+    run.cycleTable += fmt::format("array pass {} of {}: {}\n", k + 1, passes.size(), what) + passes[k].table;
+  }
+  run.modelledSeconds = total["modelledSeconds"].get<double>();
+  total["hostSeconds"] = run.hostSeconds;
+  total["realTimeFactor"] = run.modelledSeconds / run.hostSeconds;
+  run.cycleTable += fmt::format(
+      "total over {} array passes: {} layers, {:.0f} cycles; modelled time {:.4f} s at {:g} MHz; host time {:.4f} s; "
+      "real-time factor {:.2f}\n",
+      passes.size(), total["layers"].get<int64_t>(), total["totalCycles"].get<double>(), run.modelledSeconds,
+      head["clockHz"].get<double>() / 1e6, run.hostSeconds, run.modelledSeconds / run.hostSeconds);
+  run.cycles = std::move(total);
 }
 
 // The host side: decode the matrix, count the flags.
@@ -228,28 +293,71 @@ void HandleUncertain(PrimaryPass& pass, const Scene& scene, const PrimaryRays& r
 
 namespace {
 
-// The program over the plan's PEs (pixel pixels[k] in PE k; every pixel when empty), run
-// whole on each layer block in turn (bitserial/blocks.h): no operation of the pass crosses
+// The whole program on the machine's PEs (a layer block's own) of the array pass that starts
+// at the plan's PE `first`: directions, every object, flags, and (raw not null) the readout.
+void RunProgram(Machine& m, const PrimaryPlan& plan, const PrimaryRays& rays, const std::vector<int64_t>& pixels,
+                int64_t first, MatrixRaw* raw) {
+  ArrayMatrix matrix(m, plan);
+  LoadDirections(m, matrix, rays, plan, pixels, first);
+  const Fixed tMax{plan.t, plan.t.MaxRaw()};
+  matrix.t = Broadcast(m, tMax);
+  Trackers trackers(m, tMax, plan);
+  for (const ObjectPlan& object : plan.objects) FoldCandidate(m, object, plan, matrix, trackers);
+  SetFlags(m, tMax, matrix, trackers);
+  if (raw) ReadMatrix(m, matrix, *raw, first);
+}
+
+// The planner splits the passes by an estimate of the program's memory per virtual PE; where
+// a pass of several layers leaves less than twice the estimate, the program's real allocation
+// (the same on every PE and every run) is checked on one layer of a pass-sized machine, and
+// when it does not fit the passes are split again by what the program allocates on a
+// machine of one layer (plan.memoryBitsPerPe becomes that; docs/simd.md, "Several array
+// passes"). `unit`: the PEs a pass holds whole (a row; 1 for a refine pass).
+void FitPasses(PrimaryPlan& plan, const bitserial::MachineProfile& profile, const PrimaryRays& rays,
+               const std::vector<int64_t>& pixels, int64_t unit) {
+  const auto fits = [&] {
+    if (plan.layersPerPass == 1 || 2 * plan.memoryBitsPerPe <= plan.internalCapacity + plan.externalCapacity)
+      return true;  // one layer: the run itself reports what does not fit
+    try {
+      Machine m(profile, plan.pesPerPass, 0, bitserial::LayerBlock{0, 1});
+      RunProgram(m, plan, rays, pixels, 0, nullptr);
+      return true;
+    } catch (const UserError&) {
+      return false;
+    }
+  };
+  if (fits()) return;
+  Machine one(profile, std::min<int64_t>(plan.virtualPes, profile.physicalPes));
+  RunProgram(one, plan, rays, pixels, 0, nullptr);
+  plan.memoryBitsPerPe = std::max(plan.memoryBitsPerPe,
+                                  one.Memory().PeakUsed(Space::Internal) + one.Memory().PeakUsed(Space::External));
+  for (SplitPasses(plan, profile, unit, plan.memoryBitsPerPe); !fits();
+       SplitPasses(plan, profile, unit, plan.memoryBitsPerPe))
+    plan.memoryBitsPerPe += plan.memoryBitsPerPe / 16;
+}
+
+// The program over the plan's PEs (pixel pixels[k] in PE k; every pixel when empty), in the
+// plan's array passes one after the other (docs/simd.md, "Several array passes"), each a
+// complete pass with its own layers, matrix readout and cycle report. Each pass runs whole
+// on one layer block at a time (bitserial/blocks.h): no operation of the program crosses
 // layers, so the matrix, the flags and the cycle report are those of op-by-op execution.
 ArrayRun RunArray(const Scene& scene, const PrimaryPlan& plan, const SimdOptions& options, const PrimaryRays& rays,
                   const std::vector<int64_t>& pixels) {
   ArrayRun run(plan.virtualPes);
   const auto start = std::chrono::steady_clock::now();
   const bitserial::MachineProfile profile = MachineProfileOf(options);
-  const bitserial::BlockedRun blocked = bitserial::RunLayerBlocks(
-      profile, plan.virtualPes, {.blockLayers = options.blockLayers, .threads = options.threads},
-      [&](Machine& m) {
-        ArrayMatrix matrix(m, plan);
-        LoadDirections(m, matrix, rays, plan, pixels);
-        const Fixed tMax{plan.t, plan.t.MaxRaw()};
-        matrix.t = Broadcast(m, tMax);
-        Trackers trackers(m, tMax, plan);
-        for (const ObjectPlan& object : plan.objects) FoldCandidate(m, object, plan, matrix, trackers);
-        SetFlags(m, tMax, matrix, trackers);
-        ReadMatrix(m, matrix, run.raw);
-      });
+  std::vector<PassReport> reports;
+  for (int k = 0; k < plan.passes; ++k) {
+    const auto passStart = std::chrono::steady_clock::now();
+    const int64_t first = int64_t(k) * plan.pesPerPass, pes = std::min(plan.pesPerPass, plan.virtualPes - first);
+    const bitserial::BlockedRun blocked = bitserial::RunLayerBlocks(
+        profile, pes, {.blockLayers = options.blockLayers, .threads = options.threads},
+        [&](Machine& m) { RunProgram(m, plan, rays, pixels, first, &run.raw); });
+    reports.push_back(ReportCycles(
+        blocked, profile, std::chrono::duration<double>(std::chrono::steady_clock::now() - passStart).count()));
+  }
   run.hostSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  ReportCycles(run, blocked, profile);
+  CombinePasses(run, reports, plan, pixels.empty());
   return run;
 }
 
@@ -262,7 +370,8 @@ void Refine(PrimaryPass& pass, const Scene& scene, const SimdOptions& options, c
   for (int64_t pe = 0; pe < int64_t(out.flags.size()); ++pe)
     if (out.flags[pe]) pixels.push_back(pe);
   if (pixels.empty()) return;
-  const PrimaryPlan plan = PlanRefinePass(scene, options, pass.plan, int64_t(pixels.size()), kRefineExtraBits);
+  PrimaryPlan plan = PlanRefinePass(scene, options, pass.plan, int64_t(pixels.size()), kRefineExtraBits);
+  FitPasses(plan, MachineProfileOf(options), rays, pixels, 1);
   const ArrayRun run = RunArray(scene, plan, options, rays, pixels);
   int64_t still = 0, overflow = 0, grazing = 0, tie = 0;
   for (size_t k = 0; k < pixels.size(); ++k) {
@@ -292,6 +401,7 @@ PrimaryPass RunPrimaryPass(const Scene& scene, const SimdOptions& options) {
   PrimaryPass pass;
   pass.plan = PlanPrimaryPass(scene, options);
   const PrimaryRays rays(scene.camera);
+  FitPasses(pass.plan, MachineProfileOf(options), rays, {}, pass.plan.width);
   ArrayRun run = RunArray(scene, pass.plan, options, rays, {});
   pass.cycles = std::move(run.cycles);
   pass.cycleTable = std::move(run.cycleTable);

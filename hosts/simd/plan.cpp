@@ -215,32 +215,55 @@ void SummaryTable(PrimaryPlan& plan, const Scene& scene, const SceneRange& range
                                         cones)});
 }
 
-// Memory per virtual PE: the matrix (object, t, d, two flag bits) plus the temporaries of
-// one sphere test (tca, 3 cross, 3 clamped, 3 squares, sum, disc, root, t0, t1, t and the
-// 1-bit masks), the near-tie and grazing trackers. UserError when it cannot fit.
-void CheckMemory(PrimaryPlan& plan, const SceneRange& range, const bitserial::MachineProfile& profile) {
-  const int R = IntBitsFor(range.rMax), F = plan.fracBits;
+// Memory per virtual PE at fraction bits F and Fd: the matrix (object, t, d, two flag bits)
+// plus the temporaries of one sphere test (tca, 3 cross, 3 clamped, 3 squares, sum, disc,
+// root, t0, t1, t and the 1-bit masks), the near-tie and grazing trackers.
+int64_t FootprintBits(const PrimaryPlan& plan, int R, int F, int Fd) {
+  const int L = plan.distIntBits, wt = 1 + L + F, ws = 2 * R + 3 + F;
+  const int64_t matrix = plan.objectBits + wt + 3 * (2 + Fd) + 2;
+  return matrix + 2 * wt + 6 * wt + 3 * (R + 1 + F) + 5 * ws + 4 * wt + 8;
+}
+
+// The memory check and the array passes. With n layers each virtual PE has
+// floor(internal / n) + floor(external / n) bits (bitserial/memory.h); when the image's
+// layers leave too few, the image runs in several array passes (docs/simd.md, "Several
+// array passes"), each over as few whole units of `unit` PEs (rows of the image; single PEs
+// of a refine pass) as balance the passes, with as many layers as still fit. UserError only
+// when a single layer cannot hold the program (naming the widest formats and the fraction
+// bits that would fit), or a single unit needs more layers than fit.
+void CheckMemory(PrimaryPlan& plan, const SceneRange& range, const bitserial::MachineProfile& profile,
+                 int64_t unit) {
+  const int R = IntBitsFor(range.rMax);
   plan.matrixBitsPerPe = plan.objectBits + plan.t.Width() + 3 * plan.direction.Width() + 2;
-  const int wl = plan.length.Width(), ws = 2 * R + 3 + F;
-  plan.memoryBitsPerPe = plan.matrixBitsPerPe + 2 * plan.t.Width() + 6 * wl + 3 * (R + 1 + F) +
-                         5 * ws + 4 * plan.t.Width() + 8;
-  plan.internalCapacity = profile.internalBitsPerPe / plan.layers;
-  plan.externalCapacity = profile.externalBitsPerPe / plan.layers;
-  if (plan.memoryBitsPerPe > plan.internalCapacity + plan.externalCapacity)
+  plan.memoryBitsPerPe = FootprintBits(plan, R, plan.fracBits, plan.dirFracBits);
+  const auto capacity = [&](int64_t layers) {
+    return profile.internalBitsPerPe / layers + profile.externalBitsPerPe / layers;
+  };
+  const int64_t need = plan.memoryBitsPerPe;
+  if (need > capacity(1)) {
+    int fits = -1;
+    for (int F = plan.fracBits - 1; F >= kMinFracBits && fits < 0; --F)
+      if (FootprintBits(plan, R, F, std::min(F, plan.dirFracBits)) <= capacity(1)) fits = F;
     throw UserError(fmt::format(
-        "the scene does not fit the {} array: the primary pass needs about {} bits per virtual "
-        "PE (t {}, direction {}, {} layers for {}x{} pixels) but each virtual PE has {} internal + "
-        "{} external bits; use a smaller image or fewer bits (--frac-bits, --int-bits)",
-        profile.name, plan.memoryBitsPerPe, plan.t.Name(), plan.direction.Name(), plan.layers,
-        plan.width, plan.height, plan.internalCapacity, plan.externalCapacity));
+        "the primary pass does not fit one layer of the {} array: it needs about {} bits per virtual PE "
+        "(its widest formats: t and lengths {}, {} bits each; squares and discriminants u{}.{}, {} bits; "
+        "directions {}) but a PE has {} internal + {} external bits; {}",
+        profile.name, need, plan.t.Name(), plan.t.Width(), 2 * R + 2, plan.fracBits, 2 * R + 3 + plan.fracBits,
+        plan.direction.Name(), profile.internalBitsPerPe, profile.externalBitsPerPe,
+        fits >= 0 ? fmt::format("--frac-bits {} would fit", fits)
+                  : fmt::format("no width down to {} fraction bits fits (fewer --int-bits?)", kMinFracBits)));
+  }
+  SplitPasses(plan, profile, unit, need);
 }
 
 }  // namespace
 
 namespace {
 
-// A plan over `virtualPes` PEs whose bounds' nominal sizes refer to `nominalUlp` (0: its own).
-PrimaryPlan PlanFor(const Scene& scene, const SimdOptions& options, int64_t virtualPes, double nominalUlp) {
+// A plan over `virtualPes` PEs, split into passes of whole units of `unit` PEs when the
+// array is full, whose bounds' nominal sizes refer to `nominalUlp` (0: its own).
+PrimaryPlan PlanFor(const Scene& scene, const SimdOptions& options, int64_t virtualPes, int64_t unit,
+                    double nominalUlp) {
   const bitserial::MachineProfile profile = MachineProfileOf(options);
   const Camera& cam = scene.camera;
   PrimaryPlan plan;
@@ -280,14 +303,46 @@ PrimaryPlan PlanFor(const Scene& scene, const SimdOptions& options, int64_t virt
   }
   SummaryTable(plan, scene, range);
   CheckObjectFormats(plan, scene);
-  CheckMemory(plan, range, profile);
+  CheckMemory(plan, range, profile, unit);
   return plan;
 }
 
 }  // namespace
 
+void SplitPasses(PrimaryPlan& plan, const bitserial::MachineProfile& profile, int64_t unit, int64_t needBits) {
+  const auto capacity = [&](int64_t layers) {
+    return profile.internalBitsPerPe / layers + profile.externalBitsPerPe / layers;
+  };
+  const int64_t p = profile.physicalPes;
+  // The most layers a pass may have: capacity(n) falls with n.
+  int64_t most = (plan.virtualPes + p - 1) / p;
+  if (capacity(most) < needBits) {
+    int64_t lo = 1, hi = most;  // capacity(lo) >= needBits > capacity(hi)
+    while (hi - lo > 1) {
+      const int64_t mid = (lo + hi) / 2;
+      (capacity(mid) >= needBits ? lo : hi) = mid;
+    }
+    most = lo;
+  }
+  const int64_t units = (plan.virtualPes + unit - 1) / unit;
+  const int64_t unitsFit = most * p / unit;
+  if (unitsFit == 0)
+    throw UserError(fmt::format(
+        "a row of {} pixels does not fit one pass of the {} array: each virtual PE needs about {} bits, so at "
+        "most {} layer(s) ({} PEs) per pass; use a narrower image or fewer bits (--frac-bits, --int-bits)",
+        unit, profile.name, needBits, most, most * p));
+  plan.passes = int((units + unitsFit - 1) / unitsFit);
+  const int64_t perPass = (units + plan.passes - 1) / plan.passes;  // balanced; <= unitsFit
+  plan.pesPerPass = std::min(plan.virtualPes, perPass * unit);
+  plan.layersPerPass = int((plan.pesPerPass + p - 1) / p);
+  const int64_t lastPes = plan.virtualPes - int64_t(plan.passes - 1) * plan.pesPerPass;
+  plan.layers = (plan.passes - 1) * plan.layersPerPass + int((lastPes + p - 1) / p);
+  plan.internalCapacity = profile.internalBitsPerPe / plan.layersPerPass;
+  plan.externalCapacity = profile.externalBitsPerPe / plan.layersPerPass;
+}
+
 PrimaryPlan PlanPrimaryPass(const Scene& scene, const SimdOptions& options) {
-  return PlanFor(scene, options, int64_t(scene.camera.width) * scene.camera.height, 0);
+  return PlanFor(scene, options, int64_t(scene.camera.width) * scene.camera.height, scene.camera.width, 0);
 }
 
 PrimaryPlan PlanRefinePass(const Scene& scene, const SimdOptions& options, const PrimaryPlan& first,
@@ -296,12 +351,13 @@ PrimaryPlan PlanRefinePass(const Scene& scene, const SimdOptions& options, const
   // As many more bits as still fit t's 64-bit word (a far scene may have none to add).
   const int fracBits = std::min({first.fracBits + extraBits, 56, kMaxMatrixWordBits - 1 - first.distIntBits});
   wide.formats = {fracBits, std::min(first.dirFracBits + extraBits, 60), first.distIntBits};
-  return PlanFor(scene, wide, std::max<int64_t>(pixels, 1), first.pass.Ulp());
+  return PlanFor(scene, wide, std::max<int64_t>(pixels, 1), 1, first.pass.Ulp());
 }
 
 nlohmann::json PrimaryPlan::Json() const {
   nlohmann::json j = {{"width", width}, {"height", height}, {"virtualPes", virtualPes},
-                      {"layers", layers}, {"distIntBits", distIntBits}, {"fracBits", fracBits},
+                      {"layers", layers}, {"passes", passes}, {"pesPerPass", pesPerPass},
+                      {"layersPerPass", layersPerPass}, {"distIntBits", distIntBits}, {"fracBits", fracBits},
                       {"dirFracBits", dirFracBits}, {"objectBits", objectBits},
                       {"tErrorBound", tErrorBound},
                       {"grazingFraction", grazingFraction}, {"memoryBitsPerPe", memoryBitsPerPe},
@@ -331,6 +387,9 @@ nlohmann::json PrimaryPlan::ObjectsJson() const {
 std::string PrimaryPlan::Text() const {
   std::string s = fmt::format("{}x{} pixels = {} virtual PEs in {} layer(s)\n", width, height,
                               virtualPes, layers);
+  if (passes > 1)
+    s += fmt::format("the array is full: {} array passes of up to {} virtual PEs ({} layers) each\n", passes,
+                     pesPerPass, layersPerPass);
   for (const PlannedFormat& f : formats)
     s += fmt::format("  {:<26} {:<8} {}\n", f.quantity, f.format.Name(), f.reason);
   s += fmt::format("error bound on t (certain pixels): {:.3g} (the largest object's e); near tie per pair: "

@@ -99,8 +99,14 @@ struct ObjectPlan {
 // The format planner's choice for one scene (docs/simd.md: model no more than a scene needs).
 struct PrimaryPlan {
   int width = 0, height = 0;
-  int64_t virtualPes = 0;
-  int layers = 0;
+  int64_t virtualPes = 0;   // every pixel (a refine pass: every pixel it runs on)
+  int layers = 0;           // over every array pass
+  // Array passes (docs/simd.md, "Several array passes"): when the layers of every virtual PE
+  // leave each too little memory, pass k runs PEs [k·pesPerPass, (k+1)·pesPerPass) (whole
+  // rows of the image), each with at most layersPerPass layers, by which memory is split.
+  int passes = 1;
+  int64_t pesPerPass = 0;
+  int layersPerPass = 0;
   int distIntBits = 0;      // integer bits of every distance (eye-to-object, t)
   int fracBits = 0;         // fraction bits of lengths, products, discriminants, t
   int dirFracBits = 0;      // fraction bits of the direction components
@@ -116,7 +122,7 @@ struct PrimaryPlan {
   std::vector<ObjectPlan> objects;  // one per scene object, in scene order
   int64_t memoryBitsPerPe = 0;  // peak estimate per virtual PE
   int64_t matrixBitsPerPe = 0;  // the per-pixel matrix in external memory
-  int64_t internalCapacity = 0, externalCapacity = 0;  // bits per virtual PE
+  int64_t internalCapacity = 0, externalCapacity = 0;  // bits per virtual PE (in a pass)
   int alwaysUncertainObjects = 0;  // objects whose bounds degenerate at these widths (every
                                    // pixel that may hit them is flagged)
   int planeClasses = 0;  // planes holding more than one polygon (ObjectPlan::planeClass)
@@ -125,9 +131,18 @@ struct PrimaryPlan {
   std::string Text() const;            // `zephyr plan`'s output, per-object formats included
 };
 
-// Throws UserError when no format within the machine's memory can hold the scene, or the
-// requested widths are beyond the pass's limits.
+// Throws UserError when one layer of the machine cannot hold the program at these formats
+// (or one row of the image does not fit a pass), or the requested widths are beyond the
+// pass's limits. An image whose layers do not fit at once is planned in several passes.
 PrimaryPlan PlanPrimaryPass(const Scene& scene, const SimdOptions& options);
+
+// Splits the plan's PEs into array passes of whole units of `unit` PEs (the image's rows; 1
+// for a refine pass) with as many layers each as leave every virtual PE `needBits` bits of
+// memory, the units spread evenly (sets passes, pesPerPass, layersPerPass, layers and the
+// capacities). UserError if one unit needs more layers than that. The planner calls it with
+// its estimate of the pass's memory; the pass again with the memory its program really
+// allocates when that is more (docs/simd.md, "Several array passes").
+void SplitPasses(PrimaryPlan& plan, const bitserial::MachineProfile& profile, int64_t unit, int64_t needBits);
 
 // The plan of a refine pass (docs/simd.md, "Refine pass"): `pixels` virtual PEs (the first
 // pass's uncertain pixels, compacted into as few layers as they need) at the first plan's

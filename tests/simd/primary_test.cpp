@@ -95,13 +95,25 @@ TEST(SimdPrimary, ShadeRegionIsBitIdenticalToTheFullImage) {
 }
 
 TEST(SimdPrimary, SceneThatCannotFitIsAClearError) {
-  Scene scene = GenerateRandomSpheres({.count = 8, .seed = 1, .width = 4096, .height = 4096});
+  // One layer of the MPP (1024 bits per PE, no external memory) cannot hold the pass at 40
+  // fraction bits; the message names the widest formats and what would fit.
+  Scene scene = GenerateRandomSpheres({.count = 8, .seed = 1, .width = 64, .height = 64});
+  SimdOptions o;
+  o.profile = "mpp";
+  o.formats.fracBits = 40;
   try {
-    PlanPrimaryPass(scene, {});
-    FAIL() << "a 4096x4096 image (2048 layers) should not fit";
+    PlanPrimaryPass(scene, o);
+    FAIL() << "40 fraction bits should not fit one layer of the MPP";
   } catch (const UserError& e) {
-    EXPECT_NE(std::string(e.what()).find("does not fit"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("2048 layers"), std::string::npos) << e.what();
+    const std::string what = e.what();
+    EXPECT_NE(what.find("does not fit one layer"), std::string::npos) << what;
+    EXPECT_NE(what.find("t and lengths s"), std::string::npos) << what;
+    const size_t at = what.find("--frac-bits ");
+    ASSERT_NE(at, std::string::npos) << what;
+    // The width it names does fit.
+    o.formats.fracBits = std::stoi(what.substr(at + 12));
+    EXPECT_LT(o.formats.fracBits, 40);
+    EXPECT_EQ(PlanPrimaryPass(scene, o).passes, 1);
   }
 }
 
