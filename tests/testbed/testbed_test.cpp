@@ -102,6 +102,11 @@ TEST(TestbedModel, SimdIsArrayPlusScsiPlusHostShading) {
   EXPECT_DOUBLE_EQ(t.at("modelledSeconds").get<double>(),
                    cycles.at("totalCycles").get<double>() / clock + t.at("host").at("seconds").get<double>());
   EXPECT_GT(t.at("array").at("scsiBytes").get<double>(), 0);
+  // Two independent sources agree: the bytes the array profile's hostPlane cost moves per
+  // second at the array clock are the testbed's SCSI bandwidth (5 MB/s, docs/testbed.md) —
+  // which pins bytes to bits / 8, not to bits.
+  EXPECT_NEAR(t.at("array").at("scsiBytes").get<double>() / t.at("array").at("scsiSeconds").get<double>(),
+              t.at("testbed").at("scsiBandwidth").at("value").get<double>(), 1e-6 * 5e6);
 }
 
 TEST(TestbedModel, BadTestbedAndUnsimulatedFarmAreUserErrors) {
