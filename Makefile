@@ -97,9 +97,11 @@ bench: setup ## Build and run the benchmarks (figures printed; medians of repeat
 	$(Q)$(MAKE) --no-print-directory -j$(JOBS) $(ZEPHYR) $(BENCH_BINS)
 	$(Q)bash tools/bench.sh $(BENCH_BINS)
 
-charts: setup ## Run the experiment sweeps and draw the charts under docs/results/ (QUICK=1: small)
-	$(Q)$(MAKE) --no-print-directory -j$(JOBS) $(ZEPHYR)
-	$(Q)QUICK='$(QUICK)' bash tools/charts.sh
+# TESTBED=ufmg1992: the same figures in modelled 1992 seconds (docs/testbed.md), with
+# dist/hetero on simulated children under SimGrid (tools/testbed/charts.sh).
+charts: setup ## Run the experiment sweeps and draw the charts under docs/results/ (QUICK=1: small; TESTBED=ufmg1992: modelled)
+	$(Q)$(MAKE) --no-print-directory -j$(JOBS) $(ZEPHYR) $(if $(TESTBED),$(ZEPHYR_SMPI_BIN))
+	$(Q)$(if $(TESTBED),TESTBED='$(TESTBED)' QUICK='$(QUICK)' bash tools/testbed/charts.sh,QUICK='$(QUICK)' bash tools/charts.sh)
 
 # The NFF reader under libFuzzer with AddressSanitizer and UBSan (Debian's clang-14).
 # `make fuzz` runs FUZZ_RUNS inputs; `make test` runs a few seconds of it (fuzz-smoke).

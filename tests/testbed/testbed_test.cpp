@@ -5,7 +5,10 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 #include <map>
+#include <sstream>
+#include <vector>
 
 #include "fixed/check.h"
 #include "hosts/methods/render.h"
@@ -210,6 +213,57 @@ TEST(TestbedSimulated, DistAndHeteroMatchSeqAndSimdAndRepeatToTheLastDigit) {
     // To the last digit: under SimGrid the farm's clock is the simulated one
     // (hosts/farm/common.h), so no wall-clock time reaches a message or a decision.
     EXPECT_EQ(seconds[0], seconds[1]) << method;
+  }
+}
+
+// `make charts TESTBED=ufmg1992 QUICK=1` (tools/testbed/charts.sh) end to end: every figure
+// in modelled seconds, no cell missing; the winner of each grid point is the fastest of the
+// four; dist's children process every pixel of the image.
+TEST(TestbedCharts, QuickRunDrawsEveryFigureInModelledSeconds) {
+  if (!std::filesystem::exists(SmpiPath())) GTEST_SKIP() << "no zephyr-smpi (make smpi)";
+  TempDir dir;
+  const std::string out = dir / "charts";
+  const std::string bin = std::filesystem::path(SmpiPath()).parent_path().string();
+  auto r = RunCommand("QUICK=1 TESTBED=ufmg1992 OUT=" + out + " ZEPHYR=" + bin + "/zephyr ZEPHYR_SMPI=" +
+                      SmpiPath() + " timeout -k 5 600 bash " + Repo() + "/tools/testbed/charts.sh");
+  ASSERT_EQ(r.status, 0) << r.output;
+  auto rows = [&](const std::string& name) {
+    std::ifstream f(out + "/" + name + ".csv");
+    EXPECT_TRUE(f) << name;
+    std::vector<std::vector<std::string>> table;
+    for (std::string line; std::getline(f, line);) {
+      std::vector<std::string> cells;
+      std::stringstream in(line);
+      for (std::string cell; std::getline(in, cell, ',');) cells.push_back(cell);
+      table.push_back(cells);
+    }
+    return table;
+  };
+  for (const char* name : {"fig05_seq_vs_simd", "fig06_seq_vs_dist", "fig07_hetero_vs_dist_2children",
+                           "fig10_data_flow", "fig11_pixels", "fig12_all_methods", "past_efficiency",
+                           "past_ethernet", "past_parent", "past_time", "where_each_wins"}) {
+    const auto table = rows(name);
+    ASSERT_GE(table.size(), 3u) << name;  // a header and 2 points at least
+    for (size_t i = 1; i < table.size(); ++i)
+      for (size_t c = 1; c < table[i].size(); ++c) {
+        ASSERT_NE(table[i][c], "NaN") << name << " row " << i << " column " << c;
+        EXPECT_GE(std::stod(table[i][c]), 0) << name << " row " << i << " column " << c;
+      }
+    std::ifstream png(out + "/" + std::string(name) + ".png", std::ios::binary);
+    char magic[4] = {};
+    png.read(magic, 4);
+    EXPECT_EQ(std::string(magic + 1, 3), "PNG") << name;
+  }
+  for (const auto& row : rows("fig11_pixels")) {
+    if (row[0] != "frame") EXPECT_EQ(std::stod(row[1]), 64 * 64) << row[0];  // dist: every pixel
+  }
+  for (const auto& row : rows("where_each_wins")) {
+    if (row[0] == "ethernet_bps") continue;  // ethernet_bps,objects,winner,seq_s,simd_s,dist_s,hetero_s
+    ASSERT_EQ(row.size(), 7u);
+    int fastest = 1;
+    for (int m = 2; m <= 4; ++m)
+      if (std::stod(row[2 + m]) < std::stod(row[2 + fastest])) fastest = m;
+    EXPECT_EQ(std::stoi(row[2]), fastest) << row[0] << " bit/s, " << row[1] << " objects";
   }
 }
 

@@ -1,0 +1,204 @@
+#!/usr/bin/env bash
+# tools/testbed/charts.sh — `make charts TESTBED=ufmg1992` (docs/testbed.md): the paper's
+# Figs 5–12 in modelled 1992 seconds, where each method wins, and past the paper (8 → 256
+# simulated children). seq/simd come from `zephyr render --testbed`; dist/hetero from
+# build/bin/zephyr-smpi under smpirun (tools/testbed/simrun.sh). Every figure is read from
+# the JSON reports. Output: docs/results/testbed-NAME/ (CSV + PNG).
+#
+# Environment: TESTBED (default ufmg1992), QUICK=1 (64×64, few points), OUT=dir,
+#   ZEPHYR / ZEPHYR_SMPI (default build/bin/zephyr, build/bin/zephyr-smpi).
+set -euo pipefail
+# The whole script is one block, read before it runs: editing this file during a long sweep
+# does not change the running one.
+{
+
+ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
+abspath() { case "$1" in /*) echo "$1" ;; *) echo "$PWD/$1" ;; esac; }
+TESTBED=${TESTBED:-ufmg1992}
+ZEPHYR=$(abspath "${ZEPHYR:-$ROOT/build/bin/zephyr}")
+ZEPHYR_SMPI=$(abspath "${ZEPHYR_SMPI:-$ROOT/build/bin/zephyr-smpi}")
+OUT=$(abspath "${OUT:-$ROOT/docs/results/testbed-$TESTBED}")
+GP=$ROOT/tools/charts
+SIMRUN=$ROOT/tools/testbed/simrun.sh
+
+if [ -n "${QUICK:-}" ] && [ "${QUICK}" != 0 ]; then
+  SIZE=64 COUNTS="8 32" CHILDREN="2" FRAMES="32 16" REF_COUNT=32 PAST="2 4" PAST_FRAMES="32 16"
+  MAP_BW="1e6 1e7" MAP_COUNTS="8 32"
+else
+  SIZE=384 COUNTS="8 16 32 64 128 256" CHILDREN="2 4 8" FRAMES="128 64 32" REF_COUNT=64
+  PAST="8 16 32 64 128 256" PAST_FRAMES="128 64 32"
+  MAP_BW="1e5 1e6 1e7 1e8" MAP_COUNTS="8 32 128"
+fi
+SEED=${SEED:-1}
+for tool in jq gnuplot awk xmllint; do
+  command -v "$tool" >/dev/null || { echo "charts: $tool not found (run tools/setup.sh)" >&2; exit 1; }
+done
+[ -x "$ZEPHYR" ] || { echo "charts: $ZEPHYR not built (make)" >&2; exit 1; }
+[ -f "$ZEPHYR_SMPI" ] || { echo "charts: $ZEPHYR_SMPI not built (make smpi)" >&2; exit 1; }
+mkdir -p "$OUT"
+WORK=$(mktemp -d "${TMPDIR:-/tmp}/zephyr-testbed.XXXXXX")
+trap 'rm -rf "$WORK"' EXIT
+say() { echo "testbed charts: $*" >&2; }
+say "$TESTBED: ${SIZE}x${SIZE}, objects {$COUNTS}, children {$CHILDREN}, frames {$FRAMES}, past {$PAST}"
+
+scene() { echo "$WORK/spheres-$1.nff"; }
+for n in $COUNTS $REF_COUNT $MAP_COUNTS; do
+  [ -f "$(scene "$n")" ] || "$ZEPHYR" gen spheres --count "$n" --seed "$SEED" --size "${SIZE}x${SIZE}" --out "$(scene "$n")"
+done
+
+RUNS=$OUT/runs.csv
+echo "method,objects,children,frame,ethernet_bps,model_s,bytes,pixels,frames_sent,frames_skipped,child_busy_s,ethernet_busy,parent_busy,wall_s" >"$RUNS"
+# One row from a report: model_s is .testbed.modelledSeconds; bytes both ways with envelopes;
+# child_busy_s the mean simulated busy seconds of the children; ethernet_busy the simulated
+# Ethernet's busy fraction (bytes / bandwidth / modelled time, SimGrid's link_load);
+# parent_busy the parent's array pass + charged host work over the modelled time.
+row() {  # method objects children frame bw report wall
+  jq -r --arg m "$1" --arg n "$2" --arg k "$3" --arg f "$4" --arg bw "$5" --arg w "$6" '
+    def tot(x): (x.total.payloadBytes + x.total.envelopeBytes);
+    [$m, $n, $k, $f, $bw, .testbed.modelledSeconds,
+     (if .distributed then tot(.distributed.traffic.parentToChildren) + tot(.distributed.traffic.childrenToParent) else 0 end),
+     (if .distributed then ([.distributed.perChild[].pixels] | add) else .pixels end),
+     (if .distributed then .distributed.frames.sent else 0 end),
+     (if .distributed then .distributed.frames.skipped else 0 end),
+     (if .distributed then ([.testbed.children[] | .busySeconds // 0] | add / length) else 0 end),
+     (if .distributed then ([.testbed.links[] | select(.link == "ethernet") | .busyFraction] | add // 0) else 0 end),
+     (if .distributed then ((.testbed.parent.arrayPassSeconds + .testbed.parent.hostWorkSeconds) / .testbed.modelledSeconds) else 0 end),
+     $w] | @csv' "$7" | tr -d '"' >>"$RUNS"
+}
+local_run() {  # method objects
+  local r=$WORK/r.json t0=$SECONDS
+  "$ZEPHYR" render --no-progress --method "$1" "$(scene "$2")" --testbed "$TESTBED" --report "$r" >/dev/null 2>&1 ||
+    { say "failed: $1 $2"; return 0; }
+  row "$1" "$2" 0 0 0 "$(( SECONDS - t0 ))" "$r"
+}
+sim_run() {  # method objects children frame [ethernet_bps]
+  local r=$WORK/r.json t0=$SECONDS plat=() bw=${5:-0}
+  if [ "$bw" != 0 ]; then
+    "$ZEPHYR" testbed platform --testbed "$TESTBED" --children "$3" --ethernet-bps "$bw" --out "$WORK/p.xml" --hostfile "$WORK/h"
+    plat=(--platform "$WORK/p.xml" --hostfile "$WORK/h")
+  fi
+  rm -f "$r"
+  bash "$SIMRUN" --children "$3" --testbed "$TESTBED" "${plat[@]}" --zephyr "$ZEPHYR_SMPI" -- render --no-progress \
+    --method "$1" "$(scene "$2")" --frame "$4" --testbed "$TESTBED" --report "$r" >"$WORK/log" 2>&1 ||
+    { say "failed: $*"; tail -n 3 "$WORK/log" >&2; return 0; }
+  row "$1" "$2" "$3" "$4" "$bw" "$(( SECONDS - t0 ))" "$r"
+}
+
+# ---- Tables: x, then one column per series (NaN where missing) -----------------------------
+# pick METHOD OBJECTS CHILDREN FRAME BW COLUMN: the value of the first matching row.
+pick() {
+  awk -F, -v m="$1" -v n="$2" -v k="$3" -v f="$4" -v bw="$5" -v c="$6" \
+    'NR > 1 && $1 == m && $2 == n && $3 == k && $4 == f && $5 == bw { print $c; found = 1; exit }
+     END { if (!found) print "NaN" }' "$RUNS"
+}
+col() { awk -F, -v name="$1" 'NR == 1 { for (i = 1; i <= NF; ++i) if ($i == name) print i }' "$RUNS"; }
+MODEL=$(col model_s) BYTES=$(col bytes) PIXELS=$(col pixels) BUSY=$(col child_busy_s)
+ETH=$(col ethernet_busy) PARENT=$(col parent_busy)
+
+LAST_FRAME=${FRAMES##* }
+for n in $COUNTS; do local_run seq "$n"; local_run simd "$n"; done
+for n in $COUNTS; do for k in $CHILDREN; do for f in $FRAMES; do
+  sim_run dist "$n" "$k" "$f"; sim_run hetero "$n" "$k" "$f"
+done; done; say "objects $n done (${SECONDS} s)"; done
+MAXK=${CHILDREN##* }
+for k in $PAST; do for f in $PAST_FRAMES; do for m in dist hetero; do
+  [ "$(pick "$m" "$REF_COUNT" "$k" "$f" 0 "$MODEL")" = NaN ] && sim_run "$m" "$REF_COUNT" "$k" "$f"
+done; done; say "past the paper: $k children done (${SECONDS} s)"; done
+for bw in $MAP_BW; do for n in $MAP_COUNTS; do
+  sim_run dist "$n" "$MAXK" "$LAST_FRAME" "$bw"; sim_run hetero "$n" "$MAXK" "$LAST_FRAME" "$bw"
+done; done
+
+table() {  # out header x-values row-command...
+  local out=$1 header=$2 xs=$3; shift 3
+  echo "$header" >"$out"
+  for x in $xs; do
+    local line=$x
+    for spec in "$@"; do line+=",$(eval "${spec//@/$x}")"; done
+    echo "$line" >>"$out"
+  done
+}
+chart() {  # name title xlabel ylabel logx logy note
+  local ncols; ncols=$(head -1 "$OUT/$1.csv" | awk -F, '{print NF}')
+  gnuplot -e "in='$OUT/$1.csv'; out='$OUT/$1.png'; ttl='$2'; xl='$3'; yl='$4'; logx=$5; logy=$6; \
+note='$7'; ncols=$ncols; empty=0" "$GP/lines.gp" || say "gnuplot failed for $1"
+}
+NOTE="modelled 1992 seconds ($TESTBED: SPARCstation 2 parent, SLC children, 10 Mbit/s shared Ethernet, 10 MHz Zephyr); docs/testbed.md"
+
+table "$OUT/fig05_seq_vs_simd.csv" "objects,sequential,SIMD/sequential" "$COUNTS" \
+  "pick seq @ 0 0 0 $MODEL" "pick simd @ 0 0 0 $MODEL"
+chart fig05_seq_vs_simd "Fig 5: sequential vs SIMD/sequential (${SIZE}x${SIZE})" objects "modelled s" 1 1 "$NOTE"
+
+specs=("pick seq @ 0 0 0 $MODEL") hdr="objects,sequential"
+for k in $CHILDREN; do specs+=("pick dist @ $k $LAST_FRAME 0 $MODEL"); hdr+=",distributed $k children"; done
+table "$OUT/fig06_seq_vs_dist.csv" "$hdr" "$COUNTS" "${specs[@]}"
+chart fig06_seq_vs_dist "Fig 6: sequential vs distributed (frames $LAST_FRAME)" objects "modelled s" 1 1 "$NOTE"
+
+fig=7
+for k in $CHILDREN; do
+  specs=() hdr="objects"
+  for f in $FRAMES; do
+    specs+=("pick dist @ $k $f 0 $MODEL" "pick hetero @ $k $f 0 $MODEL"); hdr+=",distributed $f,heterogeneous $f"
+  done
+  name=$(printf 'fig%02d_hetero_vs_dist_%schildren' "$fig" "$k")
+  table "$OUT/$name.csv" "$hdr" "$COUNTS" "${specs[@]}"
+  chart "$name" "Fig $fig: heterogeneous vs distributed, $k children" objects "modelled s" 1 1 "$NOTE"
+  fig=$((fig + 1))
+done
+
+table "$OUT/fig10_data_flow.csv" "frame,distributed,heterogeneous" "$FRAMES" \
+  "pick dist $REF_COUNT $MAXK @ 0 $BYTES" "pick hetero $REF_COUNT $MAXK @ 0 $BYTES"
+chart fig10_data_flow "Fig 10: bytes parent<->children ($REF_COUNT objects, $MAXK children)" "frame size" bytes 1 0 "$NOTE"
+table "$OUT/fig11_pixels.csv" "frame,distributed,heterogeneous" "$FRAMES" \
+  "pick dist $REF_COUNT $MAXK @ 0 $PIXELS" "pick hetero $REF_COUNT $MAXK @ 0 $PIXELS"
+chart fig11_pixels "Fig 11: pixels processed by the children" "frame size" pixels 1 0 "$NOTE"
+
+table "$OUT/fig12_all_methods.csv" "objects,sequential,SIMD/sequential,distributed $MAXK,heterogeneous $MAXK" "$COUNTS" \
+  "pick seq @ 0 0 0 $MODEL" "pick simd @ 0 0 0 $MODEL" \
+  "pick dist @ $MAXK $LAST_FRAME 0 $MODEL" "pick hetero @ $MAXK $LAST_FRAME 0 $MODEL"
+chart fig12_all_methods "Fig 12: all methods ($MAXK children, frames $LAST_FRAME)" objects "modelled s" 1 1 "$NOTE"
+
+# ---- Past the paper: children busy fraction (efficiency) and the Ethernet's load ------------
+ALLK=$(printf '%s\n' $CHILDREN $PAST | sort -n | uniq | tr '\n' ' ')
+# past NAME TITLE YLABEL LOGY SPEC: one column per method and frame over every child count,
+# SPEC a command with @ for the child count, M for the method and F for the frame.
+past() {
+  local name=$1 title=$2 yl=$3 logy=$4 spec=$5 specs=() hdr="children" f m
+  for f in $PAST_FRAMES; do
+    for m in dist hetero; do
+      local one=${spec//M/$m}
+      specs+=("${one//F/$f}"); hdr+=",$m $f"
+    done
+  done
+  table "$OUT/$name.csv" "$hdr" "$ALLK" "${specs[@]}"
+  chart "$name" "$title" children "$yl" 1 "$logy" "$NOTE"
+}
+ratio() { awk -v b="$1" -v t="$2" 'BEGIN { if (b == "NaN" || t == "NaN" || t == 0) print "NaN"; else print b / t }'; }
+past past_efficiency "Past the paper: children busy / modelled time ($REF_COUNT objects)" efficiency 0 \
+  "ratio \$(pick M $REF_COUNT @ F 0 $BUSY) \$(pick M $REF_COUNT @ F 0 $MODEL)"
+past past_ethernet "Past the paper: busy fraction of the shared Ethernet (SimGrid link_load)" "busy fraction" 0 \
+  "pick M $REF_COUNT @ F 0 $ETH"
+past past_parent "Past the paper: busy fraction of the parent (array pass + own work)" "busy fraction" 0 \
+  "pick M $REF_COUNT @ F 0 $PARENT"
+past past_time "Past the paper: modelled time vs children ($REF_COUNT objects)" "modelled s" 1 \
+  "pick M $REF_COUNT @ F 0 $MODEL"
+
+# ---- Where each method wins: Ethernet bandwidth x objects, $MAXK children ----------------------
+{
+  echo "ethernet_bps,objects,winner,seq_s,simd_s,dist_s,hetero_s"
+  for bw in $MAP_BW; do for n in $MAP_COUNTS; do
+    s=$(pick seq "$n" 0 0 0 "$MODEL"); d=$(pick simd "$n" 0 0 0 "$MODEL")
+    if [ "$s" = NaN ]; then local_run seq "$n"; local_run simd "$n"; s=$(pick seq "$n" 0 0 0 "$MODEL"); d=$(pick simd "$n" 0 0 0 "$MODEL"); fi
+    di=$(pick dist "$n" "$MAXK" "$LAST_FRAME" "$bw" "$MODEL"); h=$(pick hetero "$n" "$MAXK" "$LAST_FRAME" "$bw" "$MODEL")
+    awk -v bw="$bw" -v n="$n" -v s="$s" -v d="$d" -v di="$di" -v h="$h" 'BEGIN {
+      split("sequential SIMD/sequential distributed heterogeneous", names, " ")
+      v[1] = s; v[2] = d; v[3] = di; v[4] = h; best = 0
+      for (i = 1; i <= 4; ++i) if (v[i] != "NaN" && (best == 0 || v[i] + 0 < v[best] + 0)) best = i
+      printf "%s,%s,%d,%s,%s,%s,%s\n", bw, n, best, s, d, di, h }'
+  done; done
+} >"$OUT/where_each_wins.csv"
+gnuplot -e "in='$OUT/where_each_wins.csv'; out='$OUT/where_each_wins.png'; paperbw=10e6; note='$NOTE'" \
+  "$ROOT/tools/testbed/wins.gp" || say "gnuplot failed for where_each_wins"
+
+say "wrote $OUT (runs.csv has every render)"
+exit 0
+}

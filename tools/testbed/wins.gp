@@ -1,0 +1,28 @@
+# tools/testbed/wins.gp — "where each method wins": the fastest method (modelled seconds) at
+# each Ethernet bandwidth × object count, the paper's network marked. Called by
+# tools/testbed/charts.sh with in= (CSV: ethernet_bps,objects,winner 1..4,...), out=,
+# paperbw=, note=.
+set terminal pngcairo size 900,600 font ',10'
+set output out
+set datafile separator ','
+set title 'Where each method wins (fastest in modelled 1992 seconds)'
+set xlabel 'Ethernet bandwidth (bit/s)'
+set ylabel 'objects'
+set logscale x 10
+set logscale y 2
+set offsets graph 0.1, graph 0.1, graph 0.1, graph 0.1
+set bmargin 7
+set grid
+set palette defined (1 'gray40', 2 'dark-orange', 3 'royalblue', 4 'forest-green')
+set cbrange [1:4]
+unset colorbox
+set label 1 note at screen 0.02, screen 0.03 left font ',8' noenhanced
+set arrow from paperbw, graph 0 to paperbw, graph 1 nohead dt 2 lw 2 lc 'red'
+set label 2 "the paper's 10 Mbit/s" at paperbw, graph 1.02 center tc 'red'
+names = 'sequential SIMD/seq distributed heterogeneous'
+plot in using 1:2:3 every ::1 with points pt 5 ps 5 lc palette notitle, \
+     in using 1:2:(word(names, int($3))) every ::1 with labels offset 0,2 notitle, \
+     1/0 with points pt 5 ps 2 lc rgb 'gray40' title 'sequential', \
+     1/0 with points pt 5 ps 2 lc rgb 'dark-orange' title 'SIMD/sequential', \
+     1/0 with points pt 5 ps 2 lc rgb 'royalblue' title 'distributed', \
+     1/0 with points pt 5 ps 2 lc rgb 'forest-green' title 'heterogeneous'
