@@ -6,7 +6,9 @@
 # the JSON reports. Output: docs/results/testbed-NAME/ (CSV + PNG).
 #
 # Environment: TESTBED (default ufmg1992), QUICK=1 (64×64, few points), OUT=dir,
-#   ZEPHYR / ZEPHYR_SMPI (default build/bin/zephyr, build/bin/zephyr-smpi).
+#   ZEPHYR / ZEPHYR_SMPI (default build/bin/zephyr, build/bin/zephyr-smpi),
+#   REUSE=1 (keep OUT/runs.csv and render only the points it lacks: the model is
+#   deterministic, so a point once rendered does not change unless the code does).
 set -euo pipefail
 # The whole script is one block, read before it runs: editing this file during a long sweep
 # does not change the running one.
@@ -22,11 +24,11 @@ GP=$ROOT/tools/charts
 SIMRUN=$ROOT/tools/testbed/simrun.sh
 
 if [ -n "${QUICK:-}" ] && [ "${QUICK}" != 0 ]; then
-  SIZE=64 COUNTS="8 32" CHILDREN="2" FRAMES="32 16" REF_COUNT=32 PAST="2 4" PAST_FRAMES="32 16"
+  SIZE=64 COUNTS="8 32" CHILDREN="2" FRAMES="32 16" REF_COUNT=32 PAST="2 4" PAST_SERIES="32:32 32:16 8:16"
   MAP_BW="1e6 1e7" MAP_COUNTS="8 32"
 else
   SIZE=384 COUNTS="8 16 32 64 128 256" CHILDREN="2 4 8" FRAMES="128 64 32" REF_COUNT=64
-  PAST="8 16 32 64 128 256" PAST_FRAMES="128 64 32"
+  PAST="8 16 32 64 128 256" PAST_SERIES="64:128 64:64 64:32 8:16"
   MAP_BW="1e5 1e6 1e7 1e8" MAP_COUNTS="8 32 128"
 fi
 SEED=${SEED:-1}
@@ -39,15 +41,20 @@ mkdir -p "$OUT"
 WORK=$(mktemp -d "${TMPDIR:-/tmp}/zephyr-testbed.XXXXXX")
 trap 'rm -rf "$WORK"' EXIT
 say() { echo "testbed charts: $*" >&2; }
-say "$TESTBED: ${SIZE}x${SIZE}, objects {$COUNTS}, children {$CHILDREN}, frames {$FRAMES}, past {$PAST}"
+# Past the paper: series OBJECTS:FRAME over the child counts PAST (and CHILDREN).
+PAST_COUNTS=$(for s in $PAST_SERIES; do echo "${s%%:*}"; done | sort -n | uniq | tr '\n' ' ')
+say "$TESTBED: ${SIZE}x${SIZE}, objects {$COUNTS}, children {$CHILDREN}, frames {$FRAMES}, past {$PAST} x {$PAST_SERIES}"
 
 scene() { echo "$WORK/spheres-$1.nff"; }
-for n in $COUNTS $REF_COUNT $MAP_COUNTS; do
+for n in $COUNTS $REF_COUNT $MAP_COUNTS $PAST_COUNTS; do
   [ -f "$(scene "$n")" ] || "$ZEPHYR" gen spheres --count "$n" --seed "$SEED" --size "${SIZE}x${SIZE}" --out "$(scene "$n")"
 done
 
 RUNS=$OUT/runs.csv
-echo "method,objects,children,frame,ethernet_bps,model_s,bytes,pixels,frames_sent,frames_skipped,child_busy_s,ethernet_busy,parent_busy,wall_s" >"$RUNS"
+HEADER="method,objects,children,frame,ethernet_bps,model_s,bytes,pixels,frames_sent,frames_skipped,child_busy_s,ethernet_busy,parent_busy,wall_s"
+if [ "${REUSE:-0}" = 0 ] || [ ! -f "$RUNS" ] || [ "$(head -1 "$RUNS")" != "$HEADER" ]; then
+  echo "$HEADER" >"$RUNS"
+fi
 # One row from a report: model_s is .testbed.modelledSeconds; bytes both ways with envelopes;
 # child_busy_s the mean simulated busy seconds of the children; ethernet_busy the simulated
 # Ethernet's busy fraction (bytes / bandwidth / modelled time, SimGrid's link_load);
@@ -67,12 +74,14 @@ row() {  # method objects children frame bw report wall
 }
 local_run() {  # method objects
   local r=$WORK/r.json t0=$SECONDS
+  [ "$(pick "$1" "$2" 0 0 0 "$MODEL")" = NaN ] || return 0  # REUSE=1: already rendered
   "$ZEPHYR" render --no-progress --method "$1" "$(scene "$2")" --testbed "$TESTBED" --report "$r" >/dev/null 2>&1 ||
     { say "failed: $1 $2"; return 0; }
   row "$1" "$2" 0 0 0 "$(( SECONDS - t0 ))" "$r"
 }
 sim_run() {  # method objects children frame [ethernet_bps]
   local r=$WORK/r.json t0=$SECONDS plat=() bw=${5:-0}
+  [ "$(pick "$1" "$2" "$3" "$4" "$bw" "$MODEL")" = NaN ] || return 0  # already rendered
   if [ "$bw" != 0 ]; then
     "$ZEPHYR" testbed platform --testbed "$TESTBED" --children "$3" --ethernet-bps "$bw" --out "$WORK/p.xml" --hostfile "$WORK/h"
     plat=(--platform "$WORK/p.xml" --hostfile "$WORK/h")
@@ -101,8 +110,9 @@ for n in $COUNTS; do for k in $CHILDREN; do for f in $FRAMES; do
   sim_run dist "$n" "$k" "$f"; sim_run hetero "$n" "$k" "$f"
 done; done; say "objects $n done (${SECONDS} s)"; done
 MAXK=${CHILDREN##* }
-for k in $PAST; do for f in $PAST_FRAMES; do for m in dist hetero; do
-  [ "$(pick "$m" "$REF_COUNT" "$k" "$f" 0 "$MODEL")" = NaN ] && sim_run "$m" "$REF_COUNT" "$k" "$f"
+ALLK=$(printf '%s\n' $CHILDREN $PAST | sort -n | uniq | tr '\n' ' ')
+for k in $ALLK; do for s in $PAST_SERIES; do for m in dist hetero; do
+  sim_run "$m" "${s%%:*}" "$k" "${s##*:}"
 done; done; say "past the paper: $k children done (${SECONDS} s)"; done
 for bw in $MAP_BW; do for n in $MAP_COUNTS; do
   sim_run dist "$n" "$MAXK" "$LAST_FRAME" "$bw"; sim_run hetero "$n" "$MAXK" "$LAST_FRAME" "$bw"
@@ -158,29 +168,29 @@ table "$OUT/fig12_all_methods.csv" "objects,sequential,SIMD/sequential,distribut
 chart fig12_all_methods "Fig 12: all methods ($MAXK children, frames $LAST_FRAME)" objects "modelled s" 1 1 "$NOTE"
 
 # ---- Past the paper: children busy fraction (efficiency) and the Ethernet's load ------------
-ALLK=$(printf '%s\n' $CHILDREN $PAST | sort -n | uniq | tr '\n' ' ')
-# past NAME TITLE YLABEL LOGY SPEC: one column per method and frame over every child count,
-# SPEC a command with @ for the child count, M for the method and F for the frame.
+# past NAME TITLE YLABEL LOGY SPEC: one column per method and series (objects:frame) over
+# every child count, SPEC a command with @ for the child count, %M the method, %N the objects
+# and %F the frame.
 past() {
-  local name=$1 title=$2 yl=$3 logy=$4 spec=$5 specs=() hdr="children" f m
-  for f in $PAST_FRAMES; do
+  local name=$1 title=$2 yl=$3 logy=$4 spec=$5 specs=() hdr="children" s m one
+  for s in $PAST_SERIES; do
     for m in dist hetero; do
-      local one=${spec//M/$m}
-      specs+=("${one//F/$f}"); hdr+=",$m $f"
+      one=${spec//%M/$m}; one=${one//%N/${s%%:*}}
+      specs+=("${one//%F/${s##*:}}"); hdr+=",$m ${s%%:*} spheres ${s##*:}"
     done
   done
   table "$OUT/$name.csv" "$hdr" "$ALLK" "${specs[@]}"
   chart "$name" "$title" children "$yl" 1 "$logy" "$NOTE"
 }
 ratio() { awk -v b="$1" -v t="$2" 'BEGIN { if (b == "NaN" || t == "NaN" || t == 0) print "NaN"; else print b / t }'; }
-past past_efficiency "Past the paper: children busy / modelled time ($REF_COUNT objects)" efficiency 0 \
-  "ratio \$(pick M $REF_COUNT @ F 0 $BUSY) \$(pick M $REF_COUNT @ F 0 $MODEL)"
+past past_efficiency "Past the paper: children busy / modelled time (series: method, spheres, frame)" efficiency 0 \
+  "ratio \$(pick %M %N @ %F 0 $BUSY) \$(pick %M %N @ %F 0 $MODEL)"
 past past_ethernet "Past the paper: busy fraction of the shared Ethernet (SimGrid link_load)" "busy fraction" 0 \
-  "pick M $REF_COUNT @ F 0 $ETH"
+  "pick %M %N @ %F 0 $ETH"
 past past_parent "Past the paper: busy fraction of the parent (array pass + own work)" "busy fraction" 0 \
-  "pick M $REF_COUNT @ F 0 $PARENT"
-past past_time "Past the paper: modelled time vs children ($REF_COUNT objects)" "modelled s" 1 \
-  "pick M $REF_COUNT @ F 0 $MODEL"
+  "pick %M %N @ %F 0 $PARENT"
+past past_time "Past the paper: modelled time vs children (series: method, spheres, frame)" "modelled s" 1 \
+  "pick %M %N @ %F 0 $MODEL"
 
 # ---- Where each method wins: Ethernet bandwidth x objects, $MAXK children ----------------------
 {
@@ -196,7 +206,7 @@ past past_time "Past the paper: modelled time vs children ($REF_COUNT objects)" 
       printf "%s,%s,%d,%s,%s,%s,%s\n", bw, n, best, s, d, di, h }'
   done; done
 } >"$OUT/where_each_wins.csv"
-gnuplot -e "in='$OUT/where_each_wins.csv'; out='$OUT/where_each_wins.png'; paperbw=10e6; note='$NOTE'" \
+gnuplot -e "in='$OUT/where_each_wins.csv'; out='$OUT/where_each_wins.png'; paperbw=10e6; note='dist/hetero: $MAXK children, frames $LAST_FRAME; $NOTE'" \
   "$ROOT/tools/testbed/wins.gp" || say "gnuplot failed for where_each_wins"
 
 say "wrote $OUT (runs.csv has every render)"

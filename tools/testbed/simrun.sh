@@ -3,7 +3,7 @@
 # platform (docs/testbed.md): rank 0 on the host "parent", rank i on the i-th child host.
 #
 #   tools/testbed/simrun.sh --children K [--testbed NAME|FILE] [--platform FILE] [--hostfile FILE] \
-#       [--zephyr PATH] -- render --method dist|hetero SCENE --testbed ufmg1992 --out x.png --report r.json
+#       [--zephyr PATH] [--cfg NAME:VALUE ...] -- render --method dist|hetero SCENE --testbed ufmg1992 --out x.png --report r.json
 #
 # Without --platform the named testbed's platform (--testbed, default ufmg1992) with K
 # children is written by `zephyr testbed platform` (from the host profiles); --testbed FILE
@@ -11,9 +11,11 @@
 # taken from it (or from --hostfile): a malformed file or too few hosts is an error naming
 # the file. Computation is never measured (smpi/simulate-computation:no): the children
 # charge their counted work; SimGrid's network factors are 1 (the link figures as given).
+# --cfg NAME:VALUE (repeatable) passes one more SimGrid setting to smpirun, after these
+# (e.g. --cfg network/crosstraffic:no; docs/testbed.md, "Bytes on the Ethernet").
 set -euo pipefail
 
-children="" platform="" hostfile="" zephyr="" testbed="ufmg1992"
+children="" platform="" hostfile="" zephyr="" testbed="ufmg1992" extra=()
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 while [[ $# -gt 0 ]]; do
   case "$1" in
@@ -22,6 +24,7 @@ while [[ $# -gt 0 ]]; do
     --testbed) if [[ "$2" == */* || -f "$2" ]]; then platform="$2"; else testbed="$2"; fi; shift 2 ;;
     --hostfile) hostfile="$2"; shift 2 ;;
     --zephyr) zephyr="$2"; shift 2 ;;
+    --cfg) extra+=("--cfg=$2"); shift 2 ;;
     --) shift; break ;;
     *) echo "simrun.sh: unknown option '$1' (see the header of $0)" >&2; exit 2 ;;
   esac
@@ -62,5 +65,5 @@ fi
 
 exec smpirun -np "$((children + 1))" -platform "$platform" -hostfile "$hostfile" \
   --cfg=smpi/simulate-computation:no --cfg=smpi/bw-factor:0:1 --cfg=smpi/lat-factor:0:1 \
-  --cfg=smpi/display-timing:no --cfg=plugin:link_load --log=root.thres:warning \
+  --cfg=smpi/display-timing:no --cfg=plugin:link_load --log=root.thres:warning "${extra[@]}" \
   "$zephyr" "$@"

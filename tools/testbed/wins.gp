@@ -13,6 +13,7 @@ set logscale y 2
 set offsets graph 0.1, graph 0.1, graph 0.1, graph 0.1
 set bmargin 7
 set grid
+set key outside right top
 set palette defined (1 'gray40', 2 'dark-orange', 3 'royalblue', 4 'forest-green')
 set cbrange [1:4]
 unset colorbox
