@@ -1,6 +1,7 @@
 #include "hosts/testbed/testbed.h"
 
 #include <cstdio>
+#include <filesystem>
 #include <map>
 
 #include "bitserial/profile.h"
@@ -80,6 +81,10 @@ const Testbed& TestbedNamed(const std::string& name) {
   if (it == Testbeds().end()) {
     std::string known;
     for (const auto& n : TestbedNames()) known += (known.empty() ? "" : ", ") + n;
+    if (std::filesystem::is_regular_file(name))
+      throw UserError("--testbed " + name + ": a platform file is simulated — run the render under "
+                      "`tools/testbed/simrun.sh --children K --platform " + name +
+                      " -- render ...` (K = 0 for seq and simd; docs/testbed.md)");
     throw UserError("--testbed: unknown testbed '" + name + "' (known: " + known + ")");
   }
   return it->second;
@@ -129,14 +134,36 @@ void AddModelledTime(const std::string& testbedName, const std::string& method,
     r["testbed"] = t;
     return;
   }
-  const Testbed& bed = TestbedNamed(testbedName);
-  const HostProfile& host = HostProfileNamed(bed.parentProfile);
   TraceStats stats;
   try {
     stats = TraceStats::FromJson(r);
   } catch (const nlohmann::json::exception&) {
     throw UserError("--testbed: method '" + method + "' does not report counted work");
   }
+  if (Simulated()) {
+    // seq/simd under smpirun on a platform (tools/testbed/simrun.sh --children 0): the
+    // counted work is charged to this rank's simulated host, the array's cycles to the
+    // platform's array host and the matrix to the link between them, as for hetero.
+    const double start = SimulatedNow();
+    t["testbed"] = testbedName;
+    t["clock"] = "SimGrid (simulated seconds of the charged work on the platform's hosts)";
+    t["hostProfile"] = SimulatedHost();
+    if (method == "simd") {
+      const nlohmann::json& pass = r.at("simd");
+      const double arrayStart = SimulatedNow();
+      ChargeArrayCycles(pass.at("cycles"), pass.at("uncertain").at("recomputed").get<uint64_t>(), scene,
+                        "SIMD/sequential");
+      t["array"] = {{"seconds", SimulatedNow() - arrayStart},
+                    {"what", "array cycles at the array host's speed, the matrix over the link to "
+                             "it, the uncertain pixels recomputed on this host"}};
+    }
+    t["host"] = {{"seconds", ChargeHostWork(stats)}, {"events", stats.ToJson()}};
+    t["modelledSeconds"] = SimulatedNow() - start;
+    r["testbed"] = t;
+    return;
+  }
+  const Testbed& bed = TestbedNamed(testbedName);
+  const HostProfile& host = HostProfileNamed(bed.parentProfile);
   t["testbed"] = bed.Json();
   t["hostProfile"] = host.Json();
   if (method == "simd") {
@@ -288,6 +315,11 @@ nlohmann::json LinkBytes(double now) {
 }  // namespace
 
 double ChargeArrayPass(const simd::PrimaryPass& pass, const Scene& scene) {
+  return ChargeArrayCycles(pass.cycles, uint64_t(pass.recomputedPixels), scene, "heterogeneous");
+}
+
+double ChargeArrayCycles(const nlohmann::json& cycles, uint64_t recomputedPixels, const Scene& scene,
+                         const std::string& method) {
   const double start = SimulatedNow();
   simgrid::s4u::Host* self = simgrid::s4u::this_actor::get_host();
   const auto arrays = simgrid::s4u::Engine::get_instance()->get_filtered_hosts([](simgrid::s4u::Host* h) {
@@ -296,13 +328,13 @@ double ChargeArrayPass(const simd::PrimaryPass& pass, const Scene& scene) {
   });
   if (arrays.size() != 1)
     throw UserError("the platform has " + std::to_string(arrays.size()) +
-                    " hosts with zephyr:role=array; the heterogeneous method needs exactly one "
+                    " hosts with zephyr:role=array; the " + method + " method needs exactly one "
                     "(docs/testbed.md)");
-  const ArraySplit a = SplitPass(pass.cycles);
+  const ArraySplit a = SplitPass(cycles);
   // The array computes at its clock (the platform gives its speed in cycles per second).
   simgrid::s4u::this_actor::exec_init(a.arrayCycles)->set_host(arrays[0])->wait();
   if (a.scsiBytes > 0) simgrid::s4u::Comm::sendto(arrays[0], self, uint64_t(a.scsiBytes));
-  passHost += ChargeHostWork(RecomputeWork(uint64_t(pass.recomputedPixels), scene));
+  passHost += ChargeHostWork(RecomputeWork(recomputedPixels, scene));
   return SimulatedNow() - start;
 }
 
@@ -313,6 +345,7 @@ double SimulatedNow() { return 0; }
 nlohmann::json SimulatedHost() { return nlohmann::json::object(); }
 double ChargeHostWork(const TraceStats&) { return 0; }
 double ChargeArrayPass(const simd::PrimaryPass&, const Scene&) { return 0; }
+double ChargeArrayCycles(const nlohmann::json&, uint64_t, const Scene&, const std::string&) { return 0; }
 void StartLinkAccounting() {}
 namespace {
 nlohmann::json LinkBytes(double) { return nlohmann::json::array(); }

@@ -63,8 +63,11 @@ bool Simulated();
 // requires the simulated build and reports SimGrid's clock (UserError otherwise), with what
 // the simulation measured: "parent" (its charged host work and array pass, seconds),
 // "children" (per child: simulated busy and idle seconds) and "links" (per platform link:
-// bytes carried, from SimGrid's link_load plugin when simrun.sh enabled it). UserError for
-// an unknown testbed or a method that counts no work.
+// bytes carried, from SimGrid's link_load plugin when simrun.sh enabled it). seq and simd
+// under simulation (`simrun.sh --children 0 --platform FILE`) charge their counted work to
+// the rank's host and simd's array cycles to the platform's array host (ChargeArrayCycles),
+// and report SimGrid's seconds for them. UserError for an unknown testbed (naming simrun.sh
+// when it is a file) or a method that counts no work.
 void AddModelledTime(const std::string& testbedName, const std::string& method,
                      const Scene& scene, nlohmann::json& report);
 
@@ -78,6 +81,11 @@ double ChargeHostWork(const TraceStats& work);
 // host's share of the pass (uncertain pixels recomputed) on the parent. Returns the
 // simulated seconds it took (0 when not simulated).
 double ChargeArrayPass(const simd::PrimaryPass& pass, const Scene& scene);
+// The same from a pass's cycle report (JSON, as `render --report` writes it under "simd") and
+// its count of uncertain pixels recomputed on the host; `method` names the caller in the
+// UserError for a platform without exactly one array host.
+double ChargeArrayCycles(const nlohmann::json& cycles, uint64_t recomputedPixels, const Scene& scene,
+                         const std::string& method);
 
 // Under simulation, at the parent before its first message: starts counting the bytes every
 // platform link carries (SimGrid's link_load plugin, `--cfg=plugin:link_load`, which

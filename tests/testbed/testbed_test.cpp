@@ -122,6 +122,13 @@ TEST(TestbedModel, BadTestbedAndUnsimulatedFarmAreUserErrors) {
     EXPECT_NE(std::string(e.what()).find("cray1"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("ufmg1992"), std::string::npos) << e.what();
   }
+  try {
+    Render(scene, "seq", scene);  // an existing file: a platform, simulated only
+    FAIL() << "--testbed FILE outside SimGrid must be refused";
+  } catch (const UserError& e) {
+    EXPECT_NE(std::string(e.what()).find("simrun.sh --children K --platform " + scene), std::string::npos)
+        << e.what();
+  }
   nlohmann::json report;
   try {
     testbed::AddModelledTime("ufmg1992", "dist", ReadNffFile(scene), report);
@@ -255,7 +262,8 @@ TEST(TestbedCharts, QuickRunDrawsEveryFigureInModelledSeconds) {
     EXPECT_EQ(std::string(magic + 1, 3), "PNG") << name;
   }
   for (const auto& row : rows("fig11_pixels")) {
-    if (row[0] != "frame") EXPECT_EQ(std::stod(row[1]), 64 * 64) << row[0];  // dist: every pixel
+    if (row[0] == "frame") continue;  // the header
+    EXPECT_EQ(std::stod(row[1]), 64 * 64) << row[0];  // dist: every pixel
   }
   for (const auto& row : rows("where_each_wins")) {
     if (row[0] == "ethernet_bps") continue;  // ethernet_bps,objects,winner,seq_s,simd_s,dist_s,hetero_s
@@ -265,6 +273,45 @@ TEST(TestbedCharts, QuickRunDrawsEveryFigureInModelledSeconds) {
       if (std::stod(row[2 + m]) < std::stod(row[2 + fastest])) fastest = m;
     EXPECT_EQ(std::stoi(row[2]), fastest) << row[0] << " bit/s, " << row[1] << " objects";
   }
+}
+
+// seq and simd on a platform file (`simrun.sh --children 0`): on the paper's platform the
+// same seconds as the named testbed; on a user's platform whose host is an SLC, the SLC
+// profile's seconds for the same counts.
+TEST(TestbedSimulated, SeqAndSimdOnAPlatformFile) {
+  if (!std::filesystem::exists(SmpiPath())) GTEST_SKIP() << "no zephyr-smpi (make smpi)";
+  TempDir dir;
+  const std::string scene = WriteScene(dir, 8, "64x64");
+  auto simulated = [&](const std::string& method, const std::string& platform) {
+    const std::string report = dir / (method + ".json");
+    auto r = RunCommand("timeout -k 5 300 bash " + Repo() + "/tools/testbed/simrun.sh --children 0 " +
+                        (platform.empty() ? "" : "--platform " + platform + " ") + "--zephyr " + SmpiPath() +
+                        " -- render --no-progress --method " + method + " " + scene +
+                        " --testbed ufmg1992 --out " + (dir / (method + ".png")) + " --report " + report);
+    EXPECT_EQ(r.status, 0) << r.output;
+    return ReadJson(report);
+  };
+  for (const char* method : {"seq", "simd"}) {
+    const nlohmann::json t = Render(scene, method, "ufmg1992").report.at("testbed");
+    // Under SimGrid the matrix crosses the SCSI link with the network model's 5 % cross
+    // traffic (docs/testbed.md, "Bytes on the Ethernet"): 1.05 times the SCSI seconds.
+    const double named = t.at("modelledSeconds").get<double>() +
+                         (t.contains("array") ? 0.05 * t.at("array").at("scsiSeconds").get<double>() : 0.0);
+    const nlohmann::json j = simulated(method, "");
+    EXPECT_NEAR(j.at("testbed").at("modelledSeconds").get<double>(), named, 1e-9 * named) << method;
+    EXPECT_EQ(j.at("testbed").at("hostProfile").at("profile"), "sparcstation2") << j.at("testbed").dump(2);
+  }
+  // A user's platform: the host/parent is an SLC (its profile named; the speed only converts).
+  std::string xml = ReadFile(Repo() + "/hosts/testbed/platforms/ufmg1992.xml");
+  const std::string from = "<host id=\"parent\" speed=\"4200000.000000f\">\n      <prop id=\"zephyr:profile\" value=\"sparcstation2\"/>";
+  ASSERT_NE(xml.find(from), std::string::npos);
+  xml.replace(xml.find(from), from.size(),
+              "<host id=\"parent\" speed=\"1200000f\">\n      <prop id=\"zephyr:profile\" value=\"sparcstation-slc\"/>");
+  const std::string platform = dir / "slc.xml";
+  std::ofstream(platform) << xml;
+  const nlohmann::json j = simulated("seq", platform);
+  const double slc = testbed::ModelHostTime(TraceStats::FromJson(j), testbed::HostProfileNamed("sparcstation-slc")).seconds;
+  EXPECT_NEAR(j.at("testbed").at("modelledSeconds").get<double>(), slc, 1e-9 * slc);
 }
 
 TEST(TestbedSimulated, TooFewHostsNamesTheFile) {

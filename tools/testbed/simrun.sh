@@ -9,7 +9,8 @@
 # children is written by `zephyr testbed platform` (from the host profiles); --testbed FILE
 # (a path to an existing file) is the same as --platform FILE. With --platform FILE the hosts are
 # taken from it (or from --hostfile): a malformed file or too few hosts is an error naming
-# the file. Computation is never measured (smpi/simulate-computation:no): the children
+# the file. --children 0 runs seq or simd alone on the parent host (their work charged to
+# it, simd's array cycles to the platform's array host). Computation is never measured (smpi/simulate-computation:no): the children
 # charge their counted work; SimGrid's network factors are 1 (the link figures as given).
 # --cfg NAME:VALUE (repeatable) passes one more SimGrid setting to smpirun, after these
 # (e.g. --cfg network/crosstraffic:no; docs/testbed.md, "Bytes on the Ethernet").
@@ -29,7 +30,8 @@ while [[ $# -gt 0 ]]; do
     *) echo "simrun.sh: unknown option '$1' (see the header of $0)" >&2; exit 2 ;;
   esac
 done
-[[ "$children" =~ ^[1-9][0-9]*$ ]] || { echo "simrun.sh: --children K (K >= 1) is required" >&2; exit 2; }
+[[ "$children" =~ ^(0|[1-9][0-9]*)$ ]] ||
+  { echo "simrun.sh: --children K (K >= 1 for dist/hetero; 0 for seq/simd, the parent alone) is required" >&2; exit 2; }
 zephyr="${zephyr:-$here/build/bin/zephyr-smpi}"
 [[ -f "$zephyr" ]] || { echo "simrun.sh: $zephyr not found: build it with \`make smpi\`" >&2; exit 2; }
 command -v smpirun >/dev/null || { echo "simrun.sh: smpirun not found (Debian package simgrid; tools/setup.sh)" >&2; exit 2; }
@@ -38,7 +40,7 @@ tmp="$(mktemp -d)"
 trap 'rm -rf "$tmp"' EXIT
 if [[ -z "$platform" ]]; then
   platform="$tmp/ufmg1992.xml"
-  "$(dirname "$zephyr")/zephyr" testbed platform --testbed "$testbed" --children "$children" --out "$platform" \
+  "$(dirname "$zephyr")/zephyr" testbed platform --testbed "$testbed" --children "$(( children > 0 ? children : 1 ))" --out "$platform" \
     --hostfile "$tmp/hosts"
   hostfile="${hostfile:-$tmp/hosts}"
 else
