@@ -247,6 +247,10 @@ say "wrote $OUT/stability_overflow.png"
 
 # ---- Speed against accuracy ---------------------------------------------------------------
 source "$ROOT/tools/charts/accuracy.sh"
+# Fixed against float on the array, with the host tracers (its own script, also run alone).
+if [ "$MODE" = quick ]; then FVF=(FRAC=8 FLOATS=e6m12 SAMPLE=1024); else FVF=(SAMPLE="$ACC_SAMPLE"); fi
+env "${FVF[@]}" SIZE="$SIZE" COUNT="$REF_COUNT" SEED="$SEED" ZEPHYR="$ZEPHYR" OUT="$OUT" \
+  bash "$GP/fixed_vs_float.sh" || skip "fixed vs float chart (tools/charts/fixed_vs_float.sh failed)"
 
 { echo "mode,$MODE"; echo "size,$SIZE"; echo "objects,$(tr ' ' ';' <<<"$COUNTS")"
   echo "children,$(tr ' ' ';' <<<"$CHILDREN")"; echo "frames,$(tr ' ' ';' <<<"$FRAMES")"

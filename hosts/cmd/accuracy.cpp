@@ -5,10 +5,12 @@
 // final image against the sequential method in double.
 //
 //   zephyr accuracy SCENE [--frac-bits N …]              the SIMD primary pass (default)
+//   zephyr accuracy SCENE --number float [--float-format e8m16]   ... in bit-serial float
 //   zephyr accuracy SCENE --method seq --precision float  the sequential tracer's first hits
 //                                                         in float32 (or double: its PSNR
 //                                                         against itself is inf)
 #include <CLI/CLI.hpp>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -46,7 +48,7 @@ CommandRegistration reg("accuracy", [](CLI::App& program) {
       throw UserError("--method: expected simd or seq, got '" + *method + "'");
     const bool simd = *method == "simd";
     if (simd && !precision->empty())
-      throw UserError("--precision applies to --method seq (the SIMD pass is fixed point)");
+      throw UserError("--precision applies to --method seq (the SIMD pass's numbers are --number)");
     if (!simd && !flags->Given().empty())
       throw UserError(flags->Given().front() + " applies to --method simd only");
     TraceOptions seqOptions;
@@ -95,13 +97,20 @@ CommandRegistration reg("accuracy", [](CLI::App& program) {
     const auto tracer = Tracer::Create(s, TraceOptions{});
     TraceStats stats;
     Image image(c.width, c.height), seqImage(c.width, c.height);
-    if (simd)
+    double seqSeconds = 0;  // the sequential tracer's render of the image (host seconds)
+    if (simd) {
       ShadeRegion(*tracer, pass.matrix, 0, 0, c.width, c.height, image.pixels, stats);
-    else
+    } else {
+      const auto start = std::chrono::steady_clock::now();
       RenderRegion(*seqTracer, 0, 0, c.width, c.height, image.pixels, stats);
+      seqSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    }
     RenderRegion(*tracer, 0, 0, c.width, c.height, seqImage.pixels, stats);
     const double psnr = Psnr(image, seqImage);
-    const std::string what = simd ? "the SIMD pass" : std::string("seq ") + PrecisionName(seqOptions.precision);
+    const std::string what = simd ? (pass.plan.number == NumberSystem::kFloat
+                                          ? "the SIMD pass in float " + pass.plan.floatFormat.Name()
+                                          : "the SIMD pass")
+                                    : std::string("seq ") + PrecisionName(seqOptions.precision);
     nlohmann::json j = {{"scene", *scene}, {"method", *method}, {"pixels", which.size()},
                         {"sampled", which.size() < size_t(pixels)},
                         {"firstObjectDiffers", differ},
@@ -109,11 +118,19 @@ CommandRegistration reg("accuracy", [](CLI::App& program) {
                         {"tMaxError", maxErr}, {"tMeanError", compared ? sumErr / compared : 0.0},
                         {"psnrDb", std::isfinite(psnr) ? nlohmann::json(psnr) : nlohmann::json("inf")}};
     if (simd) {
+      // The pass's cost, for speed-against-accuracy charts: modelled cycles of the whole
+      // primary pass (every array pass and layer) and the emulator's wall time.
+      j["number"] = NumberSystemName(pass.plan.number);
+      if (pass.plan.number == NumberSystem::kFloat) j["floatFormat"] = pass.plan.floatFormat.Name();
+      j["fracBits"] = pass.plan.fracBits;
+      j["cycles"] = pass.cycles["totalCycles"];
+      j["hostSeconds"] = pass.hostSeconds;
       j["tErrorBound"] = pass.plan.tErrorBound;
       j["uncertain"] = pass.Json()["uncertain"];
       if (pass.refinedPixels > 0) j["refine"] = pass.Json()["refine"];
     } else {
       j["precision"] = PrecisionName(seqOptions.precision);
+      j["hostSeconds"] = seqSeconds;  // one render of the image in that precision (shading included)
     }
     if (*json) {
       std::printf("%s\n", j.dump(2).c_str());

@@ -18,6 +18,14 @@ void SimdFlags::AddTo(CLI::App& command, const std::string& helpPrefix, bool wit
        "fraction bits of lengths, t and directions (default: planned per scene)");
   bits("--dir-frac-bits", options_.formats.dirFracBits, "fraction bits of the directions only");
   bits("--int-bits", options_.formats.intBits, "integer bits of distances");
+  added_.push_back(command.add_option(
+      "--number", number_,
+      helpPrefix + "number system of the ray-object intersections on the array: fixed (default) or float "
+                   "(bit-serial floating point; spheres only, docs/simd.md)"));
+  added_.push_back(command.add_option(
+      "--float-format", floatFormat_,
+      helpPrefix + "with --number float: the format, eXmY[ftz] as in docs/float.md (e8m23 = binary32; "
+                   "default: planned per scene)"));
   if (withUncertain)
     added_.push_back(command.add_option(
         "--uncertain", uncertain_,
@@ -44,6 +52,12 @@ simd::SimdOptions SimdFlags::Options() const {
   atLeast("--frac-bits", o.formats.fracBits, simd::kMinFracBits, "fraction bits");
   atLeast("--dir-frac-bits", o.formats.dirFracBits, simd::kMinFracBits, "direction fraction bits");
   atLeast("--int-bits", o.formats.intBits, simd::kMinIntBits, "integer bits");
+  if (!number_.empty()) o.number = simd::ParseNumberSystem(number_);
+  if (!floatFormat_.empty()) {
+    if (o.number != simd::NumberSystem::kFloat)
+      throw UserError("--float-format " + floatFormat_ + " applies to --number float only");
+    o.floatFormat = fixed::FloatFormat::Parse(floatFormat_);
+  }
   if (!uncertain_.empty()) o.uncertain = simd::ParseUncertainPolicy(uncertain_);
   if (o.threads != 0) bitserial::CheckThreads(o.threads);  // 0: not given, every core
   return o;

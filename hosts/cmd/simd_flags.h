@@ -3,6 +3,7 @@
 //
 //   SimdFlags flags;
 //   flags.AddTo(*cmd, "simd: ");            // --frac-bits --dir-frac-bits --int-bits
+//                                           // --number --float-format
 //                                           // [--uncertain] --machine --threads
 //   simd::SimdOptions o = flags.Options();  // in the command's callback
 #pragma once
@@ -26,7 +27,8 @@ class SimdFlags {
   // prints formats and has no pixels to be uncertain about).
   void AddTo(CLI::App& command, const std::string& helpPrefix, bool withUncertain = true);
   // The options the flags give (the defaults where none was given). UserError for an
-  // unknown --uncertain policy, a width below simd::kMinFracBits / kMinIntBits (the
+  // unknown --uncertain policy or --number, a bad --float-format or one without --number
+  // float, a width below simd::kMinFracBits / kMinIntBits (the
   // message says the minimum) or --threads outside 1..1024; an unknown machine profile
   // name is refused by the pass.
   simd::SimdOptions Options() const;
@@ -35,7 +37,7 @@ class SimdFlags {
 
  private:
   simd::SimdOptions options_;
-  std::string uncertain_;
+  std::string uncertain_, number_, floatFormat_;
   std::vector<CLI::Option*> added_;
 };
 

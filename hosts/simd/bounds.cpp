@@ -37,6 +37,35 @@ std::pair<double, double> GrazingBand(double r2, double floorBand, double eCross
   return {g, eDisc};
 }
 
+uint64_t FloatOfDouble(const fixed::FloatFormat& f, double x) {
+  int e = 0;
+  const double mant = std::frexp(std::abs(x), &e);  // |x| = mant·2^e, mant in [0.5, 1)
+  const int64_t n = int64_t(std::ldexp(mant, 53));  // exact: 53 significant bits
+  return fixed::RoundToFloat(f, std::signbit(x), fixed::BigInt(n), n == 0 ? 0 : e - 53, false);
+}
+
+uint64_t FloatAtOrAbove(const fixed::FloatFormat& f, double x) {
+  uint64_t b = FloatOfDouble(f, x);
+  if (fixed::FloatToDouble(f, b) >= x) return b;
+  // Below x: the next value up (the patterns of one sign are ordered as integers; a
+  // negative b below x is not a zero). A flush-to-zero format reads a subnormal as 0: from
+  // +0 the next value up is 2^emin.
+  if (x < 0) return b - 1;
+  const uint64_t up = b + 1;
+  return !f.subnormals && (up >> f.fracBits) == 0 ? uint64_t{1} << f.fracBits : up;
+}
+
+double FloatMaxFinite(const fixed::FloatFormat& f) {
+  return std::ldexp(2.0 - std::ldexp(1.0, -f.fracBits), f.Bias());
+}
+
+double FloatRoundErr(const fixed::FloatFormat& f, double m) {
+  if (!(m < FloatMaxFinite(f))) return kInf;
+  const int emin = 1 - f.Bias();
+  const double underflow = f.subnormals ? std::ldexp(1.0, emin - f.fracBits - 1) : std::ldexp(1.0, emin);
+  return std::ldexp(m, -f.Precision()) + underflow;
+}
+
 LinearForm MakeLinear(const Vec3& c, const PassFormats& pf) {
   LinearForm l;
   l.c = c;

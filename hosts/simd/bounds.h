@@ -6,8 +6,10 @@
 #pragma once
 
 #include <limits>
+#include <optional>
 #include <utility>
 
+#include "fixed/float.h"
 #include "fixed/format.h"
 #include "hosts/scene/geometry.h"
 
@@ -25,6 +27,8 @@ struct PassFormats {
   // cone's target t error): 0 = this pass's own. A refine pass at wider formats keeps the
   // first pass's nominal t error and shrinks those floors by Ulp()/nominal.
   double nominalUlp = 0;
+  // --number float: the intersections' float format (else unset).
+  std::optional<fixed::FloatFormat> floatFormat;
   double Ulp() const;        // 2^-F: a floor-rounded result's error
   double DirError() const;   // 2^-Fd / 2: a direction component's rounding error
   double NominalUlp() const { return nominalUlp > 0 ? nominalUlp : Ulp(); }
@@ -56,6 +60,19 @@ double SquareErr(double m, double e, double u);
 // G >= 2·eDisc, and at least `floorBand`; found by iterating G (it only grows).
 std::pair<double, double> GrazingBand(double r2, double floorBand, double eCross, double eR2,
                                       double clampRange, double u);
+
+// --number float (docs/simd.md, "Floating point on the array"): the float format's value of a
+// double rounded to nearest (ties to even), and the least value >= x (x finite), as bit
+// patterns of f.
+uint64_t FloatOfDouble(const fixed::FloatFormat& f, double x);
+uint64_t FloatAtOrAbove(const fixed::FloatFormat& f, double x);
+// The largest finite value of f.
+double FloatMaxFinite(const fixed::FloatFormat& f);
+// A sound bound on the error of one float operation of f (round to nearest) whose exact
+// result has magnitude <= m: 2^-p·m (half an ulp relative, p = fracBits + 1) plus
+// the underflow's absolute error (half the subnormal spacing, or 2^emin where f flushes to
+// zero); +inf when m reaches f's largest finite value (the result may overflow).
+double FloatRoundErr(const fixed::FloatFormat& f, double m);
 
 // One linear form c·d of the direction with uni coefficients c (rounded to nearest): the
 // computed value is within `err` of the exact c·d̂ along the exact unit direction, and

@@ -277,7 +277,7 @@ class ConeProgram final : public ObjectProgram {
             {"t", pf_.t, "the nearer valid root"}};
   }
 
-  Candidate Run(Machine& m, const Multi (&d)[3]) const override;
+  Candidate Run(Machine& m, const Directions& dirs) const override;
 
  private:
   // The bounds: t's error from the divisions (ConeDivision); an object whose quotient could
@@ -334,7 +334,8 @@ void ConeProgram::TestRoot(Machine& m, int i, const ConeRoot& r, const Multi& ro
   });
 }
 
-Candidate ConeProgram::Run(Machine& m, const Multi (&d)[3]) const {
+Candidate ConeProgram::Run(Machine& m, const Directions& dirs) const {
+  const Multi(&d)[3] = dirs.fixed;
   const int F = pf_.fracBits;
   const double u = pf_.Ulp();
   const ConeSetup& cs = cs_;

@@ -52,7 +52,8 @@ class EllipsoidProgram final : public ObjectProgram {
             {"t = (f·d' ∓ root)/|d'|²", pf_.t, "by division"}};
   }
 
-  Candidate Run(Machine& m, const Multi (&d)[3]) const override {
+  Candidate Run(Machine& m, const Directions& dirs) const override {
+    const Multi(&d)[3] = dirs.fixed;
     const int F = pf_.fracBits;
     const Fixed f[3] = {Tight(f_.x, F), Tight(f_.y, F), Tight(f_.z, F)};
     // d' = T⁻¹'s 3×3 times d: nine multiplies by uni constants.

@@ -13,6 +13,7 @@
 #include <memory>
 #include <utility>
 
+#include "bitserial/float.h"
 #include "bitserial/multi.h"
 #include "hosts/simd/plan.h"
 
@@ -26,13 +27,20 @@ struct Candidate {
   bitserial::Multi tLow;       // in the t format: where uncertain, the true hit (if any) is >= tLow
 };
 
+// The ray directions on the array: fixed point (s1.Fd, the matrix's) always; with --number
+// float also in the pass's float format (each the double unit direction rounded to nearest).
+struct Directions {
+  bitserial::Multi fixed[3];
+  bitserial::MultiFloat floats[3];  // empty with --number fixed
+};
+
 // An object's array program with its host set-up (constants and formats) built once by the
 // planner.
 class ObjectProgram {
  public:
   virtual ~ObjectProgram() = default;
   // Runs the program against the directions d (every PE).
-  virtual Candidate Run(bitserial::Machine& m, const bitserial::Multi (&d)[3]) const = 0;
+  virtual Candidate Run(bitserial::Machine& m, const Directions& d) const = 0;
 };
 
 // The plan of one object from its program (a kind's class with Bounds() and Formats()).
@@ -57,6 +65,8 @@ struct ObjectExtent {
 // Per kind (hosts/simd/<kind>.cpp): the extent, and the plan at the pass's formats.
 ObjectExtent SphereExtent(const Primitive& p, const Vec3& eye);
 ObjectPlan PlanSphere(const Primitive& p, const Vec3& eye, const PassFormats& pf);
+// The sphere in bit-serial float (pf.floatFormat; hosts/simd/sphere_float.cpp).
+ObjectPlan PlanFloatSphere(const Primitive& p, const Vec3& eye, const PassFormats& pf);
 ObjectExtent EllipsoidExtent(const Primitive& p, const Vec3& eye);
 ObjectPlan PlanEllipsoid(const Primitive& p, const Vec3& eye, const PassFormats& pf);
 ObjectExtent PolygonExtent(const Primitive& p, const Vec3& eye);

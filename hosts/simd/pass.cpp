@@ -45,11 +45,20 @@ struct ArrayMatrix {
   ArrayMatrix(Machine& m, const PrimaryPlan& plan)
       : object(m, plan.object, "matrix.object", Space::External),
         t(m, plan.t, "matrix.t", Space::External),
-        d{Multi(m, plan.direction, "matrix.dx", Space::External), Multi(m, plan.direction, "matrix.dy", Space::External),
-          Multi(m, plan.direction, "matrix.dz", Space::External)},
+        d{{Multi(m, plan.direction, "matrix.dx", Space::External), Multi(m, plan.direction, "matrix.dy", Space::External),
+           Multi(m, plan.direction, "matrix.dz", Space::External)},
+          {}},
         grazing(m, bitserial::BoolFormat(), "matrix.grazing", Space::External),
-        nearTie(m, bitserial::BoolFormat(), "matrix.nearTie", Space::External) {}
-  Multi object, t, d[3], grazing, nearTie;
+        nearTie(m, bitserial::BoolFormat(), "matrix.nearTie", Space::External) {
+    // --number float: the directions in the pass's float format too (internal memory: the
+    // programs read them; the matrix keeps the fixed ones for the host).
+    if (plan.number == NumberSystem::kFloat)
+      for (int k = 0; k < 3; ++k)
+        d.floats[k] = bitserial::MultiFloat(m, plan.floatFormat, std::string("d.float.") + "xyz"[k]);
+  }
+  Multi object, t;
+  Directions d;  // d.fixed: the matrix's
+  Multi grazing, nearTie;
 };
 
 // The host computes each pixel's eye ray and loads the directions (one plane per bit) into
@@ -58,14 +67,20 @@ struct ArrayMatrix {
 // (row-major).
 void LoadDirections(Machine& m, ArrayMatrix& a, const PrimaryRays& rays, const PrimaryPlan& plan,
                     const std::vector<int64_t>& pixels, int64_t first) {
+  const bool floats = plan.number == NumberSystem::kFloat;
   std::vector<int64_t> raw[3];
-  for (auto& r : raw) r.resize(m.VirtualPes());
+  std::vector<uint64_t> bits[3];
+  for (int k = 0; k < 3; ++k) raw[k].resize(m.VirtualPes()), bits[k].resize(floats ? m.VirtualPes() : 0);
   for (int64_t i = 0; i < m.VirtualPes(); ++i) {
     const int64_t pe = first + m.FirstPe() + i, pixel = pixels.empty() ? pe : pixels[pe];
     const Vec3 dir = rays.At(int(pixel % plan.width), int(pixel / plan.width)).direction;
     for (int k = 0; k < 3; ++k) raw[k][i] = QuantiseDirection(dir[k], plan.dirFracBits);
+    if (floats)
+      for (int k = 0; k < 3; ++k) bits[k][i] = FloatOfDouble(plan.floatFormat, dir[k]);
   }
-  for (int k = 0; k < 3; ++k) a.d[k].LoadRaw(raw[k]);
+  for (int k = 0; k < 3; ++k) a.d.fixed[k].LoadRaw(raw[k]);
+  if (floats)
+    for (int k = 0; k < 3; ++k) a.d.floats[k].Load(bits[k]);
 }
 
 // Near ties per pair (docs/simd.md, "Uncertain pixels"): the final best k and another hit j
@@ -140,7 +155,7 @@ void ReadMatrix(Machine& m, const ArrayMatrix& a, MatrixRaw& r, int64_t passFirs
     std::copy(raw.begin(), raw.end(), to.begin() + first);
   };
   read(a.object, r.object), read(a.t, r.t);
-  for (int k = 0; k < 3; ++k) read(a.d[k], r.d[k]);
+  for (int k = 0; k < 3; ++k) read(a.d.fixed[k], r.d[k]);
   read(a.grazing, r.grazing), read(a.nearTie, r.nearTie);
   m.Charge("hostRead", bitserial::HostTransferCost(1));  // the overflow flags
   for (int64_t pe = 0; pe < m.VirtualPes(); ++pe) r.overflow[first + pe] = m.Overflow(pe) || m.DivideByZero(pe);

@@ -35,6 +35,13 @@ const char* UncertainPolicyName(UncertainPolicy p) {
   return "?";
 }
 
+NumberSystem ParseNumberSystem(const std::string& name) {
+  if (name == "fixed") return NumberSystem::kFixed;
+  if (name == "float") return NumberSystem::kFloat;
+  throw UserError("--number: expected fixed or float, got '" + name + "'");
+}
+const char* NumberSystemName(NumberSystem n) { return n == NumberSystem::kFloat ? "float" : "fixed"; }
+
 bitserial::MachineProfile MachineProfileOf(const SimdOptions& o) {
   bitserial::MachineProfile p = bitserial::Profile(o.profile);
   for (const std::string& a : o.profileOverrides) p.Override(a);
@@ -97,6 +104,18 @@ ObjectPlan PlanObject(const Scene& scene, int index, const PassFormats& pf, cons
   const Primitive& p = scene.objects[index];
   const Vec3& eye = scene.camera.from;
   ObjectPlan plan;
+  if (pf.floatFormat) {
+    // --number float has a program for spheres only (docs/simd.md, "Floating point on the array").
+    if (p.Kind() != ShapeKind::kSphere || p.transform)
+      throw UserError(fmt::format("{}: --number float supports spheres only; this object is a {} "
+                                  "(use --number fixed)",
+                                  p.where.ToString(), p.transform && p.Kind() == ShapeKind::kSphere
+                                                          ? "transformed sphere (an ellipsoid)"
+                                                          : ShapeKindName(p.Kind())));
+    plan = PlanFloatSphere(p, eye, pf);
+    plan.index = index;
+    return plan;
+  }
   switch (p.Kind()) {
     case ShapeKind::kSphere: plan = p.transform ? PlanEllipsoid(p, eye, pf) : PlanSphere(p, eye, pf); break;
     case ShapeKind::kPolygon: plan = PlanPolygon(p, eye, pf, planes[index] >= 0 ? scene.objects[planes[index]] : p); break;
@@ -239,6 +258,8 @@ void CheckMemory(PrimaryPlan& plan, const SceneRange& range, const bitserial::Ma
   const auto capacity = [&](int64_t layers) {
     return profile.internalBitsPerPe / layers + profile.externalBitsPerPe / layers;
   };
+  // --number float: the float directions and about 17 float temporaries of the sphere.
+  if (plan.number == NumberSystem::kFloat) plan.memoryBitsPerPe += 20 * plan.floatFormat.Width();
   const int64_t need = plan.memoryBitsPerPe;
   if (need > capacity(1)) {
     int fits = -1;
@@ -259,6 +280,17 @@ void CheckMemory(PrimaryPlan& plan, const SceneRange& range, const bitserial::Ma
 }  // namespace
 
 namespace {
+
+// --number float without --float-format: 8 exponent bits (11 when the squares of the scene's
+// distances need them) and as many fraction bits as make the float's absolute error at the
+// farthest distance about the fixed pass's ulp (p ≈ F + log2(farthest)), 10..52; subnormals
+// as the profile's machine had them (floatSubnormals).
+fixed::FloatFormat PlanFloatFormat(const PrimaryPlan& plan, const SceneRange& range,
+                                   const bitserial::MachineProfile& profile) {
+  const int e = 2 * CeilLog2(range.farthest + 1) + 4 < 127 ? 8 : 11;
+  const int m = std::clamp(plan.fracBits + CeilLog2(range.farthest + 1) - 1, 10, 52);
+  return {e, m, profile.floatSubnormals};
+}
 
 // A plan over `virtualPes` PEs, split into passes of whole units of `unit` PEs when the
 // array is full, whose bounds' nominal sizes refer to `nominalUlp` (0: its own).
@@ -285,6 +317,11 @@ PrimaryPlan PlanFor(const Scene& scene, const SimdOptions& options, int64_t virt
   // exceeds it) so that it fits the pass's formats: `hither 1e30` once aborted the pass.
   plan.pass.hither = std::min(std::max(cam.hither, 0.0), 2 * range.farthest + 1);
   plan.pass.nominalUlp = nominalUlp;
+  if (options.number == NumberSystem::kFloat) {
+    plan.number = NumberSystem::kFloat;
+    plan.floatFormat = options.floatFormat ? *options.floatFormat : PlanFloatFormat(plan, range, profile);
+    plan.pass.floatFormat = plan.floatFormat;
+  }
   // Each object's bounds, formats and program, derived from these formats (docs/simd.md,
   // "Error bounds").
   plan.grazingFraction = 1.0 / 8;
@@ -351,6 +388,11 @@ PrimaryPlan PlanRefinePass(const Scene& scene, const SimdOptions& options, const
   // As many more bits as still fit t's 64-bit word (a far scene may have none to add).
   const int fracBits = std::min({first.fracBits + extraBits, 56, kMaxMatrixWordBits - 1 - first.distIntBits});
   wide.formats = {fracBits, std::min(first.dirFracBits + extraBits, 60), first.distIntBits};
+  if (first.number == NumberSystem::kFloat) {
+    fixed::FloatFormat f = first.floatFormat;
+    f.fracBits = std::min({f.fracBits + extraBits, 52, 63 - f.expBits});
+    wide.floatFormat = f;
+  }
   return PlanFor(scene, wide, std::max<int64_t>(pixels, 1), 1, first.pass.Ulp());
 }
 
@@ -363,9 +405,11 @@ nlohmann::json PrimaryPlan::Json() const {
                       {"grazingFraction", grazingFraction}, {"memoryBitsPerPe", memoryBitsPerPe},
                       {"matrixBitsPerPe", matrixBitsPerPe}, {"internalCapacity", internalCapacity},
                       {"externalCapacity", externalCapacity},
-                      {"alwaysUncertainObjects", alwaysUncertainObjects}};
+                      {"alwaysUncertainObjects", alwaysUncertainObjects},
+                      {"number", NumberSystemName(number)}};
+  if (number == NumberSystem::kFloat) j["floatFormat"] = floatFormat.Name();
   for (const PlannedFormat& f : formats)
-    j["formats"].push_back({{"quantity", f.quantity}, {"format", f.format.Name()}, {"reason", f.reason}});
+    j["formats"].push_back({{"quantity", f.quantity}, {"format", f.FormatName()}, {"reason", f.reason}});
   return j;
 }
 
@@ -378,7 +422,7 @@ nlohmann::json PrimaryPlan::ObjectsJson() const {
                         {"tError", finite(b.tError)}, {"slack", finite(b.slack)},
                         {"grazeBand", b.grazeBand}, {"alwaysUncertain", b.alwaysUncertain}};
     for (const PlannedFormat& f : o.formats)
-      j["formats"].push_back({{"quantity", f.quantity}, {"format", f.format.Name()}, {"reason", f.reason}});
+      j["formats"].push_back({{"quantity", f.quantity}, {"format", f.FormatName()}, {"reason", f.reason}});
     all.push_back(j);
   }
   return all;
@@ -391,7 +435,11 @@ std::string PrimaryPlan::Text() const {
     s += fmt::format("the array is full: {} array passes of up to {} virtual PEs ({} layers) each\n", passes,
                      pesPerPass, layersPerPass);
   for (const PlannedFormat& f : formats)
-    s += fmt::format("  {:<26} {:<8} {}\n", f.quantity, f.format.Name(), f.reason);
+    s += fmt::format("  {:<26} {:<8} {}\n", f.quantity, f.FormatName(), f.reason);
+  if (number == NumberSystem::kFloat)
+    s += fmt::format("--number float: the intersections in bit-serial float {} (directions, f·d, f×d, squares, "
+                     "disc, √disc, t0/t1), t then in the fixed format above\n",
+                     floatFormat.Name());
   s += fmt::format("error bound on t (certain pixels): {:.3g} (the largest object's e); near tie per pair: "
                    "|t_i - t_j| <= e_i + e_j; grazing when disc < max((r/{:g})^2, 2 x its error "
                    "bound), per object\n",
@@ -414,7 +462,7 @@ std::string PrimaryPlan::Text() const {
   std::vector<std::string> order;
   for (const ObjectPlan& o : objects) {
     std::string key = o.KindName();
-    for (const PlannedFormat& f : o.formats) key += "|" + f.format.Name();
+    for (const PlannedFormat& f : o.formats) key += "|" + f.FormatName();
     auto [it, fresh] = groups.try_emplace(key);
     if (fresh) order.push_back(key), it->second.first = &o;
     it->second.indices.push_back(o.index);
@@ -436,7 +484,7 @@ std::string PrimaryPlan::Text() const {
                      g.indices.size(), which, g.tError, g.band,
                      std::isfinite(g.tError) ? "" : " (always uncertain)");
     for (const PlannedFormat& f : g.first->formats)
-      s += fmt::format("    {:<26} {:<8} {}\n", f.quantity, f.format.Name(), f.reason);
+      s += fmt::format("    {:<26} {:<8} {}\n", f.quantity, f.FormatName(), f.reason);
   }
   return s;
 }

@@ -9,12 +9,15 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
 #include "bitserial/profile.h"
+#include "fixed/float.h"
 #include "fixed/format.h"
 #include "hosts/scene/scene.h"
 #include "hosts/simd/bounds.h"
@@ -44,8 +47,19 @@ struct FormatOverrides {
   int intBits = -1;      // --int-bits: integer bits of distances
 };
 
+// The number system of the ray–object intersections (--number): fixed point, or bit-serial
+// floating point (bitserial/float.h) in one format for the whole pass (docs/simd.md,
+// "Floating point on the array"). The matrix and the closest-hit fold stay fixed point.
+enum class NumberSystem { kFixed, kFloat };
+NumberSystem ParseNumberSystem(const std::string& name);  // fixed|float; UserError otherwise
+const char* NumberSystemName(NumberSystem n);
+
 struct SimdOptions {
   std::string profile = "wavetracer";
+  NumberSystem number = NumberSystem::kFixed;
+  // --float-format (with --number float): the intersections' format; empty = planned per
+  // scene (PlanFloatFormat).
+  std::optional<fixed::FloatFormat> floatFormat;
   std::vector<std::string> profileOverrides;  // "readExternal=3", ...
   FormatOverrides formats;
   UncertainPolicy uncertain = UncertainPolicy::kRecompute;
@@ -63,9 +77,16 @@ bitserial::MachineProfile MachineProfileOf(const SimdOptions& options);
 
 // One chosen quantity of the plan: its format and why.
 struct PlannedFormat {
+  PlannedFormat() = default;
+  PlannedFormat(std::string q, fixed::Format f, std::string r, std::optional<fixed::FloatFormat> ff = std::nullopt)
+      : quantity(std::move(q)), format(f), reason(std::move(r)), floatFormat(ff) {}
   std::string quantity;
   fixed::Format format;
   std::string reason;
+  // --number float: the quantity is a float of this format (`format` is then the fixed t it
+  // ends in); FormatName() names the float.
+  std::optional<fixed::FloatFormat> floatFormat;
+  std::string FormatName() const { return floatFormat ? floatFormat->Name() : format.Name(); }
 };
 
 // What the host knows about one object before the pass (world-space eye), derived from the
@@ -126,6 +147,8 @@ struct PrimaryPlan {
   int alwaysUncertainObjects = 0;  // objects whose bounds degenerate at these widths (every
                                    // pixel that may hit them is flagged)
   int planeClasses = 0;  // planes holding more than one polygon (ObjectPlan::planeClass)
+  NumberSystem number = NumberSystem::kFixed;  // of the intersections (--number)
+  fixed::FloatFormat floatFormat;              // with kFloat: their format (pass.floatFormat)
   nlohmann::json Json() const;         // the report's plan (pass-wide)
   nlohmann::json ObjectsJson() const;  // per object: kind, bounds, formats
   std::string Text() const;            // `zephyr plan`'s output, per-object formats included

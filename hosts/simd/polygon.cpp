@@ -101,7 +101,8 @@ class PolygonProgram final : public ObjectProgram {
             {"t = dist/(n̂·d)", pf_.t, "by division"}};
   }
 
-  Candidate Run(Machine& m, const Multi (&d)[3]) const override {
+  Candidate Run(Machine& m, const Directions& dirs) const override {
+    const Multi(&d)[3] = dirs.fixed;
     const int F = pf_.fracBits;
     const Format unit = Format::Signed(1, F);
     // Inside: parity over the groups of (every edge function on its inside: e >= 0 for an

@@ -39,7 +39,8 @@ class SphereProgram final : public ObjectProgram {
             {"t = tca ∓ root", pf_.t, "t <= farthest"}};
   }
 
-  Candidate Run(Machine& m, const Multi (&d)[3]) const override {
+  Candidate Run(Machine& m, const Directions& dirs) const override {
+    const Multi(&d)[3] = dirs.fixed;
     const int F = pf_.fracBits;
     const Format T = pf_.t, L = pf_.t;
     const Fixed f[3] = {Tight(f_.x, F), Tight(f_.y, F), Tight(f_.z, F)};
