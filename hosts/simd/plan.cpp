@@ -304,6 +304,15 @@ PrimaryPlan PlanFor(const Scene& scene, const SimdOptions& options, int64_t virt
   plan.layers = int((plan.virtualPes + profile.physicalPes - 1) / profile.physicalPes);
   const SceneRange range = RangeOf(scene);
   ChooseWidths(plan, range, options.formats);
+  if (options.number == NumberSystem::kFloat) {
+    plan.number = NumberSystem::kFloat;
+    plan.floatFormat = options.floatFormat ? *options.floatFormat : PlanFloatFormat(plan, range, profile);
+    plan.pass.floatFormat = plan.floatFormat;
+    // The matrix's direction (the host shades with it) keeps the float's precision too, so
+    // the image is not limited by a coarser direction than the pass computed with.
+    if (options.formats.dirFracBits < 0)
+      plan.dirFracBits = std::clamp(plan.floatFormat.Precision(), plan.dirFracBits, 60);
+  }
   const int L = plan.distIntBits, F = plan.fracBits;
   plan.objectBits = std::max(1, CeilLog2(double(scene.objects.size()) + 1));
   plan.direction = Format::Signed(1, plan.dirFracBits);
@@ -317,11 +326,6 @@ PrimaryPlan PlanFor(const Scene& scene, const SimdOptions& options, int64_t virt
   // exceeds it) so that it fits the pass's formats: `hither 1e30` once aborted the pass.
   plan.pass.hither = std::min(std::max(cam.hither, 0.0), 2 * range.farthest + 1);
   plan.pass.nominalUlp = nominalUlp;
-  if (options.number == NumberSystem::kFloat) {
-    plan.number = NumberSystem::kFloat;
-    plan.floatFormat = options.floatFormat ? *options.floatFormat : PlanFloatFormat(plan, range, profile);
-    plan.pass.floatFormat = plan.floatFormat;
-  }
   // Each object's bounds, formats and program, derived from these formats (docs/simd.md,
   // "Error bounds").
   plan.grazingFraction = 1.0 / 8;

@@ -12,7 +12,8 @@
 #   bash tools/charts/fixed_vs_float.sh             # 64 random spheres, 384x384 (the chart)
 #   SIZE=128 bash tools/charts/fixed_vs_float.sh    # quicker
 # Environment: SIZE, COUNT (64), SEED (1), SAMPLE (pixels the first-object error samples;
-# default every pixel), FRAC, FLOATS (the widths and formats), ZEPHYR, OUT (docs/results).
+# default every pixel), FRAC, FLOATS (the widths and formats), ZEPHYR, OUT (docs/results);
+# REDRAW=1 draws the charts from the CSV already in OUT without running anything.
 # Writes OUT/fixed_vs_float.csv, OUT/fixed_vs_float_pct_wrong.png, OUT/fixed_vs_float_psnr.png.
 set -euo pipefail
 
@@ -31,10 +32,11 @@ scene=$WORK/spheres.nff
 "$ZEPHYR" gen spheres --count "$COUNT" --seed "$SEED" --size "${SIZE}x${SIZE}" --out "$scene"
 
 CSV=$OUT/fixed_vs_float.csv
-echo "kind,label,cycles,host_s,pct_wrong,t_err_max,psnr,flagged" >"$CSV"
+if [ -z "${REDRAW:-}" ]; then
+echo "kind,label,cycles,host_s,pct_wrong,t_err_max,psnr,grazing,near_tie" >"$CSV"
 JQ='[.cycles // "NaN", .hostSeconds, .firstObjectDiffersPercent, .tMaxError,
      (.psnrDb | if . == "inf" then "Inf" else . end),
-     ((.uncertain // {}) | if .overflow == null then "NaN" else ([.overflow, .grazing, .nearTie] | max) end)]
+     (.uncertain.grazing // "NaN"), (.uncertain.nearTie // "NaN")]
    | map(tostring) | join(",")'
 point() {  # point KIND LABEL FLAGS...
   local kind=$1 label=$2; shift 2
@@ -47,12 +49,13 @@ point float "planned" --uncertain keep --number float
 planned=$(jq -r '.floatFormat' "$WORK/p.json"); sed -i "s/^float,planned,/float,$planned (planned),/" "$CSV"
 point seq float32 --method seq --precision float
 point seq float64 --method seq --precision double
+fi
 
 NOTE="$COUNT random spheres (zephyr gen spheres --seed $SEED), ${SIZE}x${SIZE}, --uncertain keep; $(date +%Y-%m-%d)"
-for spec in "5:pct_wrong:% of pixels with a wrong first object (vs exact 128-bit)" \
-            "7:psnr:PSNR of the image against seq float64 (dB)"; do
-  IFS=: read -r xcol tag xl <<<"$spec"
-  gnuplot -e "in='$CSV'; out='$OUT/fixed_vs_float_$tag.png'; xcol=$xcol; xl='$xl'; note='$NOTE'" \
+for spec in "5:pct_wrong:% of pixels with a wrong first object (vs exact 128-bit; 0 drawn at 1e-4):1" \
+            "7:psnr:PSNR of the image against seq float64 (dB; float64 itself is the reference, not drawn):0"; do
+  IFS=: read -r xcol tag xl logx <<<"$spec"
+  gnuplot -e "in='$CSV'; out='$OUT/fixed_vs_float_$tag.png'; xcol=$xcol; xl='$xl'; note='$NOTE'; logx=$logx; floor=1e-4" \
     "$ROOT/tools/charts/fixed_vs_float.gp" 2> >(grep -v "Skipping data file with no valid points" >&2)
   echo "wrote $OUT/fixed_vs_float_$tag.png" >&2
 done
