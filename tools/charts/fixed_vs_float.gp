@@ -23,9 +23,18 @@ x(c) = (logx && column(c) <= 0) ? floor : column(c)
 set key tmargin horizontal maxcols 2 box font ',9'
 set bmargin 6
 set label 1 note at screen 0.02, screen 0.03 left font ',8' noenhanced
-plot in using (strcol(1) eq 'fixed' ? x(xcol) : NaN):3 with linespoints lw 2 pt 7 title 'array, fixed point (label: fraction bits)', \
-     ''  using (strcol(1) eq 'fixed' ? x(xcol) : NaN):3:2 with labels offset 0,1 font ',8' notitle noenhanced, \
-     ''  using (strcol(1) eq 'float' ? x(xcol) : NaN):3 with linespoints lw 2 pt 5 title 'array, bit-serial float (label: format)', \
-     ''  using (strcol(1) eq 'float' ? x(xcol) : NaN):3:2 with labels offset 0,-1 font ',8' notitle noenhanced, \
-     ''  using (strcol(1) eq 'seq' ? x(xcol) : NaN):4 axes x1y2 with points pt 9 ps 2 title 'host seq float32 / float64 (host seconds)', \
-     ''  using (strcol(1) eq 'seq' ? x(xcol) : NaN):4:2 axes x1y2 with labels offset 0,1 font ',8' notitle noenhanced
+# hasseq=0: no host tracer has a finite value on this axis (a PSNR of inf is not drawn)
+if (!exists('hasseq')) hasseq = 1
+if (hasseq) {
+  plot in using (strcol(1) eq 'fixed' ? x(xcol) : NaN):3 with linespoints lw 2 pt 7 title 'array, fixed point (label: fraction bits)', \
+       ''  using (strcol(1) eq 'fixed' ? x(xcol) : NaN):3:2 with labels offset 0,1 font ',8' notitle noenhanced, \
+       ''  using (strcol(1) eq 'float' ? x(xcol) : NaN):3 with linespoints lw 2 pt 5 title 'array, bit-serial float (label: format)', \
+       ''  using (strcol(1) eq 'float' ? x(xcol) : NaN):3:2 with labels offset 0,-1 font ',8' notitle noenhanced, \
+       ''  using (strcol(1) eq 'seq' ? x(xcol) : NaN):4 axes x1y2 with points pt 9 ps 2 title 'host seq float32 / float64 (host seconds)', \
+       ''  using (strcol(1) eq 'seq' ? x(xcol) : NaN):4:2 axes x1y2 with labels offset 0,1 font ',8' notitle noenhanced
+} else {
+  plot in using (strcol(1) eq 'fixed' ? x(xcol) : NaN):3 with linespoints lw 2 pt 7 title 'array, fixed point (label: fraction bits)', \
+       ''  using (strcol(1) eq 'fixed' ? x(xcol) : NaN):3:2 with labels offset 0,1 font ',8' notitle noenhanced, \
+       ''  using (strcol(1) eq 'float' ? x(xcol) : NaN):3 with linespoints lw 2 pt 5 title 'array, bit-serial float (label: format)', \
+       ''  using (strcol(1) eq 'float' ? x(xcol) : NaN):3:2 with labels offset 0,-1 font ',8' notitle noenhanced
+}

@@ -55,7 +55,8 @@ NOTE="$COUNT random spheres (zephyr gen spheres --seed $SEED), ${SIZE}x${SIZE}, 
 for spec in "5:pct_wrong:% of pixels with a wrong first object (vs exact 128-bit; 0 drawn at 1e-4):1" \
             "7:psnr:PSNR of the image against seq float64 (dB; float64 itself is the reference, not drawn):0"; do
   IFS=: read -r xcol tag xl logx <<<"$spec"
-  gnuplot -e "in='$CSV'; out='$OUT/fixed_vs_float_$tag.png'; xcol=$xcol; xl='$xl'; note='$NOTE'; logx=$logx; floor=1e-4" \
+  hasseq=$(awk -F, -v c="$xcol" '$1 == "seq" && $c != "NaN" && $c != "Inf" { f = 1 } END { print f + 0 }' "$CSV")
+  gnuplot -e "in='$CSV'; out='$OUT/fixed_vs_float_$tag.png'; xcol=$xcol; xl='$xl'; note='$NOTE'; logx=$logx; floor=1e-4; hasseq=$hasseq" \
     "$ROOT/tools/charts/fixed_vs_float.gp" 2> >(grep -v "Skipping data file with no valid points" >&2)
   echo "wrote $OUT/fixed_vs_float_$tag.png" >&2
 done
