@@ -34,6 +34,7 @@ CommandRegistration planCommand("plan", [](CLI::App& program) {
     SimdOptions keep = options;
     keep.uncertain = UncertainPolicy::kKeep;
     keep.formats = {plan.fracBits, plan.dirFracBits, plan.distIntBits};
+    if (plan.number == NumberSystem::kFloat) keep.floatFormat = plan.floatFormat;
     const PrimaryPass probe = RunPrimaryPass(small, keep);
     const double layerCycles = probe.cycles["totalCycles"].get<double>() / probe.plan.layers;
     const double cycles = layerCycles * plan.layers;

@@ -213,6 +213,13 @@ void SummaryTable(PrimaryPlan& plan, const Scene& scene, const SceneRange& range
       {"t = tca ∓ root", plan.t, "t <= farthest (one bit of headroom)"},
       {"object index + 1", plan.object, fmt::format("{} objects, 0 = none", scene.objects.size())},
   };
+  if (plan.number == NumberSystem::kFloat) {  // the sphere's fixed formats are not used: its float's
+    plan.formats[0].reason = "the matrix's, fraction bits = max(F, the float's precision); the pass reads them in float";
+    plan.formats.erase(plan.formats.begin() + 1, plan.formats.begin() + 7);
+    plan.formats.insert(plan.formats.begin() + 1,
+                        {"f (uni), f·d, f×d, squares, disc, √", plan.t,
+                         "--number float: every sphere's intersection in this float, t then fixed", plan.floatFormat});
+  }
   int ellipsoids = 0, polygons = 0, ellipsoidBits = 0, cones = 0, coneBits = 0;
   for (const ObjectPlan& o : plan.objects) {
     const ObjectBounds& b = o.bounds;

@@ -8,6 +8,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <filesystem>
 
 #include "fixed/check.h"
 #include "hosts/scene/gen.h"
@@ -157,6 +159,25 @@ TEST(SimdFloat, CommandLineFlags) {
   auto bad = RunZephyrProcess("accuracy " + scene + " --float-format e8m20");
   EXPECT_NE(bad.status, 0);
   EXPECT_NE(bad.output.find("applies to --number float only"), std::string::npos) << bad.output;
+  // A cone is refused through the command line too: its file:line, a non-zero exit, no image.
+  {
+    std::FILE* f = std::fopen(cone.c_str(), "w");
+    ASSERT_NE(f, nullptr);
+    std::fputs("b 0 0 0\nv\nfrom 0 0 10\nat 0 0 0\nup 0 1 0\nangle 30\nhither 0.01\nresolution 8 8\n"
+               "l 5 5 5\nf 1 0.5 0.2 0.7 0.3 10 0 1\ns 0 0 0 1\nc 0 0 0 1 0 1 0 0.5\n", f);
+    std::fclose(f);
+  }
+  const std::string png = dir / "cone.png";
+  auto refused = RunZephyrProcess("render --method simd --scene " + cone + " --number float --out " + png);
+  EXPECT_NE(refused.status, 0);
+  EXPECT_NE(refused.output.find("c.nff:12"), std::string::npos) << refused.output;
+  EXPECT_NE(refused.output.find("supports spheres only; this object is a cone"), std::string::npos) << refused.output;
+  EXPECT_FALSE(std::filesystem::exists(png));
+  // `zephyr plan` names the float format where the sphere's fixed formats were.
+  auto plan = RunZephyrProcess("plan " + scene + " --number float --float-format e6m12");
+  ASSERT_EQ(plan.status, 0) << plan.output;
+  EXPECT_NE(plan.output.find("e6m12"), std::string::npos) << plan.output;
+  EXPECT_EQ(plan.output.find("cross, clamped"), std::string::npos) << plan.output;
   auto word = RunZephyrProcess("render " + scene + " --method simd --number double --out " + (dir / "x.png"));
   EXPECT_NE(word.status, 0);
   EXPECT_NE(word.output.find("--number: expected fixed or float"), std::string::npos) << word.output;
