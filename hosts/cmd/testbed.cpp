@@ -1,9 +1,12 @@
-// hosts/cmd/testbed.cpp — `zephyr testbed profiles|platform`: the modelled 1992 testbed's host
-// profiles and work table with their sources, and its SimGrid platform file and hostfile
-// (hosts/testbed/testbed.h; docs/testbed.md).
+// hosts/cmd/testbed.cpp — `zephyr testbed profiles|platform|calibrate`: the modelled 1992
+// testbed's host profiles and work table with their sources, its SimGrid platform file and
+// hostfile, and this host's speed calibrated from a measured render (hosts/testbed/testbed.h;
+// docs/testbed.md).
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <fstream>
 #include <memory>
+#include <sstream>
 
 #include "fixed/check.h"
 #include "hosts/cmd/command.h"
@@ -39,15 +42,38 @@ CommandRegistration testbedCommand("testbed", [](CLI::App& program) {
   platform->add_option("--hostfile", *hostfile, "Also write smpirun's hostfile: the parent, then the children");
   auto bps = std::make_shared<double>(0);
   platform->add_option("--ethernet-bps", *bps, "Override the Ethernet's bandwidth, bit/s (what-if runs)");
-  platform->callback([bed, children, out, hostfile, bps] {
+  auto hostOps = std::make_shared<double>(0);
+  platform->add_option("--host-ops", *hostOps,
+                       "Parent and children run this many counted operations per second, no profile "
+                       "(the this-host speed from `zephyr testbed calibrate`)");
+  platform->callback([bed, children, out, hostfile, bps, hostOps] {
     Testbed t = TestbedNamed(*bed);
     if (*bps < 0 || (*bps > 0 && *bps < 1e3))
       throw UserError("--ethernet-bps: expected a bandwidth of at least 1000 bit/s");
     if (*bps > 0) t.ethernetBandwidth = {*bps, "bit/s", "--ethernet-bps (what-if; not the paper's network)"};
-    const std::string xml = PlatformXml(t, *children);
+    if (*hostOps < 0 || (*hostOps > 0 && *hostOps < 1e3))
+      throw UserError("--host-ops: expected at least 1000 operations per second");
+    const std::string xml = PlatformXml(t, *children, *hostOps);
     if (out->empty()) std::fputs(xml.c_str(), stdout);
     else WriteOutputFile(*out, "platform file", xml);
     if (!hostfile->empty()) WriteOutputFile(*hostfile, "hostfile", Hostfile(*children));
+  });
+  auto* calibrate = cmd->add_subcommand(
+      "calibrate", "This host's speed (the this-host profile) from a measured `render --method seq --report`");
+  auto report = std::make_shared<std::string>();
+  calibrate->add_option("--report", *report, "JSON report of a seq render measured on this host")->required();
+  calibrate->callback([report] {
+    std::ifstream in(*report);
+    if (!in) throw UserError(*report + ": cannot read the report");
+    std::stringstream text;
+    text << in.rdbuf();
+    nlohmann::json r;
+    try {
+      r = nlohmann::json::parse(text.str());
+    } catch (const nlohmann::json::exception& e) {
+      throw UserError(*report + ": not a JSON report: " + e.what());
+    }
+    std::printf("%s\n", CalibrateThisHost(r, *report).dump(2).c_str());
   });
 });
 

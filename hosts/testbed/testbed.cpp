@@ -197,7 +197,35 @@ std::string Comment(std::string text) {
 }
 }  // namespace
 
-std::string PlatformXml(const Testbed& bed, int children) {
+nlohmann::json CalibrateThisHost(const nlohmann::json& r, const std::string& file) {
+  if (r.value("method", "") != "seq")
+    throw UserError(file + ": calibrate from a report of `zephyr render --method seq` (this is '" +
+                    r.value("method", std::string("?")) + "')");
+  TraceStats stats;
+  double seconds = 0;
+  try {
+    stats = TraceStats::FromJson(r);
+    seconds = r.at("phases").at("render").get<double>();
+  } catch (const nlohmann::json::exception&) {
+    throw UserError(file + ": the report has no counted work or no phases.render time");
+  }
+  if (!(seconds > 0)) throw UserError(file + ": phases.render is not a positive time");
+  const HostTime h = ModelHostTime(stats, HostProfileNamed("sparcstation2"));  // counts only
+  const double ops = h.flops + h.instructions;
+  return {{"profile", "this-host"},
+          {"operationsPerSecond", ops / seconds},
+          {"operations", ops},
+          {"flops", h.flops},
+          {"instructions", h.instructions},
+          {"measuredSeconds", seconds},
+          {"source", "zephyr testbed calibrate --report " + file +
+                         ": the work table's operations of that seq render over its measured render "
+                         "seconds; flops and instructions at one rate (assumed)"},
+          {"use", "zephyr testbed platform --host-ops " + std::to_string(ops / seconds) +
+                      " --children K --out this-host.xml"}};
+}
+
+std::string PlatformXml(const Testbed& bed, int children, double hostOps) {
   if (children < 1 || children > 4096)
     throw UserError("--children: expected 1..4096, got " + std::to_string(children));
   const HostProfile& parent = HostProfileNamed(bed.parentProfile);
@@ -215,14 +243,19 @@ std::string PlatformXml(const Testbed& bed, int children) {
       "<!DOCTYPE platform SYSTEM \"https://simgrid.org/simgrid.dtd\">\n"
       "<!-- Written by zephyr testbed platform (testbed " + bed.name + ", " +
       std::to_string(children) + " children; docs/testbed.md): " + Comment(bed.description) + ".\n"
-      "     Host speeds are the profiles' Linpack rates (flops/s) and the array's clock "
-      "(cycles/s);\n     work is charged as the profiles' modelled seconds, so the speeds "
-      "only convert. -->\n"
+      + (hostOps > 0
+             ? "     Parent and children: this host calibrated (zephyr testbed calibrate), one counted "
+               "operation per flop of speed; the array's speed is its clock (cycles/s). -->\n"
+             : "     Host speeds are the profiles' Linpack rates (flops/s) and the array's clock "
+               "(cycles/s);\n     work is charged as the profiles' modelled seconds, so the speeds "
+               "only convert. -->\n") +
       "<platform version=\"4.1\">\n  <zone id=\"" + bed.name + "\" routing=\"Full\">\n";
-  x += host("parent", parent.mflops.value * 1e6, parent.name, "parent");
+  const bool calibrated = hostOps > 0;
+  x += host("parent", calibrated ? hostOps : parent.mflops.value * 1e6, calibrated ? "" : parent.name, "parent");
   x += host("zephyr", array.clockHz, "", "array");
   for (int i = 1; i <= children; ++i)
-    x += host("child-" + std::to_string(i), child.mflops.value * 1e6, child.name, "child");
+    x += host("child-" + std::to_string(i), calibrated ? hostOps : child.mflops.value * 1e6,
+              calibrated ? "" : child.name, "child");
   x += "    <!-- " + Comment(bed.ethernetBandwidth.source + "; " + bed.ethernetLatency.source) + " -->\n";
   x += "    <link id=\"ethernet\" bandwidth=\"" + std::to_string(bed.ethernetBandwidth.value) +
        "bps\" latency=\"" + std::to_string(bed.ethernetLatency.value) +

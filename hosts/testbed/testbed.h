@@ -49,7 +49,17 @@ std::vector<std::string> TestbedNames();
 // parent's profile), "zephyr" (the array, speed = its clock), "child-1".."child-K", one
 // SHARED Ethernet link on every parent-child route, the SCSI link parent-zephyr. Hosts carry
 // "zephyr:profile" and "zephyr:role" properties. UserError for children outside 1..4096.
-std::string PlatformXml(const Testbed& bed, int children);
+// With hostOps > 0 the parent and the children have that speed and no profile: each counted
+// operation (work-table flop or instruction) costs 1/hostOps seconds (a calibrated this-host).
+std::string PlatformXml(const Testbed& bed, int children, double hostOps = 0);
+
+// The this-host profile: from the report of a seq render measured on this host, its counted
+// operations (the work table's flops + instructions) over the render phase's seconds:
+// {"profile": "this-host", "operationsPerSecond", "operations", "flops", "instructions",
+// "measuredSeconds", "source"}. One rate for both kinds (an assumption: one measurement
+// cannot separate them). UserError (naming `file`) for a report of another method or
+// without counts or a positive render time.
+nlohmann::json CalibrateThisHost(const nlohmann::json& report, const std::string& file);
 // smpirun's hostfile for it: rank 0 on the parent, rank i on child-i.
 std::string Hostfile(int children);
 

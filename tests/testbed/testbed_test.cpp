@@ -314,6 +314,44 @@ TEST(TestbedSimulated, SeqAndSimdOnAPlatformFile) {
   EXPECT_NEAR(j.at("testbed").at("modelledSeconds").get<double>(), slc, 1e-9 * slc);
 }
 
+// this-host: `zephyr testbed calibrate` turns a measured seq render into operations per
+// second; a platform of that speed (`testbed platform --host-ops`) models the same render in
+// the seconds it was measured in. Reports of another method, or not JSON, are refused by name.
+TEST(TestbedSimulated, ThisHostCalibratedModelsItsOwnRender) {
+  TempDir dir;
+  const std::string scene = WriteScene(dir, 8, "64x64");
+  const std::string measured = dir / "m.json";
+  auto r = RunZephyrProcess("render --no-progress --method seq " + scene + " --report " + measured);
+  ASSERT_EQ(r.status, 0) << r.output;
+  r = RunZephyrProcess("testbed calibrate --report " + measured);
+  ASSERT_EQ(r.status, 0) << r.output;
+  const nlohmann::json c = nlohmann::json::parse(r.output.substr(r.output.find('{')));
+  const double seconds = ReadJson(measured).at("phases").at("render").get<double>();
+  EXPECT_EQ(c.at("measuredSeconds").get<double>(), seconds);
+  const double ops = c.at("operationsPerSecond").get<double>();
+  EXPECT_DOUBLE_EQ(ops * seconds, c.at("flops").get<double>() + c.at("instructions").get<double>());
+  const std::string simd = dir / "simd.json";
+  ASSERT_EQ(RunZephyrProcess("render --no-progress --method simd " + scene + " --report " + simd).status, 0);
+  r = RunZephyrProcess("testbed calibrate --report " + simd);
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.output.find(simd), std::string::npos) << r.output;
+  r = RunZephyrProcess("testbed calibrate --report " + scene);  // not JSON
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.output.find(scene), std::string::npos) << r.output;
+
+  if (!std::filesystem::exists(SmpiPath())) GTEST_SKIP() << "no zephyr-smpi (make smpi)";
+  const std::string platform = dir / "this-host.xml";
+  r = RunZephyrProcess("testbed platform --children 1 --host-ops " + std::to_string(ops) + " --out " + platform);
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_EQ(ReadFile(platform).find("zephyr:profile"), std::string::npos);
+  const std::string report = dir / "sim.json";
+  r = RunCommand("timeout -k 5 300 bash " + Repo() + "/tools/testbed/simrun.sh --children 0 --platform " + platform +
+                 " --zephyr " + SmpiPath() + " -- render --no-progress --method seq " + scene +
+                 " --testbed ufmg1992 --out " + (dir / "sim.png") + " --report " + report);
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NEAR(ReadJson(report).at("testbed").at("modelledSeconds").get<double>(), seconds, 1e-6 * seconds);
+}
+
 TEST(TestbedSimulated, TooFewHostsNamesTheFile) {
   if (!std::filesystem::exists(SmpiPath())) GTEST_SKIP() << "no zephyr-smpi (make smpi)";
   TempDir dir;
