@@ -82,7 +82,7 @@ Word* Machine::AcquirePlanes(int planes) {
     list.pop_back();
     return p;
   }
-  blocks_.push_back(hwy::AllocateAligned<Word>(static_cast<size_t>(planes) * words_));
+  blocks_.push_back(hwy::AllocateAligned<Word>(static_cast<size_t>(planes) * PlaneStride()));
   return blocks_.back().get();
 }
 

@@ -61,6 +61,13 @@ class Machine {
   bool IsBlock() const { return layers_ != modelledLayers_; }
   size_t WordsPerLayer() const { return wordsPerLayer_; }
   size_t WordsPerPlane() const { return words_; }
+  // Words from one plane to the next in a block of AcquirePlanes(n > 1) planes (a Multi's
+  // bits): WordsPerPlane() plus kPlanePadWords unused words. Without the pad, planes 1, 2,
+  // 4 or 8 KiB apart (1, 2, 4, 8 layers) fall into the same few L1/L2 cache sets and a
+  // kernel that reads one vector of each of ~40 planes per step misses every time
+  // (docs/bitserial.md, "Speed"). Host layout only: no PE, result, flag or cycle depends on it.
+  size_t PlaneStride() const { return words_ + kPlanePadWords; }
+  static constexpr size_t kPlanePadWords = 16;  // two 64-byte cache lines
   PeMemory& Memory() { return memory_; }
   CycleReport& Report() { return report_; }
   const PlaneKernels& Kernels() const { return *kernels_; }
@@ -95,7 +102,8 @@ class Machine {
   const Word* ZeroPlane() const { return zero_; }
   const Word* OnesPlane() const { return ones_; }
 
-  // Pooled plane storage: `planes` planes of WordsPerPlane() words, 64-byte aligned.
+  // Pooled plane storage: `planes` planes of WordsPerPlane() words, PlaneStride() words
+  // apart, 64-byte aligned.
   Word* AcquirePlanes(int planes);
   void ReleasePlanes(Word* p, int planes);
 

@@ -29,15 +29,15 @@ const Word* PlaneAt(const Multi& x, int offset, int p) {
 // The same over raw planes (a scratch exact value of `w` planes).
 const Word* RawAt(Machine& m, const Word* base, int w, bool isSigned, int q) {
   if (q < 0) return m.ZeroPlane();
-  if (q >= w) return isSigned ? base + (w - 1) * m.WordsPerPlane() : m.ZeroPlane();
-  return base + q * m.WordsPerPlane();
+  if (q >= w) return isSigned ? base + (w - 1) * m.PlaneStride() : m.ZeroPlane();
+  return base + q * m.PlaneStride();
 }
 
 // Scratch planes from the machine's pool, returned on scope exit.
 struct Scratch {
   Scratch(Machine& m, int planes) : m(m), n(planes), p(m.AcquirePlanes(planes)) {}
   ~Scratch() { m.ReleasePlanes(p, n); }
-  Word* Plane(int i) const { return p + i * m.WordsPerPlane(); }
+  Word* Plane(int i) const { return p + i * m.PlaneStride(); }
   Machine& m;
   int n;
   Word* p;
@@ -125,7 +125,7 @@ void NegExact(const Multi& a, Word* base, int w) {
   for (int p = 0; p < w; ++p) {
     pa.push_back(m.ZeroPlane());
     pb.push_back(PlaneAt(a, 0, p));
-    po.push_back(base + p * m.WordsPerPlane());
+    po.push_back(base + p * m.PlaneStride());
   }
   AddArgs args{pa.data(), pb.data(), po.data(), w, true, true, 0, false, nullptr, nullptr};
   m.Kernels().add(args, m.WordsPerPlane());
@@ -141,7 +141,7 @@ void SelectExact(const Word* mask, const Multi& a, const Multi& b, const Format&
   for (int p = 0; p < u.Width(); ++p) {
     pa.push_back(PlaneAt(a, u.fracBits - a.Format().fracBits, p));
     pb.push_back(PlaneAt(b, u.fracBits - b.Format().fracBits, p));
-    po.push_back(base + p * m.WordsPerPlane());
+    po.push_back(base + p * m.PlaneStride());
   }
   m.Kernels().select(mask, pa.data(), pb.data(), po.data(), u.Width(), m.WordsPerPlane());
 }
@@ -236,13 +236,13 @@ Multi::Multi(Machine& machine, fixed::Format format, std::string name, std::opti
     throw UserError(fmt::format("multi '{}': invalid format {}", name, format.Name()));
   alloc_ = machine.Memory().Allocate(name, format.Width(), space);
   planes_ = machine.AcquirePlanes(format.Width());
-  std::memset(planes_, 0, sizeof(Word) * format.Width() * machine.WordsPerPlane());
+  std::memset(planes_, 0, sizeof(Word) * format.Width() * machine.PlaneStride());
 }
 
 Multi::Multi(const Multi& o)
     : Multi(o.GetMachine(), o.format_, o.alloc_.name + "'", Uninitialised{}) {
   machine_->Charge("copy", CopyCost(o.AsOperand(), AsOperand()));
-  std::memcpy(planes_, o.planes_, sizeof(Word) * Width() * machine_->WordsPerPlane());
+  std::memcpy(planes_, o.planes_, sizeof(Word) * Width() * machine_->PlaneStride());
 }
 
 Multi Multi::Constant(Machine& machine, const fixed::Fixed& value) {
@@ -321,7 +321,7 @@ void Multi::LoadRaw(const std::vector<int64_t>& raw) {
     throw UserError(fmt::format("multi '{}': {} values for {} virtual PEs", alloc_.name,
                                 raw.size(), m.VirtualPes()));
   m.Charge("hostLoad", HostTransferCost(Width()));
-  std::memset(planes_, 0, sizeof(Word) * Width() * m.WordsPerPlane());
+  std::memset(planes_, 0, sizeof(Word) * Width() * m.PlaneStride());
   const int w = std::min(Width(), 64);
   for (size_t pe = 0; pe < raw.size(); ++pe) {
     uint64_t bits = static_cast<uint64_t>(raw[pe]);
@@ -338,7 +338,7 @@ void Multi::Load(const std::vector<fixed::Fixed>& values) {
     throw UserError(fmt::format("multi '{}': {} values for {} virtual PEs", alloc_.name,
                                 values.size(), m.VirtualPes()));
   m.Charge("hostLoad", HostTransferCost(Width()));
-  std::memset(planes_, 0, sizeof(Word) * Width() * m.WordsPerPlane());
+  std::memset(planes_, 0, sizeof(Word) * Width() * m.PlaneStride());
   for (size_t pe = 0; pe < values.size(); ++pe) {
     if (values[pe].format != format_)
       throw UserError(fmt::format("multi '{}' has format {}; value {} has {}", alloc_.name,
@@ -534,9 +534,9 @@ void MagnitudeInto(const Multi& x, Word* base) {
   auto& po = MachineInternals::PointersOut(m);
   pa.clear(), pb.clear(), po.clear();
   for (int q = 0; q < w; ++q) {
-    pa.push_back(base + q * m.WordsPerPlane());
+    pa.push_back(base + q * m.PlaneStride());
     pb.push_back(x.Plane(q));
-    po.push_back(base + q * m.WordsPerPlane());
+    po.push_back(base + q * m.PlaneStride());
   }
   m.Kernels().select(x.Plane(w - 1), pa.data(), pb.data(), po.data(), w, m.WordsPerPlane());
 }

@@ -60,8 +60,8 @@ class Multi {
   Space GetSpace() const { return alloc_.space; }
   const Allocation& GetAllocation() const { return alloc_; }
   Operand AsOperand() const { return {format_, alloc_.space, uni_}; }
-  const Word* Plane(int i) const { return planes_ + i * machine_->WordsPerPlane(); }
-  Word* Plane(int i) { return planes_ + i * machine_->WordsPerPlane(); }
+  const Word* Plane(int i) const { return planes_ + i * machine_->PlaneStride(); }
+  Word* Plane(int i) { return planes_ + i * machine_->PlaneStride(); }
 
   // Host transfers (charged to the host class): one value per virtual PE, in PE order;
   // PEs past the vector's end get 0. Values must have this multi's format.

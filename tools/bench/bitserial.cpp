@@ -100,6 +100,7 @@ void LayerSweep() {
   fmt::print("{:>7} {:>14} {:>14} {:>14} {:>14} {:>9}\n", "layers", "cycles", "op-by-op ns/c",
              "blocks 1t ns/c", "blocks Nt ns/c", "Nt/1t");
   const MachineProfile profile = Profile("wavetracer");
+  std::vector<double> perCycle1, perCycleN;  // blocks, ns per modelled cycle
   for (int layers : {18, 64, 254, 1024, 2048}) {
     const int64_t pes = int64_t{layers} * profile.physicalPes;
     double cycles = 0;
@@ -117,10 +118,17 @@ void LayerSweep() {
       });
     };
     const double one = blocked(1), all = blocked(0);
+    perCycle1.push_back(one / cycles * 1e9);
+    perCycleN.push_back(all / cycles * 1e9);
     fmt::print("{:>7} {:>14.4g} {:>14} {:>14.3f} {:>14.3f} {:>9.2f}\n", layers, cycles,
                opByOp > 0 ? fmt::format("{:.3f}", opByOp / cycles * 1e9) : std::string("-"),
                one / cycles * 1e9, all / cycles * 1e9, one / all);
   }
+  auto spread = [](const std::vector<double>& v) {
+    return *std::max_element(v.begin(), v.end()) / *std::min_element(v.begin(), v.end());
+  };
+  fmt::print("flatness (largest / smallest ns per cycle, 18 to 2048 layers; target <= 1.5): "
+             "blocks 1t {:.2f}, blocks Nt {:.2f}\n", spread(perCycle1), spread(perCycleN));
 }
 
 int main() {
