@@ -44,6 +44,21 @@ ConeDivision PlanDivision(double eN, double eD, double tFar, double target, doub
   return v;
 }
 
+// Per-PE error ladders (docs/simd.md, "Error bounds", cones). The object-wide bounds hold at
+// the edge of what is certified: the root's error eDisc/√G at the grazing band's edge and a
+// quotient's (eN + |t|·eD)/|D| at the divisor's threshold D*. Most PEs are far from both: rung
+// j of the discriminant, computed disc >= 4^j·G, has √disc within eDisc/(2^j·√G); rung k of a
+// divisor, |D| >= 4^k·D*, divides the quotient's error by 4^k. Each PE takes the tightest rung
+// whose conditions hold (masked broadcasts of uni constants: no division), for its t margin
+// (near ties, hither) and its height margin (the rims).
+constexpr int kDiscRungs = 4, kDivRungs = 4;
+
+struct ConeLadder {
+  double margin[kDiscRungs][kDivRungs] = {};  // |t − t_exact| + u at rung (j, k)
+  double height[kDiscRungs][kDivRungs] = {};  // |s − s_exact| + u at rung (j, k)
+  Format format;                              // holds every margin and height
+};
+
 // An open truncated cone (NFF `c`) as the array tests it: everything the host folds into uni
 // constants, and the error analysis (docs/simd.md: "The program", cones, and "Error bounds").
 // In object space (ray o' + t·d', d' = T⁻¹d, so t is the world t) with unit axis a,
@@ -61,10 +76,11 @@ struct ConeSetup {
   Format aFormat, discFormat, sum3A, sum3Disc, rootFormat, qFormat;
   double eA = 0, eDisc = 0, grazeBand = 0, eRoot = 0, eQ = 0;
   ConeDivision divA, divC;  // t = Q/A and t = C/Q
-  double eS[2] = {};        // height error for each division's root
+  ConeLadder ladder[2];     // per-PE margins of each division's root (rung (0, 0): the bounds')
   Format sFormat[2];
   double tFar = 0, tNear = 0;
-  bool degenerate = false;  // the bounds do not close at these widths: always uncertain
+  bool degenerate = false;
+  bool rootsOrdered = false;  // G − e_disc > eβ²: a certain C/Q hit hides Q/A (ConeProgram::Run)  // the bounds do not close at these widths: always uncertain
 };
 
 // ‖T‖₂ <= √(‖T‖₁‖T‖∞) (tighter than the Frobenius norm for rotations and scales); 1 without
@@ -167,22 +183,63 @@ void SetUpQuadratic(ConeSetup& cs, const PassFormats& pf) {
 // showcase's cone: 8.8 % of its pixels); 16 halves that threshold at twice the t error
 // (measured with tools/refine-table.sh, docs/simd.md "Refine pass").
 constexpr double kConeTargetPerEq = 16;
+// The per-PE ladders (ConeLadder) certify every PE at its own error, so the threshold D*
+// (rung 0) is set this much lower than the target asks, and the rungs 4^k·D* reach 8× past
+// it: a root well inside the cone keeps at most the target's error, and the PEs between
+// the new and the old threshold are certified, with their own (larger) margins, instead of
+// flagged (docs/simd.md, "Error bounds", cones).
+constexpr double kLadderSpan = 8;
 
 // The divisions, aiming at a t error of 64·tFar·2^-F (the planner's nominal order) or
 // kConeTargetPerEq × the error of Q, whichever is larger. For C/Q, an in-range root has
 // Q >= |C|/tFar, so a threshold below |C|/(1.25·tFar) costs no flags (smaller Q are
 // certainly beyond). Then the height s = w·a + t·(d'·a) of each root.
-void SetUpDivisions(ConeSetup& cs, const PassFormats& pf) {
+void SetUpDivisions(ConeSetup& cs, const PassFormats& pf, double rho) {
   const double u = pf.Ulp();
   const double target = std::max({64 * cs.tFar * pf.NominalUlp(), kConeTargetPerEq * cs.eQ, 4 * u});
-  cs.divA = PlanDivision(cs.eQ, cs.eA, cs.tFar, target, 0, pf.fracBits);
-  cs.divC = PlanDivision(u / 2, cs.eQ, cs.tFar, target, std::abs(cs.C) / (1.25 * cs.tFar), pf.fracBits);
+  // The lowest threshold (the widest span) whose quotients still fit t and whose error stays
+  // within the cone's radius ρ: a lower D* lets t reach further past tFar, which at low widths
+  // can exceed t's range, and a margin wider than the cone ties with whatever lies behind it
+  // (it certifies nothing a flag would not).
+  for (double span = kLadderSpan;; span /= 2) {
+    cs.degenerate = false;
+    cs.divA = PlanDivision(cs.eQ, cs.eA, cs.tFar, span * target, 0, pf.fracBits);
+    cs.divC = PlanDivision(u / 2, cs.eQ, cs.tFar, span * target, std::abs(cs.C) / (1.25 * cs.tFar), pf.fracBits);
+    const ConeDivision* divs[2] = {&cs.divA, &cs.divC};
+    for (int i = 0; i < 2; ++i) {
+      const ConeDivision& v = *divs[i];
+      cs.sFormat[i] = Format::Signed(IntBitsFor(std::abs(cs.wa) + 2 * v.tCut * cs.da.max + 1), pf.fracBits);
+      if (v.tCut >= std::ldexp(1.0, pf.t.intBits)) cs.degenerate = true;  // a hit would not fit t
+    }
+    if ((!cs.degenerate && std::max(cs.divA.tError, cs.divC.tError) <= rho) || span <= 1) return;
+  }
+}
+
+// x rounded up to a multiple of 2^-frac.
+double RoundUp(double x, int frac) { return std::ldexp(std::ceil(std::ldexp(x, frac)), -frac); }
+
+// The ladders: at rung (j, k) the error of Q is eβ + eDisc/(2^j·√G) + u, the division's
+// error (eN + tRange·eD)/(2^k·D*) + u with eN, eD from that Q (Q/A: eN = e_Q; C/Q: eD = e_Q),
+// and the height's s = w·a + t·(d'·a) from it. Rung (0, 0) is the division's tError and eS.
+void SetUpLadders(ConeSetup& cs, const PassFormats& pf) {
+  const double u = pf.Ulp();
   const ConeDivision* divs[2] = {&cs.divA, &cs.divC};
   for (int i = 0; i < 2; ++i) {
     const ConeDivision& v = *divs[i];
-    cs.eS[i] = MulErr(v.tRange, v.tError, Length(cs.da.c), cs.da.err, u) + u / 2;
-    cs.sFormat[i] = Format::Signed(IntBitsFor(std::abs(cs.wa) + 2 * v.tCut * cs.da.max + 1), pf.fracBits);
-    if (v.tCut >= std::ldexp(1.0, pf.t.intBits)) cs.degenerate = true;  // a hit would not fit t
+    ConeLadder& l = cs.ladder[i];
+    double widest = 0;
+    for (int j = 0; j < kDiscRungs; ++j) {
+      const double eQ = cs.beta.err + cs.eDisc / std::ldexp(std::sqrt(cs.grazeBand), j) + u;
+      const double eN = i == 0 ? eQ : v.eN, eD = i == 0 ? v.eD : eQ;
+      for (int k = 0; k < kDivRungs; ++k) {
+        const double dk = std::ldexp(v.dStar, 2 * k);
+        const double e = eN / dk + v.tRange * eD / dk + u;
+        l.margin[j][k] = RoundUp(e + u, pf.fracBits);
+        l.height[j][k] = RoundUp(MulErr(v.tRange, e, Length(cs.da.c), cs.da.err, u) + u / 2 + u, pf.fracBits);
+        widest = std::max({widest, l.margin[j][k], l.height[j][k]});
+      }
+    }
+    l.format = Format::Unsigned(IntBitsFor(widest + u), pf.fracBits);
   }
 }
 
@@ -200,10 +257,12 @@ ConeSetup MakeConeSetup(const Primitive& p, const Vec3& eye, const PassFormats& 
   cs.grazeBand = std::max(2 * cs.eDisc, std::pow(rho / 8, 2) * pf.BandScale());
   cs.eRoot = cs.eDisc / std::sqrt(cs.grazeBand) + u;
   cs.eQ = cs.beta.err + cs.eRoot;
+  cs.rootsOrdered = cs.grazeBand - cs.eDisc > cs.beta.err * cs.beta.err;
   const ConeReach reach = Reach(p, eye, spectral);
   cs.tFar = reach.far + u;
   cs.tNear = reach.near;
-  SetUpDivisions(cs, pf);
+  SetUpDivisions(cs, pf, rho);
+  SetUpLadders(cs, pf);
   return cs;
 }
 
@@ -215,7 +274,7 @@ Multi Linear(const Multi (&d)[3], const LinearForm& l, int frac) {
 // One root of the cone: t = ±N/D where |D| >= D* (`sure`), or certainly outside the cone's
 // range [tNear, tFar] of t (`beyond`: no hit), or neither (uncertain). See ConeDivision.
 struct ConeRoot {
-  Multi t, sure, beyond;
+  Multi t, sure, beyond, absD;  // absD: |D|, for the ladder
 };
 
 // Certainly |N/D| outside [tNear, tFar] (no point of the cone there), for |N| and |D| with
@@ -239,6 +298,7 @@ ConeRoot ConeDivide(Machine& m, const Multi& n, const Multi& den, const Multi& n
                     const ConeDivision& v, double tNear, double tFar, int frac) {
   ConeRoot r;
   const Multi absD = AbsOf(den);
+  r.absD = absD;
   r.sure = Broadcast(m, Tight(v.dStar, frac)) <= absD;
   r.beyond = Outside(m, AbsOf(n), absD, v.eN, v.eD, tNear, tFar, frac);
   WithExpectedSaturation(m, [&] {  // a saturated quotient is >= tCut: beyond the cone
@@ -301,19 +361,46 @@ class ConeProgram final : public ObjectProgram {
   Multi UniOf(Machine& m, double x) const { return Broadcast(m, Tight(x, pf_.fracBits)); }
 
   // Root i's tests: a valid hit (in range, beyond hither, height inside), uncertain (the
-  // division undecided, or near hither or a rim), and where uncertain the least t a true
-  // hit could have.
+  // division undecided, or near hither or a rim, within the PE's margins), and where
+  // uncertain the least t a true hit could have.
   void TestRoot(Machine& m, int i, const ConeRoot& r, const Multi& roots, const Multi& da, const Multi& hither,
-                const Multi& sLo, const Multi& sHi, Multi& valid, Multi& unsure, Multi& low) const;
+                const Multi& sLo, const Multi& sHi, const Multi& margin, const Multi& height, Multi& valid,
+                Multi& unsure, Multi& low) const;
+
+  // Root i's t and height margins at each PE: the tightest rung of its ladder whose
+  // conditions hold (discAt[j − 1]: disc >= 4^j·G).
+  void Climb(Machine& m, int i, const Multi (&discAt)[kDiscRungs - 1], const Multi& absD, Multi& margin,
+             Multi& height) const;
 
   PassFormats pf_;
   ConeSetup cs_;
   ObjectBounds b_;
 };
 
+void ConeProgram::Climb(Machine& m, int i, const Multi (&discAt)[kDiscRungs - 1], const Multi& absD,
+                        Multi& margin, Multi& height) const {
+  const ConeLadder& l = cs_.ladder[i];
+  const int F = pf_.fracBits;
+  const double dStar = (i == 0 ? cs_.divA : cs_.divC).dStar;
+  auto at = [&](double x) {
+    return Broadcast(m, fixed::FromDouble(x, l.format, {fixed::Rounding::Floor, fixed::OverflowPolicy::Saturate}));
+  };
+  Multi divAt[kDivRungs - 1];
+  for (int k = 1; k < kDivRungs; ++k)
+    divAt[k - 1] = absD >= bitserial::Uni{Tight(RoundUp(std::ldexp(dStar, 2 * k), F), F)};
+  margin = at(l.margin[0][0]), height = at(l.height[0][0]);
+  // In order of j, then k: the last rung whose conditions hold is the tightest (both grow).
+  for (int j = 0; j < kDiscRungs; ++j)
+    for (int k = 0; k < kDivRungs; ++k) {
+      if (j == 0 && k == 0) continue;
+      const Multi cond = j == 0 ? divAt[k - 1] : k == 0 ? discAt[j - 1] : (discAt[j - 1] && divAt[k - 1]);
+      Where(cond, [&] { margin = at(l.margin[j][k]), height = at(l.height[j][k]); });
+    }
+}
+
 void ConeProgram::TestRoot(Machine& m, int i, const ConeRoot& r, const Multi& roots, const Multi& da,
-                           const Multi& hither, const Multi& sLo, const Multi& sHi, Multi& valid, Multi& unsure,
-                           Multi& low) const {
+                           const Multi& hither, const Multi& sLo, const Multi& sHi, const Multi& margin,
+                           const Multi& height, Multi& valid, Multi& unsure, Multi& low) const {
   const int F = pf_.fracBits;
   const double u = pf_.Ulp();
   const ConeDivision& v = i == 0 ? cs_.divA : cs_.divC;
@@ -324,12 +411,11 @@ void ConeProgram::TestRoot(Machine& m, int i, const ConeRoot& r, const Multi& ro
   const Multi inRange = roots && r.sure && (r.t < UniOf(m, v.tCut));
   valid = inRange && (hither < r.t) && (sLo < s) && (s < sHi);
   const Multi notBehind = UniOf(m, pf_.hither - v.tError - u) < r.t;
-  const Multi rim = Near(m, r.t - hither, v.tError + u, F) || Near(m, s - sLo, cs_.eS[i] + u, F) ||
-                    Near(m, s - sHi, cs_.eS[i] + u, F);
+  const Multi rim = Near(m, r.t - hither, margin, F) || Near(m, s - sLo, height, F) || Near(m, s - sHi, height, F);
   unsure = (roots && !r.sure && !r.beyond) || (inRange && notBehind && rim);
   // Where uncertain, the true root (if a hit) is >= low.
   WithExpectedSaturation(m, [&] {
-    const Multi lowSure = Sub(r.t, UniOf(m, v.tError + u), pf_.t, kSaturate);
+    const Multi lowSure = Sub(r.t, margin, pf_.t, kSaturate);
     low = Select(r.sure, lowSure, Select(r.beyond, Broadcast(m, tMax), UniOf(m, cs_.tNear), pf_.t), pf_.t, kSaturate);
   });
 }
@@ -374,13 +460,27 @@ Candidate ConeProgram::Run(Machine& m, const Directions& dirs) const {
                            Outside(m, absC, absQ, u / 2, eQg, cs.tNear, cs.tFar, F));
   }
   const Multi hither = uni(pf_.hither), sLo = uni(cs.sLo), sHi = uni(cs.sHi);
-  Multi valid[2], unsure[2], low[2];
-  for (int i = 0; i < 2; ++i) TestRoot(m, i, rs[i], roots, da, hither, sLo, sHi, valid[i], unsure[i], low[i]);
+  Multi discAt[kDiscRungs - 1];
+  for (int j = 1; j < kDiscRungs; ++j)
+    discAt[j - 1] = disc >= bitserial::Uni{Tight(RoundUp(std::ldexp(cs.grazeBand, 2 * j), F), F)};
+  Multi valid[2], unsure[2], low[2], margin[2], height[2];
+  for (int i = 0; i < 2; ++i) {
+    Climb(m, i, discAt, rs[i].absD, margin[i], height[i]);
+    TestRoot(m, i, rs[i], roots, da, hither, sLo, sHi, margin[i], height[i], valid[i], unsure[i], low[i]);
+  }
   out.hit = valid[0] || valid[1];
-  WithExpectedSaturation(m, [&] {
-    out.t = Select(valid[0] && (!valid[1] || rs[0].t < rs[1].t), rs[0].t, rs[1].t, pf_.t, kSaturate);
-  });
-  out.uncertain = grazing || unsure[0] || unsure[1];
+  const Multi first = valid[0] && (!valid[1] || rs[0].t < rs[1].t);
+  WithExpectedSaturation(m, [&] { out.t = Select(first, rs[0].t, rs[1].t, pf_.t, kSaturate); });
+  const Format marginFormat =
+      Format::Unsigned(std::max(cs.ladder[0].format.intBits, cs.ladder[1].format.intBits), F);
+  if (!b_.alwaysUncertain) out.lowMargin = Select(first, margin[0], margin[1], marginFormat);
+  // The exact roots paired with Q/A and C/Q multiply to C/A; with β's computed sign right,
+  // |Q/A| >= |C/Q| (Q² >= β² >= AC where AC > 0; Q² >= disc >= −AC where AC < 0); with it
+  // wrong (|β| <= eβ) the roots have opposite signs, as disc >= G − e_disc > eβ² >= β²
+  // (cs.rootsOrdered). Either way, where C/Q is a certain valid hit, Q/A is behind the eye or
+  // no nearer, so its own doubts (an undecided division seen along the axis, its rims) do
+  // not matter.
+  out.uncertain = grazing || unsure[1] || (cs.rootsOrdered ? unsure[0] && !valid[1] : unsure[0]);
   out.tLow = Select(grazing, uni(cs.tNear), Min(low[0], low[1], pf_.t), pf_.t);
   if (b_.alwaysUncertain) {  // the bounds do not close: every PE that may hit is flagged
     out.uncertain = uni(-cs.grazeBand) < disc;

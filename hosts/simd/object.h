@@ -25,6 +25,11 @@ struct Candidate {
   bitserial::Multi hit;        // 1 bit: a hit beyond hither at t
   bitserial::Multi uncertain;  // 1 bit: the hit/miss or hither decision is within the bounds
   bitserial::Multi tLow;       // in the t format: where uncertain, the true hit (if any) is >= tLow
+  // Optional, per PE where hit and not uncertain: a margin with |t − t_exact| <= lowMargin,
+  // at most the object's bounds.tError + 2^-F (an unsigned format with F fraction bits). Empty:
+  // that uni everywhere. A cone's error depends on its divisor and discriminant per PE
+  // (hosts/simd/cone.cpp, docs/simd.md "Error bounds", cones).
+  bitserial::Multi lowMargin;
 };
 
 // The ray directions on the array: fixed point (s1.Fd, the matrix's) always; with --number

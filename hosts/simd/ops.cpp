@@ -20,13 +20,21 @@ Multi Dot3(const Multi (&d)[3], const Fixed (&c)[3], Format out) {
 
 Multi Zero(Machine& m) { return Broadcast(m, Fixed{Format::Unsigned(1, 0), 0}); }
 
-Multi Near(Machine& m, const Multi& x, double band, int frac) {
+namespace {
+// |x| in an unsigned format of x's integer bits (saturating, expected).
+Multi AbsClamped(Machine& m, const Multi& x, int frac) {
   Multi a;
-  WithExpectedSaturation(m, [&] {
-    a = Abs(x, Format::Unsigned(std::max(1, x.Format().intBits), frac), kSaturate);
-  });
+  WithExpectedSaturation(m, [&] { a = Abs(x, Format::Unsigned(std::max(1, x.Format().intBits), frac), kSaturate); });
+  return a;
+}
+}  // namespace
+
+Multi Near(Machine& m, const Multi& x, double band, int frac) {
+  const Multi a = AbsClamped(m, x, frac);
   return a < Broadcast(m, Tight(band, frac));
 }
+
+Multi Near(Machine& m, const Multi& x, const Multi& band, int frac) { return AbsClamped(m, x, frac) < band; }
 
 Multi SubBound(Machine& m, const Multi& x, double c, Format out) {
   if (!std::isfinite(c)) return Broadcast(m, Fixed{out, out.MinRaw()});

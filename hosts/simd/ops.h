@@ -32,6 +32,9 @@ bitserial::Multi Zero(bitserial::Machine& m);
 // |x| < band (band a host constant, `frac` fraction bits), with the clamp's saturation expected.
 bitserial::Multi Near(bitserial::Machine& m, const bitserial::Multi& x, double band, int frac);
 
+// |x| < band per PE (an unsigned multi with `frac` fraction bits), the clamp's saturation expected.
+bitserial::Multi Near(bitserial::Machine& m, const bitserial::Multi& x, const bitserial::Multi& band, int frac);
+
 // x − c, saturating at the format's ends (a bound, not a value that must be exact); the
 // format's least value where c is not finite.
 bitserial::Multi SubBound(bitserial::Machine& m, const bitserial::Multi& x, double c, fixed::Format out);

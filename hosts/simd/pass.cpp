@@ -109,7 +109,9 @@ void FoldCandidate(Machine& m, const ObjectPlan& object, const PrimaryPlan& plan
   // e is never relied on); saturating down only widens the test.
   const double e = object.bounds.alwaysUncertain ? 0.0 : object.bounds.tError + plan.pass.Ulp();
   Multi low;
-  WithExpectedSaturation(m, [&] { low = Sub(c.t, Broadcast(m, Tight(e, plan.fracBits)), T, kSaturate); });
+  WithExpectedSaturation(m, [&] {
+    low = Sub(c.t, c.lowMargin.Empty() ? Broadcast(m, Tight(e, plan.fracBits)) : c.lowMargin, T, kSaturate);
+  });
   Where(c.uncertain, [&] { k.tGraze = Min(k.tGraze, c.tLow, T); });
   const Multi closer = c.hit && (c.t < a.t);
   // A polygon in the best's plane has the best's t bit for bit and ties with it exactly: the

@@ -96,6 +96,22 @@ TEST(SimdAdversarial, ConesAlongAndAcrossTheirAxis) {
   ExpectSound(s, {8, 12, -1});
 }
 
+TEST(SimdAdversarial, CylindersJoinedBySpheresAndSeenEndOn) {
+  // The joints of SPD rings and lattice: cylinders ending in spheres of their own radius (the
+  // rim circle lies on the sphere, so the surfaces tie along it; a rim within its height
+  // margin), a cylinder pointing almost at the eye (its divisor |A| small over its whole
+  // image: the per-PE ladder and the far root hidden by a certain near one) and an open tube
+  // seen obliquely through its end (the far root, its inside wall, visible).
+  const Scene s = Build("0 0 0", "0 0 -6", 40,
+                        "c -1 0 -6 0.3 1 0 -6 0.3\ns -1 0 -6 0.3\ns 1 0 -6 0.3\n"
+                        "c 1 0 -6 0.3 1.3 1.2 -7 0.3\ns 1.3 1.2 -7 0.3\n"
+                        "c -1.5 1.5 -5 0.25 -1.42 1.46 -9 0.25\n"
+                        "c 0.4 -1.3 -4.5 0.4 0.9 -1.5 -7.5 0.4\n"
+                        "p 4\n-9 -3 -2\n9 -3 -2\n9 -3 -20\n-9 -3 -20\n");
+  ExpectSeen(s, {0, 1, 2, 3, 5, 6});
+  ExpectSound(s, {8, 12, 16, -1});
+}
+
 // A quad drawn twice (two triangulations) in a tilted plane, a fan of triangles around a
 // vertex (seams where they share edges), and a polygon seen nearly edge-on.
 constexpr const char* kPolygons =
