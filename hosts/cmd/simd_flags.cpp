@@ -29,8 +29,9 @@ void SimdFlags::AddTo(CLI::App& command, const std::string& helpPrefix, bool wit
   if (withUncertain)
     added_.push_back(command.add_option(
         "--uncertain", uncertain_,
-        helpPrefix + "uncertain pixels: recompute (default, in double on the host), refine (a second, "
-                     "wider array pass on them first), keep, fail"));
+        helpPrefix + "uncertain pixels: auto (default: refine where the first pass flags more than 1 % of "
+                     "the pixels, else recompute), recompute (in double on the host), refine (a second, wider "
+                     "array pass on them first), keep, fail"));
   added_.push_back(command.add_option("--machine", options_.profile,
                                       helpPrefix + "machine profile (wavetracer, mpp)"));
   added_.push_back(command.add_option("--threads", options_.threads,
@@ -58,7 +59,7 @@ simd::SimdOptions SimdFlags::Options() const {
       throw UserError("--float-format " + floatFormat_ + " applies to --number float only");
     o.floatFormat = fixed::FloatFormat::Parse(floatFormat_);
   }
-  if (!uncertain_.empty()) o.uncertain = simd::ParseUncertainPolicy(uncertain_);
+  o.uncertain = simd::ParseUncertainPolicy(uncertain_.empty() ? "auto" : uncertain_);
   if (o.threads != 0) bitserial::CheckThreads(o.threads);  // 0: not given, every core
   return o;
 }

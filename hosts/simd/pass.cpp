@@ -290,7 +290,7 @@ void HandleUncertain(PrimaryPass& pass, const Scene& scene, const PrimaryRays& r
   if (policy == UncertainPolicy::kFail && uncertain > 0)
     throw UserError(fmt::format("--uncertain fail: {} uncertain pixel(s): {} overflow, {} grazing, {} near tie",
                                 uncertain, pass.overflowPixels, pass.grazingPixels, pass.tiePixels));
-  if ((policy != UncertainPolicy::kRecompute && policy != UncertainPolicy::kRefine) || uncertain == 0) return;
+  if (policy == UncertainPolicy::kKeep || policy == UncertainPolicy::kFail || uncertain == 0) return;
   TraceOptions trace;
   trace.depth = 1;
   const auto tracer = Tracer::Create(scene, trace);
@@ -431,7 +431,11 @@ PrimaryPass RunPrimaryPass(const Scene& scene, const SimdOptions& options) {
   const auto hostStart = std::chrono::steady_clock::now();
   DecodeMatrix(pass, run.raw);
   run.raw = MatrixRaw(0);  // the decoded matrix holds it all now; free it before the recompute
-  if (options.uncertain == UncertainPolicy::kRefine) Refine(pass, scene, options, rays);
+  const int64_t flagged =
+      std::count_if(pass.matrix.flags.begin(), pass.matrix.flags.end(), [](uint32_t f) { return f != 0; });
+  const int64_t budget = int64_t(kAutoRefineShare * double(pass.matrix.flags.size()));
+  if (options.uncertain == UncertainPolicy::kRefine || (options.uncertain == UncertainPolicy::kAuto && flagged > budget))
+    Refine(pass, scene, options, rays);
   HandleUncertain(pass, scene, rays, options.uncertain,
                   options.threads > 0 ? options.threads : bitserial::HardwareThreads());
   pass.recomputeSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - hostStart).count();

@@ -23,7 +23,8 @@ UncertainPolicy ParseUncertainPolicy(const std::string& name) {
   if (name == "keep") return UncertainPolicy::kKeep;
   if (name == "fail") return UncertainPolicy::kFail;
   if (name == "refine") return UncertainPolicy::kRefine;
-  throw UserError("--uncertain: expected recompute, refine, keep or fail, got '" + name + "'");
+  if (name == "auto") return UncertainPolicy::kAuto;
+  throw UserError("--uncertain: expected auto, recompute, refine, keep or fail, got '" + name + "'");
 }
 const char* UncertainPolicyName(UncertainPolicy p) {
   switch (p) {
@@ -31,6 +32,7 @@ const char* UncertainPolicyName(UncertainPolicy p) {
     case UncertainPolicy::kRefine: return "refine";
     case UncertainPolicy::kKeep: return "keep";
     case UncertainPolicy::kFail: return "fail";
+    case UncertainPolicy::kAuto: return "auto";
   }
   return "?";
 }

@@ -26,9 +26,13 @@ namespace zephyr::simd {
 
 // What to do with uncertain pixels (overflow, grazing, near tie): recompute them on the host
 // in double; refine them first in a second, wider array pass and recompute only what is
-// still uncertain; keep the array's answer (flagged); or fail.
-enum class UncertainPolicy { kRecompute, kKeep, kFail, kRefine };
-UncertainPolicy ParseUncertainPolicy(const std::string& name);  // recompute|refine|keep|fail
+// still uncertain; keep the array's answer (flagged); fail; or auto: refine where the first
+// pass flags more than kAutoRefineShare of the pixels, else recompute (the command line's
+// default, docs/simd.md "Refine pass": the refine pass costs ~a fifth of the first pass's
+// cycles whatever it refines, and below that share recompute already meets the 1 % budget).
+enum class UncertainPolicy { kRecompute, kKeep, kFail, kRefine, kAuto };
+UncertainPolicy ParseUncertainPolicy(const std::string& name);  // recompute|refine|keep|fail|auto
+constexpr double kAutoRefineShare = 0.01;  // the host's budget of pixels (docs/simd.md, "Refine pass")
 const char* UncertainPolicyName(UncertainPolicy p);
 
 // The narrowest widths a user may ask for (--frac-bits, --dir-frac-bits, --int-bits): the

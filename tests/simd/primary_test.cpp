@@ -396,9 +396,34 @@ TEST(SimdRefine, CertifiesSoundlyOnConesEllipsoidsAndPolygons) {
   CheckRefine(GenerateTransformedShowcase(48, 48), -1);
 }
 
+// auto refines exactly where the first pass flags more than kAutoRefineShare of the pixels
+// (then as refine does), else recomputes (as recompute does).
+TEST(SimdRefine, AutoRefinesOnlyAboveTheHostBudget) {
+  const Scene scene = GenerateRandomSpheres({.count = 64, .seed = 1, .width = 64, .height = 64});
+  for (int bits : {8, -1}) {
+    SimdOptions o;
+    o.formats.fracBits = bits;
+    o.uncertain = UncertainPolicy::kAuto;
+    const PrimaryPass automatic = RunPrimaryPass(scene, o);
+    const int64_t flagged = automatic.overflowPixels + automatic.grazingPixels + automatic.tiePixels;
+    ASSERT_GT(flagged, 0) << bits;
+    const bool above = double(flagged) > kAutoRefineShare * 64 * 64;
+    EXPECT_EQ(above, bits == 8) << "the case should have " << (bits == 8 ? "many" : "few") << " flags: " << flagged;
+    o.uncertain = above ? UncertainPolicy::kRefine : UncertainPolicy::kRecompute;
+    const PrimaryPass same = RunPrimaryPass(scene, o);
+    EXPECT_EQ(automatic.refinedPixels, same.refinedPixels) << bits;
+    EXPECT_EQ(automatic.recomputedPixels, same.recomputedPixels) << bits;
+    EXPECT_EQ(above, automatic.refinedPixels > 0) << bits;
+    for (size_t i = 0; i < same.matrix.hits.size(); ++i)
+      ASSERT_EQ(automatic.matrix.hits[i].object, same.matrix.hits[i].object) << bits << " bits, pixel " << i;
+  }
+}
+
 TEST(SimdRefine, PolicyNameParses) {
   EXPECT_EQ(ParseUncertainPolicy("refine"), UncertainPolicy::kRefine);
   EXPECT_STREQ(UncertainPolicyName(UncertainPolicy::kRefine), "refine");
+  EXPECT_EQ(ParseUncertainPolicy("auto"), UncertainPolicy::kAuto);
+  EXPECT_STREQ(UncertainPolicyName(UncertainPolicy::kAuto), "auto");
   EXPECT_THROW(ParseUncertainPolicy("refin"), UserError);
 }
 

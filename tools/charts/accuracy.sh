@@ -9,7 +9,7 @@
 # (tMaxError, tMeanError) over a random sample of ACC_SAMPLE pixels, and the PSNR of the final
 # image against the sequential method in double over every pixel (psnrDb; "inf" = identical).
 # Both run with --uncertain keep: the array's own answer, before the host repairs the pixels it
-# flagged (with the default, recompute, every pixel is exact by construction, docs/simd.md).
+# flagged (with the default, auto — refine, then recompute —, every pixel is exact by construction, docs/simd.md).
 # The planner's own choice (no --frac-bits) is one more row, marked planned=1. The sequential
 # tracer in float32 and float64 adds two points (host time of the render): `zephyr accuracy
 # --method seq --precision float|double` compares their primary hits with the same exact
