@@ -21,7 +21,9 @@
 # Usage: tools/mutants.sh [ID...]      (no ID: every mutant)
 # Env:   MUTANTS_JSON (default tools/mutants.json); LANES (default 1): scratch copies working
 #        through the list side by side; MUTANT_TIMEOUT seconds per test run (default 600);
-#        JOBS make jobs per lane (default 2); KEEP=1 keeps the scratch copies.
+#        JOBS make jobs per lane (default 2); KEEP=1 keeps the scratch copies;
+#        MUTANTS_SCRATCH=DIR keeps them in DIR and reuses them on the next run (reset to the
+#        committed tree, build/ kept), so a rerun rebuilds only what changed since.
 # Prints one line per mutant, then "mutation score: K killed of N (P %)", the equivalent
 # ones, the survivors and the errors; exits 1 when a mutant survives or errs.
 set -uo pipefail
@@ -41,10 +43,16 @@ CORE='Fixed*:BitserialArith*:BitserialCycles.*:BitserialMemory.*:TraceShade.*:Tr
 command -v jq >/dev/null || { echo "mutants: jq is needed (tools/setup.sh installs it)" >&2; exit 2; }
 jq -e 'type == "array"' "$list" >/dev/null || { echo "mutants: $list is not a JSON array" >&2; exit 2; }
 
-scratch=$(mktemp -d "${TMPDIR:-/tmp}/zephyr-mutants.XXXXXX")
+if [ -n "${MUTANTS_SCRATCH:-}" ]; then
+  mkdir -p "$MUTANTS_SCRATCH" && scratch=$(realpath "$MUTANTS_SCRATCH") ||
+    { echo "mutants: cannot make the scratch directory $MUTANTS_SCRATCH" >&2; exit 2; }
+  rm -f "$scratch"/lane*.results
+else
+  scratch=$(mktemp -d "${TMPDIR:-/tmp}/zephyr-mutants.XXXXXX")
+fi
 cleanup() {
   jobs -p | xargs -r kill 2>/dev/null
-  if [ "${KEEP:-0}" != 1 ]; then
+  if [ "${KEEP:-0}" != 1 ] && [ -z "${MUTANTS_SCRATCH:-}" ]; then
     for ((l = 0; l < lanes; ++l)); do git worktree remove --force "$scratch/tree$l" >/dev/null 2>&1; done
     rm -rf "$scratch"
   fi
@@ -70,8 +78,14 @@ echo "mutants: ${#ids[@]} mutants of $list on $(git rev-parse --short HEAD) (com
 
 # Scratch trees, built unmutated (in parallel; ccache makes this mostly linking).
 for ((l = 0; l < lanes; ++l)); do
-  git worktree add --detach "$scratch/tree$l" HEAD >/dev/null 2>&1 ||
-    { echo "mutants: cannot make a scratch worktree in $scratch" >&2; exit 2; }
+  if [ -d "$scratch/tree$l" ]; then  # reused (MUTANTS_SCRATCH): back to the committed tree
+    git -C "$scratch/tree$l" checkout -q --detach --force "$(git rev-parse HEAD)" &&
+      git -C "$scratch/tree$l" clean -q -fd -e build ||
+      { echo "mutants: cannot reset the scratch worktree $scratch/tree$l" >&2; exit 2; }
+  else
+    git worktree add --detach "$scratch/tree$l" HEAD >/dev/null 2>&1 ||
+      { echo "mutants: cannot make a scratch worktree in $scratch" >&2; exit 2; }
+  fi
   build "$scratch/tree$l" &
 done
 for ((l = 0; l < lanes; ++l)); do
