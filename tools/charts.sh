@@ -13,6 +13,7 @@
 #   ZEPHYR=path    the zephyr program (default build/bin/zephyr)
 #   OUT=dir        where the CSV/PNG go (default docs/results)
 #   MPIRUN=cmd     the MPI launcher (default mpirun)
+#   SCENES=dir     SPD scenes (lattice_s1.nff) for the recompute-share chart; optional
 # Methods that the zephyr program does not list in `render --help` yet are skipped, with a
 # note printed here and on the chart, so the chain works while methods land.
 set -euo pipefail
@@ -251,6 +252,11 @@ source "$ROOT/tools/charts/accuracy.sh"
 if [ "$MODE" = quick ]; then FVF=(FRAC=8 FLOATS=e6m12 SAMPLE=1024); else FVF=(SAMPLE="$ACC_SAMPLE"); fi
 env "${FVF[@]}" SIZE="$SIZE" COUNT="$REF_COUNT" SEED="$SEED" ZEPHYR="$ZEPHYR" OUT="$OUT" \
   bash "$GP/fixed_vs_float.sh" || skip "fixed vs float chart (tools/charts/fixed_vs_float.sh failed)"
+# The recompute share by width (its own script, also run alone): 128x128 (QUICK: 64x64, 2
+# widths); SCENES=DIR adds the SPD lattice from DIR.
+if [ "$MODE" = quick ]; then RCS=(SIZE=64 FRAC="8 16"); else RCS=(SIZE=128); fi
+env "${RCS[@]}" SEED="$SEED" ZEPHYR="$ZEPHYR" OUT="$OUT" SCENES="${SCENES:-}" \
+  bash "$GP/recompute.sh" || skip "recompute share chart (tools/charts/recompute.sh failed)"
 
 { echo "mode,$MODE"; echo "size,$SIZE"; echo "objects,$(tr ' ' ';' <<<"$COUNTS")"
   echo "children,$(tr ' ' ';' <<<"$CHILDREN")"; echo "frames,$(tr ' ' ';' <<<"$FRAMES")"

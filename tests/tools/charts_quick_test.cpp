@@ -66,7 +66,8 @@ TEST(ChartsQuick, EverySweepWritesItsCsvAndChart) {
   const struct { const char* csv; int minRows; } tables[] = {
       {"fig05_seq_vs_simd", 2}, {"fig06_seq_vs_dist", 2}, {"fig07_hetero_vs_dist_2children", 2},
       {"fig10_data_flow", 2},   {"fig11_pixels", 2},      {"fig12_all_methods", 2},
-      {"stability_distance", 100}, {"stability_overflow", 10}, {"runs", 2}};
+      {"stability_distance", 100}, {"stability_overflow", 10}, {"runs", 2},
+      {"recompute_share", 8}};  // 2 scenes x 2 policies x 2 widths
   for (const auto& t : tables) {
     const fs::path csv = out / (std::string(t.csv) + ".csv");
     ASSERT_TRUE(fs::exists(csv)) << csv;
@@ -76,7 +77,7 @@ TEST(ChartsQuick, EverySweepWritesItsCsvAndChart) {
                           "fig10_data_flow", "fig11_pixels", "fig12_all_methods",
                           "stability_wrong_hits", "stability_t_error", "stability_overflow",
                           "speed_vs_accuracy_pct_wrong", "speed_vs_accuracy_t_error",
-                          "speed_vs_accuracy_psnr", "uncertain_pixels"})
+                          "speed_vs_accuracy_psnr", "uncertain_pixels", "recompute_share"})
     EXPECT_TRUE(IsPng(out / (std::string(png) + ".png"))) << png;
   // Every method has landed: each figure's every cell is a measured number (no NaN), the
   // times positive; the farm figures count bytes and pixels.
@@ -142,6 +143,35 @@ TEST(ChartsQuick, EverySweepWritesItsCsvAndChart) {
     EXPECT_LT(lastTErr, firstTErr);
     ASSERT_EQ(floatTErr.size(), 2u) << "float32 and float64 points missing from accuracy.csv";
     EXPECT_LT(floatTErr["float64"], floatTErr["float32"]);
+  }
+  // The recompute share (tools/charts/recompute.sh): with --uncertain recompute the host's
+  // share falls as the fraction widens, and auto (refine first) never recomputes more pixels
+  // than recompute at the same width.
+  {
+    std::ifstream f(out / "recompute_share.csv");
+    std::string line;
+    std::getline(f, line);  // scene,policy,frac_bits,cycles,refine_cycles,refined,recomputed,...
+    std::map<std::string, std::map<int, double>> pct;  // scene/policy -> width -> % recomputed
+    std::map<std::string, double> recomputed;          // scene/policy/width -> pixels
+    while (std::getline(f, line)) {
+      std::vector<std::string> c;
+      std::stringstream cells(line);
+      for (std::string cell; std::getline(cells, cell, ',');) c.push_back(cell);
+      ASSERT_EQ(c.size(), 10u) << line;
+      EXPECT_GT(std::stod(c[3]), 0) << line;  // cycles of the first pass
+      pct[c[0] + "/" + c[1]][std::stoi(c[2])] = std::stod(c[7]);
+      recomputed[c[0] + "/" + c[1] + "/" + c[2]] = std::stod(c[6]);
+    }
+    for (const char* scene : {"spheres64", "showcase"}) {
+      const auto& r = pct[std::string(scene) + "/recompute"];
+      ASSERT_EQ(r.size(), 2u) << scene;  // QUICK widths 8, 16
+      EXPECT_LT(r.at(16), r.at(8)) << scene;
+      for (int b : {8, 16}) {
+        const std::string w = "/" + std::to_string(b);
+        EXPECT_LE(recomputed[scene + std::string("/auto") + w], recomputed[scene + std::string("/recompute") + w])
+            << scene << " at " << b << " bits";
+      }
+    }
   }
   fs::remove_all(out);
   fs::remove(out.string() + ".log");
