@@ -71,13 +71,40 @@ TEST(MpiRender, ChildrenNeverReadTheSceneFile) {
   }
 }
 
+// Two spheres in opposite corners of a 40×30 image: object 0 alone covers some 8×8 frames
+// (object 0 is a hit like any other, never "no hit"), object 1 others, and the middle of the
+// image is empty.
+std::string CornerSpheresScene(const TempDir& dir) {
+  std::string path = dir / "corners.nff";
+  std::ofstream(path) << "v\nfrom 0 0 -10\nat 0 0 0\nup 0 1 0\nangle 45\nhither 1\n"
+                         "resolution 40 30\nb 0.1 0.1 0.1\nl 0 10 -10\n"
+                         "f 1 0 0 0.7 0.3 10 0 1\ns -2.6 1.6 0 0.9\n"
+                         "f 0 0 1 0.7 0.3 10 0 1\ns 2.6 -1.6 0 0.9\n";
+  return path;
+}
+
+// Frames whose primary rays hit nothing are skipped, exactly those, on the random spheres and
+// on a scene where some frames' only hits are object 0.
+void CheckHeteroSkips(const TempDir& dir, const std::string& scene, bool object0AloneInAFrame);
+
 TEST(MpiRender, HeteroSkipsExactlyTheFramesWithNoPrimaryHit) {
   TempDir dir;
-  const std::string scene = Scene(dir);
+  CheckHeteroSkips(dir, Scene(dir), false);
+}
+
+TEST(MpiRender, HeteroShadesFramesWhoseOnlyHitIsObjectZero) {
+  TempDir dir;
+  CheckHeteroSkips(dir, CornerSpheresScene(dir), true);
+  // and the image is simd's, object 0's frames included
+  const std::string simd = ReadFile(Single(dir, dir / "corners.nff", "simd"));
+  EXPECT_EQ(ReadFile(dir / "h.png"), simd);
+}
+
+void CheckHeteroSkips(const TempDir& dir, const std::string& scene, bool object0AloneInAFrame) {
   const std::string csv = dir / "primary.csv";
   Single(dir, scene, "simd", "--dump-primary " + csv);
   const int frame = 8, columns = 5, rows = 4;  // 40×30: the bottom row of frames is 6 high
-  std::vector<bool> hit(columns * rows, false);
+  std::vector<bool> hit(columns * rows, false), other(columns * rows, false);
   std::ifstream in(csv);
   std::string line;
   std::getline(in, line);  // x,y,dx,dy,dz,object,t,flags
@@ -88,7 +115,13 @@ TEST(MpiRender, HeteroSkipsExactlyTheFramesWithNoPrimaryHit) {
     for (auto& f : field) std::getline(s, f, ',');
     const int x = std::stoi(field[0]), y = std::stoi(field[1]), object = std::stoi(field[5]);
     if (object >= 0) hit[(y / frame) * columns + x / frame] = true;
+    if (object > 0) other[(y / frame) * columns + x / frame] = true;
     ++pixels;
+  }
+  if (object0AloneInAFrame) {
+    int alone = 0;
+    for (int id = 0; id < columns * rows; ++id) alone += hit[id] && !other[id];
+    ASSERT_GT(alone, 0) << "the scene should have frames hit by object 0 alone";
   }
   ASSERT_EQ(pixels, kWidth * kHeight);
   std::set<int> expected;
