@@ -112,13 +112,16 @@ TEST(SimdAdversarial, CylindersJoinedBySpheresAndSeenEndOn) {
   ExpectSound(s, {8, 12, 16, -1});
 }
 
-// A quad drawn twice (two triangulations) in a tilted plane, a fan of triangles around a
-// vertex (seams where they share edges), and a polygon seen nearly edge-on.
-constexpr const char* kPolygons =
+// A quad drawn twice (two triangulations) in a tilted plane.
+const std::string kTwiceDrawnQuad =
     "pp 3\n-2 -1 -6 0 0 1\n0 -1 -7 0 0 1\n0 1 -7 0 0 1\n"
     "pp 3\n0 1 -7 0 0 1\n-2 1 -6 0 0 1\n-2 -1 -6 0 0 1\n"
     "p 3\n-2 -1 -6\n0 -1 -7\n-2 1 -6\n"
-    "p 3\n0 -1 -7\n0 1 -7\n-2 1 -6\n"
+    "p 3\n0 -1 -7\n0 1 -7\n-2 1 -6\n";
+
+// The quad above, a fan of triangles around a vertex (seams where they share edges), and a
+// polygon seen nearly edge-on.
+const std::string kPolygons = kTwiceDrawnQuad +
     "p 3\n1 0 -6\n2 -1 -6.5\n2.2 0.4 -6.2\n"
     "p 3\n1 0 -6\n2.2 0.4 -6.2\n1.6 1.3 -5.8\n"
     "p 3\n1 0 -6\n1.6 1.3 -5.8\n0.6 0.9 -6.1\n"
@@ -133,11 +136,7 @@ TEST(SimdAdversarial, PolygonSeamsAndPolygonsDrawnTwice) {
 TEST(SimdAdversarial, PolygonsInOnePlaneAreNoNearTie) {
   // The twice-drawn quad alone: its two triangulations have the same t bit for bit, and the
   // lowest index is first, as in the exact reference; no pixel is a near tie.
-  const Scene s = Build("0 0 0", "-1 0 -6.5", 40,
-                        "pp 3\n-2 -1 -6 0 0 1\n0 -1 -7 0 0 1\n0 1 -7 0 0 1\n"
-                        "pp 3\n0 1 -7 0 0 1\n-2 1 -6 0 0 1\n-2 -1 -6 0 0 1\n"
-                        "p 3\n-2 -1 -6\n0 -1 -7\n-2 1 -6\n"
-                        "p 3\n0 -1 -7\n0 1 -7\n-2 1 -6\n");
+  const Scene s = Build("0 0 0", "-1 0 -6.5", 40, kTwiceDrawnQuad);
   const std::vector<int> planes = exact::CoplanarPolygons(s);
   EXPECT_EQ(planes, (std::vector<int>{0, 0, 0, 0}));
   const PrimaryPass planned = ExpectSound(s, {8, -1});
