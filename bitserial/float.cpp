@@ -354,6 +354,7 @@ class Serial {
     for (size_t j = 0; j < b.size(); ++j) shift[j] = static_cast<int>(j);
     MulArgs args{aw.data(), w, b.data(), shift.data(), sub.data(), static_cast<int>(b.size()),
                  out.data()};
+    args.aBits = static_cast<int>(a.size());  // unsigned, zero-extended above
     m_.Kernels().mul(args, words_);
   }
 

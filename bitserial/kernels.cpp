@@ -8,6 +8,7 @@
 #include "hwy/aligned_allocator.h"
 
 #include <algorithm>
+#include <vector>
 
 HWY_BEFORE_NAMESPACE();
 namespace zephyr::bitserial::HWY_NAMESPACE {
@@ -116,27 +117,48 @@ void Add(const AddArgs& g, size_t words) {
   else ovf ? AddRange<false, true>(g, 0, words) : AddRange<false, false>(g, 0, words);
 }
 
-// One vector of PEs of roundFit; src(i) gives exact bit lo + i (i < g.k), carry the round bit.
+// Per-thread scratch for roundFit's sums (apart from StripBuffer, which the multiply's
+// column buffer holds while it fits): reused, grown on demand, never shared.
+V* FitBuffer(size_t vectors) {
+  thread_local hwy::AlignedFreeUniquePtr<uint64_t[]> buffer;
+  thread_local size_t capacity = 0;
+  const size_t need = vectors * hn::Lanes(D());
+  if (need > capacity) {
+    buffer = hwy::AllocateAligned<uint64_t>(need);
+    capacity = need;
+  }
+  return reinterpret_cast<V*>(buffer.get());
+}
+
+// One vector of PEs of roundFit; src(i) gives exact bit lo + i (i < g.k), carry the round
+// bit. The sums wait in `sums` (g.wo vectors) until the overflow is known, so each output
+// plane is stored once, saturated or not. The fields are copied into locals: a store
+// through out[i] could otherwise alias them.
 template <class Src>
-HWY_INLINE void RoundFitStrip(const RoundFitArgs& g, size_t w, V carry, const Src& src) {
+HWY_INLINE void RoundFitStrip(const RoundFitArgs& g, size_t w, V carry, const Src& src, V* sums) {
   const D d;
+  const int k = g.k, wo = g.wo;
+  const bool outSigned = g.outSigned;
+  Word* const* const out = g.out;
   V ref = hn::Zero(d), ovf = hn::Zero(d), sum = hn::Zero(d);
-  for (int i = 0; i < g.k; ++i) {
+  for (int i = 0; i < k; ++i) {
     const V x = src(i);
     sum = hn::Xor(x, carry);
     carry = hn::And(x, carry);
-    if (i < g.wo) hn::Store(sum, d, g.out[i] + w);
-    if (g.outSigned && i == g.wo - 1) ref = sum;
-    if (i >= g.wo) ovf = hn::Or(ovf, hn::Xor(sum, ref));
+    if (i < wo) sums[i] = sum;
+    else ovf = hn::Or(ovf, hn::Xor(sum, ref));
+    if (outSigned && i == wo - 1) ref = sum;
   }
   // `sum` is now the top (sign-extension) bit of the rounded exact value.
   if (g.saturate) {
     const V neg = sum;
-    for (int i = 0; i < g.wo; ++i) {
-      const V sat = (g.outSigned && i == g.wo - 1) ? neg : hn::Not(neg);
-      const V o = hn::Load(d, g.out[i] + w);
-      hn::Store(Mux(ovf, sat, o), d, g.out[i] + w);
+    const V notNeg = hn::Not(neg);
+    for (int i = 0; i < wo; ++i) {
+      const V sat = (outSigned && i == wo - 1) ? neg : notNeg;
+      hn::Store(Mux(ovf, sat, sums[i]), d, out[i] + w);
     }
+  } else {
+    for (int i = 0; i < wo; ++i) hn::Store(sums[i], d, out[i] + w);
   }
   if (g.ovf) {
     const V old = hn::Load(d, g.ovf + w);
@@ -147,9 +169,10 @@ HWY_INLINE void RoundFitStrip(const RoundFitArgs& g, size_t w, V carry, const Sr
 void RoundFit(const RoundFitArgs& g, size_t words) {
   const D d;
   const size_t lanes = hn::Lanes(d);
+  V* sums = FitBuffer(static_cast<size_t>(g.wo));
   for (size_t w = 0; w < words; w += lanes) {
     const V carry = g.roundBit ? hn::Load(d, g.roundBit + w) : hn::Zero(d);
-    RoundFitStrip(g, w, carry, [&](int i) { return hn::Load(d, g.src[i] + w); });
+    RoundFitStrip(g, w, carry, [&](int i) { return hn::Load(d, g.src[i] + w); }, sums);
   }
 }
 
@@ -174,51 +197,77 @@ V* StripBuffer(size_t vectors) {
   return reinterpret_cast<V*>(buffer.get());
 }
 
-// G rows of the product added into acc[lo..p) column by column: the G carries stay in
-// registers, so each full adder costs one L1 load and no store. x = (a << shift) & m ^ inv
-// with a's planes zero below bit 0 (aBuf[-p..-1] = 0): a subtracted row (inv = ones, carry
-// in 1) is neutral below its shift, as ~0 + carry 1 passes the sum through with carry 1.
+// G rows of the product added into acc[lo..end) column by column: the G carries stay in
+// registers, so each full adder costs one L1 load and no store. Row r's bit at column i is
+// x = src[r][i] (or (src[r][i] & m[r]) ^ inv[r][i]), zero outside the row's columns (the
+// buffers are zero there). Past `end` no row has bits: the carries ripple on (half
+// adders) until all are zero, and the rest of acc is then unchanged.
 template <int G, bool kOnes>
-HWY_NOINLINE void MulRows(const V* aBuf, const V* m, const V* inv, const int* shift, int lo,
+HWY_NOINLINE void MulRows(const V* const* src, const V* mr, const V* const* inv, int lo, int end,
                           int p, V* acc) {
-  V carry[G], mr[G], ir[G];
-  const V* ar[G];
+  const D d;
+  V carry[G];
   HWY_UNROLL(8)
-  for (int r = 0; r < G; ++r) {
-    ir[r] = inv[r];
-    mr[r] = kOnes ? inv[r] : m[r];
-    carry[r] = inv[r];  // a subtracted row adds ~x + 1
-    ar[r] = aBuf - std::min(shift[r], p);  // a row shifted past the top adds nothing
-  }
-  for (int i = lo; i < p; ++i) {
+  for (int r = 0; r < G; ++r) carry[r] = hn::Zero(d);
+  for (int i = lo; i < end; ++i) {
     V s = acc[i];
     HWY_UNROLL(8)
     for (int r = 0; r < G; ++r) {
-      const V x = kOnes ? hn::Xor(ar[r][i], ir[r]) : AndXor(ar[r][i], mr[r], ir[r]);
+      const V x = kOnes ? src[r][i] : AndXor(src[r][i], mr[r], inv[r][i]);
       FullAdd(s, x, carry[r], s);
     }
     acc[i] = s;
   }
+  for (int i = end; i < p; ++i) {
+    V s = acc[i], any = hn::Zero(d);
+    HWY_UNROLL(8)
+    for (int r = 0; r < G; ++r) {
+      const V c = carry[r];
+      carry[r] = hn::And(s, c);
+      s = hn::Xor(s, c);
+      any = hn::Or(any, carry[r]);
+    }
+    acc[i] = s;
+    if (hn::AllFalse(d, hn::Ne(any, hn::Zero(d)))) break;
+  }
 }
 
 template <bool kOnes>
-void MulRowsAny(int g, const V* aBuf, const V* m, const V* inv, const int* shift, int lo,
+void MulRowsAny(int g, const V* const* src, const V* mr, const V* const* inv, int lo, int end,
                 int p, V* acc) {
   switch (g) {
-    case 1: return MulRows<1, kOnes>(aBuf, m, inv, shift, lo, p, acc);
-    case 2: return MulRows<2, kOnes>(aBuf, m, inv, shift, lo, p, acc);
-    case 3: return MulRows<3, kOnes>(aBuf, m, inv, shift, lo, p, acc);
-    case 4: return MulRows<4, kOnes>(aBuf, m, inv, shift, lo, p, acc);
-    case 5: return MulRows<5, kOnes>(aBuf, m, inv, shift, lo, p, acc);
-    case 6: return MulRows<6, kOnes>(aBuf, m, inv, shift, lo, p, acc);
-    case 7: return MulRows<7, kOnes>(aBuf, m, inv, shift, lo, p, acc);
-    default: return MulRows<8, kOnes>(aBuf, m, inv, shift, lo, p, acc);
+    case 1: return MulRows<1, kOnes>(src, mr, inv, lo, end, p, acc);
+    case 2: return MulRows<2, kOnes>(src, mr, inv, lo, end, p, acc);
+    case 3: return MulRows<3, kOnes>(src, mr, inv, lo, end, p, acc);
+    case 4: return MulRows<4, kOnes>(src, mr, inv, lo, end, p, acc);
+    case 5: return MulRows<5, kOnes>(src, mr, inv, lo, end, p, acc);
+    case 6: return MulRows<6, kOnes>(src, mr, inv, lo, end, p, acc);
+    case 7: return MulRows<7, kOnes>(src, mr, inv, lo, end, p, acc);
+    default: return MulRows<8, kOnes>(src, mr, inv, lo, end, p, acc);
   }
 }
 
 constexpr int kMulGroup = 8;
 
-// Strip-mined: for each vector of PEs, a's planes are copied once into an L1 buffer (so
+// Adds (or subtracts) 2^e to the little-endian limbs k, modulo 2^(64 k.size()).
+void AddPowerOfTwo(std::vector<uint64_t>& k, int e, bool subtract) {
+  uint64_t v = uint64_t{1} << (e % 64);
+  for (size_t i = static_cast<size_t>(e / 64); i < k.size(); ++i, v = 1) {
+    const uint64_t old = k[i];
+    k[i] = subtract ? old - v : old + v;
+    if (subtract ? old >= v : k[i] >= old) break;  // no borrow / carry out
+  }
+}
+
+// The product in Baugh–Wooley form (Baugh & Wooley 1973): with A of n bits (its own planes;
+// a[n..p) are only its extension), each row is n bits wide instead of running to the top,
+// and every sign correction is one constant K (mod 2^p) the accumulator starts from.
+// Writing A = sum_{i<n-1} a_i 2^i - a_top 2^(n-1) (unsigned: + a_top 2^(n-1)):
+//   +m A 2^s = [sum_{i<n-1} (m a_i) 2^i + ~(m a_top) 2^(n-1)] 2^s - 2^(n-1+s)
+//   -m A 2^s = [sum_{i<n-1} ~(m a_i) 2^i + (m a_top) 2^(n-1)] 2^s - (2^(n-1) - 1) 2^s
+// and for unsigned A: +m A 2^s as is, -m A 2^s = [sum_i ~(m a_i) 2^i] 2^s - (2^n - 1) 2^s.
+// So row bit i is (m & a_i) ^ inv_i with inv_i known per call (invPos / invNeg below).
+// Strip-mined: for each vector of PEs, a's planes are copied once into L1 buffers (so
 // planes a layer-stride apart never fight over cache sets), the product accumulates in an
 // L1 column buffer, kMulGroup rows at a time, and each output plane is stored once (or
 // the product is rounded and fitted from the buffer, never stored).
@@ -226,45 +275,98 @@ void Mul(const MulArgs& g, size_t words) {
   const D d;
   const size_t lanes = hn::Lanes(d);
   const int p = g.p;
-  // Layout: p zero vectors (a below bit 0), p vectors of a, p of acc, rows of m and inv.
-  V* buf = StripBuffer(3 * static_cast<size_t>(p) + 2 * static_cast<size_t>(g.rows) + 1);
-  V* aBuf = buf + p;
-  V* acc = aBuf + p;
-  V* m = acc + p;
-  V* inv = m + g.rows;
-  for (int i = 0; i < p; ++i) buf[i] = hn::Zero(d);
-  bool ones = true;
+  if (p <= 0) return;
+  const int n = g.aBits > 0 ? std::min(g.aBits, p) : p;
+  const bool aSigned = g.aBits > 0 && g.aBits <= p && g.aSigned;
+  // The rows that reach below bit p, and the constant K.
+  thread_local std::vector<int> rowIndex, st;
+  rowIndex.clear(), st.clear();
+  thread_local std::vector<uint64_t> k;
+  k.assign((static_cast<size_t>(p) + 63) / 64, 0);
   for (int r = 0; r < g.rows; ++r) {
-    ones &= g.row[r] == g.row[0];
-    inv[r] = g.sub[r] ? hn::Set(d, ~uint64_t{0}) : hn::Zero(d);
-  }
-  // A row list of one repeated plane that is all ones (a uni constant's rows) needs no AND.
-  if (g.rows > 0 && ones) {
-    for (size_t w = 0; w < words && ones; ++w) ones = g.row[0][w] == ~uint64_t{0};
-  }
-  for (size_t w = 0; w < words; w += lanes) {
-    for (int i = 0; i < p; ++i) {
-      aBuf[i] = hn::Load(d, g.a[i] + w);
-      acc[i] = hn::Zero(d);
+    const int s = g.shift[r];
+    if (s >= p) continue;  // a row shifted past the top adds nothing
+    rowIndex.push_back(r);
+    st.push_back(s);
+    const bool sub = g.sub[r] != 0;
+    if (aSigned) {
+      if (n - 1 + s < p) AddPowerOfTwo(k, n - 1 + s, true);
+      if (sub) AddPowerOfTwo(k, s, false);
+    } else if (sub) {
+      if (n + s < p) AddPowerOfTwo(k, n + s, true);
+      AddPowerOfTwo(k, s, false);
     }
-    for (int r0 = 0; r0 < g.rows; r0 += kMulGroup) {
-      const int n = std::min(kMulGroup, g.rows - r0);
-      int lo = p;
-      for (int r = r0; r < r0 + n; ++r) {
-        lo = std::min(lo, std::min(g.shift[r], p));
-        if (!ones) m[r] = hn::Load(d, g.row[r] + w);
+  }
+  const int rows = static_cast<int>(rowIndex.size());
+  // Layout (vectors): pos and neg (ones rows: a's bits for +row, the top one inverted if
+  // signed, and their complements for -row; other rows: a's bits in pos and the inversions
+  // of +row and -row in invPos and invNeg), 2p each with column 0 at p and zero outside
+  // [0, n); acc and its start K, p each; the rows' multiplier vectors.
+  V* buf = StripBuffer(10 * static_cast<size_t>(p) + static_cast<size_t>(rows) + 1);
+  V* pos = buf + p;
+  V* neg = pos + 2 * p;
+  V* invPos = neg + 2 * p;
+  V* invNeg = invPos + 2 * p;
+  V* acc = invNeg + p;
+  V* start = acc + p;
+  V* m = start + p;
+  for (int i = -p; i < p; ++i) {
+    pos[i] = neg[i] = invPos[i] = invNeg[i] = hn::Zero(d);
+  }
+  for (int i = 0; i < p; ++i)
+    start[i] = (k[i / 64] >> (i % 64)) & 1 ? hn::Set(d, ~uint64_t{0}) : hn::Zero(d);
+  bool ones = rows > 0;
+  for (int r = 0; r < rows; ++r) ones &= g.row[rowIndex[r]] == g.row[rowIndex[0]];
+  // A row list of one repeated plane that is all ones (a uni constant's rows) needs no AND.
+  if (ones) {
+    for (size_t w = 0; w < words && ones; ++w) ones = g.row[rowIndex[0]][w] == ~uint64_t{0};
+  }
+  for (int i = 0; i < n; ++i) {
+    invPos[i] = aSigned && i == n - 1 ? hn::Set(d, ~uint64_t{0}) : hn::Zero(d);
+    invNeg[i] = hn::Not(invPos[i]);
+  }
+  thread_local std::vector<const V*> src, inv;
+  src.assign(rows, nullptr), inv.assign(rows, nullptr);
+  for (int r = 0; r < rows; ++r) {
+    const bool sub = g.sub[rowIndex[r]] != 0;
+    src[r] = (ones && sub ? neg : pos) - st[r];
+    inv[r] = (sub ? invNeg : invPos) - st[r];
+  }
+  V* sums = g.fit ? FitBuffer(static_cast<size_t>(g.fit->wo)) : nullptr;
+  const int fitLo = g.fitLo;
+  const bool productSigned = g.productSigned;
+  for (size_t w = 0; w < words; w += lanes) {
+    for (int i = 0; i < n; ++i) {
+      const V v = hn::Load(d, g.a[i] + w);
+      if (ones) {
+        pos[i] = hn::Xor(v, invPos[i]);
+        neg[i] = hn::Not(pos[i]);
+      } else {
+        pos[i] = v;
       }
-      if (ones) MulRowsAny<true>(n, aBuf, m + r0, inv + r0, g.shift + r0, lo, p, acc);
-      else MulRowsAny<false>(n, aBuf, m + r0, inv + r0, g.shift + r0, lo, p, acc);
+    }
+    for (int i = 0; i < p; ++i) acc[i] = start[i];
+    for (int r0 = 0; r0 < rows; r0 += kMulGroup) {
+      const int cnt = std::min(kMulGroup, rows - r0);
+      int lo = p, end = 0;
+      for (int r = r0; r < r0 + cnt; ++r) {
+        lo = std::min(lo, st[r]);
+        end = std::max(end, std::min(st[r] + n, p));
+        if (!ones) m[r] = hn::Load(d, g.row[rowIndex[r]] + w);
+      }
+      if (ones)
+        MulRowsAny<true>(cnt, src.data() + r0, m + r0, inv.data() + r0, lo, end, p, acc);
+      else
+        MulRowsAny<false>(cnt, src.data() + r0, m + r0, inv.data() + r0, lo, end, p, acc);
     }
     if (g.fit) {  // round and fit straight from the L1 column buffer
       auto bit = [&](int j) {
         if (j < 0) return hn::Zero(d);
-        if (j >= p) return g.productSigned ? acc[p - 1] : hn::Zero(d);
+        if (j >= p) return productSigned ? acc[p - 1] : hn::Zero(d);
         return acc[j];
       };
-      const V carry = g.fitNearest && g.fitLo > 0 ? bit(g.fitLo - 1) : hn::Zero(d);
-      RoundFitStrip(*g.fit, w, carry, [&](int i) { return bit(g.fitLo + i); });
+      const V carry = g.fitNearest && fitLo > 0 ? bit(fitLo - 1) : hn::Zero(d);
+      RoundFitStrip(*g.fit, w, carry, [&](int i) { return bit(fitLo + i); }, sums);
     } else {
       for (int i = 0; i < p; ++i) hn::Store(acc[i], d, g.out[i] + w);
     }

@@ -51,8 +51,8 @@ struct RoundFitArgs {
 };
 
 // Shift-and-add product into out[0..p) (all non-null, distinct from the inputs):
-// out = sum over rows r of ±((A & row[r]) << shift[r]) mod 2^p; a[] has p entries
-// (sign- or zero-extended). A row with sub[r] is subtracted (the sign row of a signed
+// out = sum over rows r of ±((A & row[r]) << shift[r]) mod 2^p (shift[r] >= 0); a[] has p
+// entries (sign- or zero-extended). A row with sub[r] is subtracted (the sign row of a signed
 // multiplier). row[r] is the multiplier's plane or the ones plane for a uni constant.
 struct MulArgs {
   const Word* const* a;
@@ -69,6 +69,11 @@ struct MulArgs {
   int fitLo = 0;
   bool productSigned = false;
   bool fitNearest = false;
+  // a's own planes: a[0..aBits) (a[aBits..p) only repeat its sign plane or the zero plane),
+  // and whether a[aBits-1] is a sign. 0 = all p planes, unsigned (the same product mod 2^p).
+  // The kernel then adds rows aBits wide instead of p (Baugh–Wooley; kernels.cpp).
+  int aBits = 0;
+  bool aSigned = false;
 };
 
 // Restoring division, strip-mined: per vector of PEs the partial remainder and divisor stay

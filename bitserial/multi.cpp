@@ -201,7 +201,8 @@ void MulInto(const Multi& a, const std::vector<const Word*>& rows, const std::ve
                          m.Activity()};
   MulArgs args{pa.data(), w, rows.data(), shifts.data(), subs.data(),
                static_cast<int>(rows.size()), nullptr, &fit, lo, product.isSigned,
-               policy.rounding == fixed::Rounding::Nearest};
+               policy.rounding == fixed::Rounding::Nearest, a.Width(),
+               a.Format().isSigned};
   m.Kernels().mul(args, m.WordsPerPlane());
 }
 
