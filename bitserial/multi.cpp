@@ -206,6 +206,32 @@ void MulInto(const Multi& a, const std::vector<const Word*>& rows, const std::ve
   m.Kernels().mul(args, m.WordsPerPlane());
 }
 
+// The signed digits of a uni constant's integer (its bits as a two's-complement or unsigned
+// integer): (position, negative) for each nonzero digit of the non-adjacent form
+// (Reitwiesner 1960), which has the fewest nonzero digits of any signed-digit form, so
+// never more than the constant's one bits. Constants wider than 62 bits keep their bits
+// (the sign bit subtracted).
+std::vector<std::pair<int, bool>> NafDigits(const fixed::Fixed& c) {
+  std::vector<std::pair<int, bool>> digits;
+  const int wc = c.format.Width();
+  if (wc > 62) {
+    for (int j = 0; j < wc; ++j)
+      if (c.Bit(j)) digits.emplace_back(j, c.format.isSigned && j == wc - 1);
+    return digits;
+  }
+  int64_t v = 0;
+  for (int j = 0; j < wc; ++j)
+    if (c.Bit(j)) v += (c.format.isSigned && j == wc - 1) ? -(int64_t{1} << j) : int64_t{1} << j;
+  for (int j = 0; v != 0; ++j, v >>= 1) {  // v >>= 1 is exact: v is even there
+    if (v & 1) {
+      const int64_t digit = 2 - (v & 3);  // +1 or -1: leaves v - digit divisible by 4
+      digits.emplace_back(j, digit < 0);
+      v -= digit;
+    }
+  }
+  return digits;
+}
+
 // One row per multiplier bit; the sign row of a signed multiplier is subtracted.
 void MulByMulti(const Multi& a, const Multi& b, Multi& out, Policy p) {
   std::vector<const Word*> rows;
@@ -468,13 +494,14 @@ Multi Mul(const Multi& a, const Uni& b, Format out, Policy p) {
   std::vector<const Word*> rows;
   std::vector<int> shifts;
   std::vector<unsigned char> subs;
-  const int wc = b.value.format.Width();
-  for (int j = 0; j < wc; ++j)
-    if (b.value.Bit(j)) {  // the controller skips the constant's zero bits
-      rows.push_back(m.OnesPlane());
-      shifts.push_back(j);
-      subs.push_back(b.value.format.isSigned && j == wc - 1);
-    }
+  // The machine's schedule (charged above) has a row per one bit of the constant: the
+  // controller skips its zero bits. The emulator adds the constant's non-adjacent form
+  // instead (NafDigits): the same product with about a third fewer rows on the host.
+  for (const auto& [shift, negative] : NafDigits(b.value)) {
+    rows.push_back(m.OnesPlane());
+    shifts.push_back(shift);
+    subs.push_back(negative);
+  }
   MulInto(a, rows, shifts, subs, ProductFormat(a.Format(), b.value.format), r, p);
   return r;
 }

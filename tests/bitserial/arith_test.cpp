@@ -178,6 +178,45 @@ TEST(BitserialArith, MulUniMatchesFixed) {
   }
 }
 
+// The engine adds a uni constant's non-adjacent form (runs of ones become +2^k - 2^j, a
+// negative constant's top digit is subtracted), not its bits: every constant of a byte,
+// signed and unsigned, and wide constants on both sides of the 62-bit form limit, still
+// give fixed::Mul's bits and overflow flags.
+TEST(BitserialArith, MulUniEveryConstantOfAByteAndWideOnes) {
+  std::mt19937_64 rng(11);
+  Machine m(Profile("wavetracer"));
+  const Format fa = Format::Signed(6, 5);
+  auto a = Values(fa, 8192, rng);
+  Multi ma(m, fa, "a");
+  ma.Load(a);
+  const Policy p{fixed::Rounding::Nearest, fixed::OverflowPolicy::Saturate};
+  auto check = [&](const Fixed& c, const Format& out) {
+    m.ClearFlags();
+    Multi r = Mul(ma, Uni{c}, out, p);
+    for (int pe = 0; pe < 8192; pe += 61) {
+      fixed::Status st;
+      ASSERT_EQ(r.At(pe), fixed::Mul(a[pe], c, out, p, &st))
+          << fixed::ToString(a[pe]) << " * " << fixed::ToString(c);
+      ASSERT_EQ(m.Overflow(pe), st.overflow) << fixed::ToString(a[pe]) << " * " << fixed::ToString(c);
+    }
+  };
+  for (const Format& fc : {Format::Signed(3, 4), Format::Unsigned(4, 4)})
+    for (int64_t bits = 0; bits < 256; ++bits)
+      ASSERT_NO_FATAL_FAILURE(check(Fixed::FromBits(fc, bits), Format::Signed(9, 6)));
+  for (int width : {40, 61, 62, 63, 70})
+    for (const Format& fc : {Format::Signed(width - 20, 20), Format::Unsigned(width - 20, 20)})
+      for (int k = 0; k < 6; ++k) {
+        // Random bits, then the extremes: all ones, the top bit alone, alternate bits.
+        Fixed c = RandomFixed(fc, rng);
+        const fixed::BigInt all = (fixed::BigInt(1) << width) - 1;
+        if (k == 1) c = Fixed::FromBits(fc, all);
+        if (k == 2) c = Fixed::FromBits(fc, fixed::BigInt(1) << (width - 1));
+        if (k == 3) c = Fixed::FromBits(fc, all / 3);
+        if (k == 4) c = Fixed::FromBits(fc, all - all / 3);
+        ASSERT_NO_FATAL_FAILURE(check(c, Format::Signed(width - 10, 12)));
+      }
+}
+
 TEST(BitserialArith, ComparisonsAndSelectMatchFixed) {
   std::mt19937_64 rng(5);
   Machine m(Profile("wavetracer"));
