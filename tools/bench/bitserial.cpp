@@ -168,6 +168,18 @@ int main() {
     const double divCycles = m.Report().OpCycles("div") / divReps;
     double tSqrt = MedianSeconds(divReps, [&] { Multi r = Sqrt(x, f16_16); });
     const double sqrtCycles = m.Report().OpCycles("sqrt") / divReps;
+    // The sphere test's shapes (docs/simd.md): a 21-bit direction component times a 22-bit
+    // uni constant, and the square of a 21-bit value, both rounded to 23 bits.
+    const fixed::Format f21 = fixed::Format::Signed(10, 10), f23 = fixed::Format::Signed(12, 10);
+    Multi d21(m, f21, "d21");
+    for (auto& v : ra) v = static_cast<int32_t>(rng()) >> 11;
+    d21.LoadRaw(ra);
+    const fixed::Fixed k22{fixed::Format::Signed(11, 10), static_cast<int64_t>(static_cast<int32_t>(rng()) >> 10)};
+    const int mulReps = pes == 8192 ? 401 : 41;
+    double tMulUni = MedianSeconds(mulReps, [&] { Multi r = Mul(d21, Uni{k22}, f23); });
+    const double mulUniCycles = m.Report().OpCycles("mulUni") / mulReps;
+    double tSquare = MedianSeconds(mulReps, [&] { Multi r = Square(d21, f23); });
+    const double squareCycles = m.Report().OpCycles("square") / mulReps;
     const double clock = m.Profile().clockHz;
     fmt::print("\n{} virtual PEs ({} layer{}), profile wavetracer at {:g} Hz\n", pes, m.Layers(),
                m.Layers() == 1 ? "" : "s", clock);
@@ -177,6 +189,12 @@ int main() {
     fmt::print("  16x16 multiply  : {:9.0f} ns  {:7.0f} machine cycles  {:6.3g} Gcycles/host s  "
                "real-time factor {:.1f}\n", tMul * 1e9, mulCycles, mulCycles / tMul / 1e9,
                mulCycles / clock / tMul);
+    fmt::print("  21b x 22b const : {:9.0f} ns  {:7.0f} machine cycles  {:6.3g} Gcycles/host s  "
+               "real-time factor {:.1f}\n", tMulUni * 1e9, mulUniCycles, mulUniCycles / tMulUni / 1e9,
+               mulUniCycles / clock / tMulUni);
+    fmt::print("  21-bit square   : {:9.0f} ns  {:7.0f} machine cycles  {:6.3g} Gcycles/host s  "
+               "real-time factor {:.1f}\n", tSquare * 1e9, squareCycles, squareCycles / tSquare / 1e9,
+               squareCycles / clock / tSquare);
     fmt::print("  s15.16 divide   : {:9.0f} ns  {:7.0f} machine cycles  {:6.3g} Gcycles/host s  "
                "real-time factor {:.1f}\n", tDiv * 1e9, divCycles, divCycles / tDiv / 1e9,
                divCycles / clock / tDiv);
