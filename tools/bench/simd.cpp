@@ -78,6 +78,11 @@ Timing Time(const Scene& scene, int threads, int runs, simd::PrimaryPass& pass) 
 
 int main(int argc, char** argv) {
   const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
+  if (argc > 2 || (argc == 2 && !quick)) {
+    std::fprintf(stderr, "usage: bench_simd [--quick]  (ZEPHYR_BENCH_LARGE=1 adds 4096x4096 with "
+                         "64 and 256 spheres)\n");
+    return 2;
+  }
   const char* largeEnv = std::getenv("ZEPHYR_BENCH_LARGE");
   const bool large = largeEnv && std::strcmp(largeEnv, "0") != 0 && *largeEnv;
   std::vector<Size> sizes = {{384, 384, {16, 64, 256}, 3}};
