@@ -8,6 +8,7 @@
 #include "hwy/aligned_allocator.h"
 
 #include <algorithm>
+#include <cstring>
 #include <vector>
 
 HWY_BEFORE_NAMESPACE();
@@ -140,23 +141,28 @@ HWY_INLINE void RoundFitStrip(const RoundFitArgs& g, size_t w, V carry, const Sr
   const int k = g.k, wo = g.wo;
   const bool outSigned = g.outSigned;
   Word* const* const out = g.out;
-  V ref = hn::Zero(d), ovf = hn::Zero(d), sum = hn::Zero(d);
-  for (int i = 0; i < k; ++i) {
+  V ovf = hn::Zero(d), sum = hn::Zero(d);
+  const int kept = std::min(k, wo);
+  for (int i = 0; i < kept; ++i) {
     const V x = src(i);
     sum = hn::Xor(x, carry);
     carry = hn::And(x, carry);
-    if (i < wo) sums[i] = sum;
-    else ovf = hn::Or(ovf, hn::Xor(sum, ref));
-    if (outSigned && i == wo - 1) ref = sum;
+    sums[i] = sum;
+  }
+  // Bits at and above wo must all equal the kept sign (or be 0 for an unsigned result).
+  const V ref = outSigned && kept == wo && wo > 0 ? sums[wo - 1] : hn::Zero(d);
+  for (int i = kept; i < k; ++i) {
+    const V x = src(i);
+    sum = hn::Xor(x, carry);
+    carry = hn::And(x, carry);
+    ovf = hn::Or(ovf, hn::Xor(sum, ref));
   }
   // `sum` is now the top (sign-extension) bit of the rounded exact value.
   if (g.saturate) {
     const V neg = sum;
     const V notNeg = hn::Not(neg);
-    for (int i = 0; i < wo; ++i) {
-      const V sat = (outSigned && i == wo - 1) ? neg : notNeg;
-      hn::Store(Mux(ovf, sat, sums[i]), d, out[i] + w);
-    }
+    for (int i = 0; i + 1 < wo; ++i) hn::Store(Mux(ovf, notNeg, sums[i]), d, out[i] + w);
+    if (wo > 0) hn::Store(Mux(ovf, outSigned ? neg : notNeg, sums[wo - 1]), d, out[wo - 1] + w);
   } else {
     for (int i = 0; i < wo; ++i) hn::Store(sums[i], d, out[i] + w);
   }
@@ -298,25 +304,35 @@ void Mul(const MulArgs& g, size_t words) {
     }
   }
   const int rows = static_cast<int>(rowIndex.size());
+  // The fit reads product bits fitLo - 1 .. fitLo + k - 1: acc has `below` zero vectors
+  // under bit 0 and `above` vectors over bit p - 1 (the product's sign or zero), so it reads
+  // them straight from acc.
+  const int fitLo = g.fitLo;
+  const int below = g.fit ? std::max(0, 1 - fitLo) : 0;
+  const int above = g.fit ? std::max(0, fitLo + g.fit->k - p) : 0;
   // Layout (vectors): pos and neg (ones rows: a's bits for +row, the top one inverted if
   // signed, and their complements for -row; other rows: a's bits in pos and the inversions
   // of +row and -row in invPos and invNeg), 2p each with column 0 at p and zero outside
-  // [0, n); acc and its start K, p each; the rows' multiplier vectors.
-  V* buf = StripBuffer(10 * static_cast<size_t>(p) + static_cast<size_t>(rows) + 1);
+  // [0, n); acc (below + p + above) and its start K (p); the rows' multiplier vectors.
+  V* buf = StripBuffer(10 * static_cast<size_t>(p) + static_cast<size_t>(below + above + rows) + 1);
   V* pos = buf + p;
   V* neg = pos + 2 * p;
   V* invPos = neg + 2 * p;
   V* invNeg = invPos + 2 * p;
-  V* acc = invNeg + p;
-  V* start = acc + p;
+  V* acc = invNeg + p + below;
+  V* start = acc + p + above;
   V* m = start + p;
   for (int i = -p; i < p; ++i) {
     pos[i] = neg[i] = invPos[i] = invNeg[i] = hn::Zero(d);
   }
+  for (int i = -below; i < 0; ++i) acc[i] = hn::Zero(d);
   for (int i = 0; i < p; ++i)
     start[i] = (k[i / 64] >> (i % 64)) & 1 ? hn::Set(d, ~uint64_t{0}) : hn::Zero(d);
-  bool ones = rows > 0;
-  for (int r = 0; r < rows; ++r) ones &= g.row[rowIndex[r]] == g.row[rowIndex[0]];
+  bool ones = rows > 0, anySub = false;
+  for (int r = 0; r < rows; ++r) {
+    ones &= g.row[rowIndex[r]] == g.row[rowIndex[0]];
+    anySub |= g.sub[rowIndex[r]] != 0;
+  }
   // A row list of one repeated plane that is all ones (a uni constant's rows) needs no AND.
   if (ones) {
     for (size_t w = 0; w < words && ones; ++w) ones = g.row[rowIndex[0]][w] == ~uint64_t{0};
@@ -333,19 +349,18 @@ void Mul(const MulArgs& g, size_t words) {
     inv[r] = (sub ? invNeg : invPos) - st[r];
   }
   V* sums = g.fit ? FitBuffer(static_cast<size_t>(g.fit->wo)) : nullptr;
-  const int fitLo = g.fitLo;
   const bool productSigned = g.productSigned;
   for (size_t w = 0; w < words; w += lanes) {
     for (int i = 0; i < n; ++i) {
       const V v = hn::Load(d, g.a[i] + w);
       if (ones) {
         pos[i] = hn::Xor(v, invPos[i]);
-        neg[i] = hn::Not(pos[i]);
+        if (anySub) neg[i] = hn::Not(pos[i]);
       } else {
         pos[i] = v;
       }
     }
-    for (int i = 0; i < p; ++i) acc[i] = start[i];
+    std::memcpy(static_cast<void*>(acc), start, static_cast<size_t>(p) * sizeof(V));
     for (int r0 = 0; r0 < rows; r0 += kMulGroup) {
       const int cnt = std::min(kMulGroup, rows - r0);
       int lo = p, end = 0;
@@ -360,13 +375,10 @@ void Mul(const MulArgs& g, size_t words) {
         MulRowsAny<false>(cnt, src.data() + r0, m + r0, inv.data() + r0, lo, end, p, acc);
     }
     if (g.fit) {  // round and fit straight from the L1 column buffer
-      auto bit = [&](int j) {
-        if (j < 0) return hn::Zero(d);
-        if (j >= p) return productSigned ? acc[p - 1] : hn::Zero(d);
-        return acc[j];
-      };
-      const V carry = g.fitNearest && fitLo > 0 ? bit(fitLo - 1) : hn::Zero(d);
-      RoundFitStrip(*g.fit, w, carry, [&](int i) { return bit(fitLo + i); }, sums);
+      const V top = productSigned ? acc[p - 1] : hn::Zero(d);
+      for (int i = 0; i < above; ++i) acc[p + i] = top;
+      const V carry = g.fitNearest && fitLo > 0 ? acc[fitLo - 1] : hn::Zero(d);
+      RoundFitStrip(*g.fit, w, carry, [&](int i) { return acc[fitLo + i]; }, sums);
     } else {
       for (int i = 0; i < p; ++i) hn::Store(acc[i], d, g.out[i] + w);
     }
