@@ -245,6 +245,19 @@ void MulByMulti(const Multi& a, const Multi& b, Multi& out, Policy p) {
   MulInto(a, rows, shifts, subs, ProductFormat(a.Format(), b.Format()), out, p);
 }
 
+// Transposes a 64x64 bit matrix in place: bit c of a[r] becomes bit r of a[c] (recursive
+// block swaps, Warren, Hacker's Delight, 2nd ed., section 7-3).
+void Transpose64(uint64_t a[64]) {
+  uint64_t m = 0x00000000FFFFFFFFull;
+  for (int j = 32; j != 0; j >>= 1, m ^= m << j) {
+    for (int k = 0; k < 64; k = ((k | j) + 1) & ~j) {
+      const uint64_t t = ((a[k] >> j) ^ a[k | j]) & m;
+      a[k | j] ^= t;
+      a[k] ^= t << j;
+    }
+  }
+}
+
 }  // namespace
 
 // ---- Multi ------------------------------------------------------------------------------------
@@ -349,13 +362,15 @@ void Multi::LoadRaw(const std::vector<int64_t>& raw) {
                                 raw.size(), m.VirtualPes()));
   m.Charge("hostLoad", HostTransferCost(Width()));
   std::memset(planes_, 0, sizeof(Word) * Width() * m.PlaneStride());
-  const int w = std::min(Width(), 64);
-  for (size_t pe = 0; pe < raw.size(); ++pe) {
-    uint64_t bits = static_cast<uint64_t>(raw[pe]);
-    for (int i = 0; i < Width(); ++i) {
-      uint64_t bit = i < w ? (bits >> i) & 1 : (raw[pe] < 0 && format_.isSigned ? 1 : 0);
-      Plane(i)[pe >> 6] |= bit << (pe & 63);
-    }
+  // 64 PEs at a time: their values as the rows of a 64x64 bit matrix, transposed into one
+  // word of each plane (bits past 64 repeat bit 63, the sign, if signed; else 0).
+  const size_t count = raw.size();
+  for (size_t base = 0; base < count; base += 64) {
+    uint64_t block[64] = {};
+    for (size_t j = 0; j < 64 && base + j < count; ++j) block[j] = static_cast<uint64_t>(raw[base + j]);
+    Transpose64(block);
+    for (int i = 0; i < Width(); ++i)
+      Plane(i)[base >> 6] = i < 64 ? block[i] : (format_.isSigned ? block[63] : 0);
   }
 }
 
@@ -394,13 +409,20 @@ std::vector<fixed::Fixed> Multi::Read() const {
 std::vector<int64_t> Multi::ReadRaw() const {
   ZEPHYR_CHECK_LE(Width(), 64);
   machine_->Charge("hostRead", HostTransferCost(Width()));
-  std::vector<int64_t> v(machine_->VirtualPes());
+  const int64_t pes = machine_->VirtualPes();
+  std::vector<int64_t> v(pes);
   const int w = Width();
-  for (int64_t pe = 0; pe < machine_->VirtualPes(); ++pe) {
-    uint64_t bits = 0;
-    for (int i = 0; i < w; ++i) bits |= uint64_t{BitAt(i, pe)} << i;
-    if (format_.isSigned && w < 64 && ((bits >> (w - 1)) & 1)) bits |= ~uint64_t{0} << w;
-    v[pe] = static_cast<int64_t>(bits);
+  // 64 PEs at a time: one word of each plane as the rows of a 64x64 bit matrix, transposed
+  // into the PEs' values.
+  for (int64_t base = 0; base < pes; base += 64) {
+    uint64_t block[64] = {};
+    for (int i = 0; i < w; ++i) block[i] = Plane(i)[base >> 6];
+    Transpose64(block);
+    for (int64_t j = 0; j < 64 && base + j < pes; ++j) {
+      uint64_t bits = block[j];
+      if (format_.isSigned && w < 64 && ((bits >> (w - 1)) & 1)) bits |= ~uint64_t{0} << w;
+      v[base + j] = static_cast<int64_t>(bits);
+    }
   }
   return v;
 }
