@@ -118,9 +118,11 @@ void Add(const AddArgs& g, size_t words) {
   else ovf ? AddRange<false, true>(g, 0, words) : AddRange<false, false>(g, 0, words);
 }
 
-// Per-thread scratch for roundFit's sums (apart from StripBuffer, which the multiply's
-// column buffer holds while it fits): reused, grown on demand, never shared.
-V* FitBuffer(size_t vectors) {
+// Per-thread scratch, reused, grown on demand, never shared: kSlot 0 holds one strip of a
+// multiply, divide or square root (StripBuffer), kSlot 1 roundFit's sums (FitBuffer; the
+// multiply's column buffer is still in use while it fits).
+template <int kSlot>
+V* ThreadScratch(size_t vectors) {
   thread_local hwy::AlignedFreeUniquePtr<uint64_t[]> buffer;
   thread_local size_t capacity = 0;
   const size_t need = vectors * hn::Lanes(D());
@@ -130,6 +132,8 @@ V* FitBuffer(size_t vectors) {
   }
   return reinterpret_cast<V*>(buffer.get());
 }
+V* StripBuffer(size_t vectors) { return ThreadScratch<0>(vectors); }
+V* FitBuffer(size_t vectors) { return ThreadScratch<1>(vectors); }
 
 // One vector of PEs of roundFit; src(i) gives exact bit lo + i (i < g.k), carry the round
 // bit. The sums wait in `sums` (g.wo vectors) until the overflow is known, so each output
@@ -191,17 +195,6 @@ HWY_INLINE V AndXor(V a, V m, V inv) {
 #endif
 }
 
-// Per-thread scratch for one strip of the multiply: reused, grown on demand, never shared.
-V* StripBuffer(size_t vectors) {
-  thread_local hwy::AlignedFreeUniquePtr<uint64_t[]> buffer;
-  thread_local size_t capacity = 0;
-  const size_t need = vectors * hn::Lanes(D());
-  if (need > capacity) {
-    buffer = hwy::AllocateAligned<uint64_t>(need);
-    capacity = need;
-  }
-  return reinterpret_cast<V*>(buffer.get());
-}
 
 // G rows of the product added into acc[lo..end) column by column: the G carries stay in
 // registers, so each full adder costs one L1 load and no store. Row r's bit at column i is

@@ -183,24 +183,17 @@ int main() {
     const double clock = m.Profile().clockHz;
     fmt::print("\n{} virtual PEs ({} layer{}), profile wavetracer at {:g} Hz\n", pes, m.Layers(),
                m.Layers() == 1 ? "" : "s", clock);
-    fmt::print("  32-bit add      : {:9.0f} ns  {:7.0f} machine cycles  {:6.3g} Gcycles/host s  "
-               "real-time factor {:.1f}\n", tAdd * 1e9, addCycles, addCycles / tAdd / 1e9,
-               addCycles / clock / tAdd);
-    fmt::print("  16x16 multiply  : {:9.0f} ns  {:7.0f} machine cycles  {:6.3g} Gcycles/host s  "
-               "real-time factor {:.1f}\n", tMul * 1e9, mulCycles, mulCycles / tMul / 1e9,
-               mulCycles / clock / tMul);
-    fmt::print("  21b x 22b const : {:9.0f} ns  {:7.0f} machine cycles  {:6.3g} Gcycles/host s  "
-               "real-time factor {:.1f}\n", tMulUni * 1e9, mulUniCycles, mulUniCycles / tMulUni / 1e9,
-               mulUniCycles / clock / tMulUni);
-    fmt::print("  21-bit square   : {:9.0f} ns  {:7.0f} machine cycles  {:6.3g} Gcycles/host s  "
-               "real-time factor {:.1f}\n", tSquare * 1e9, squareCycles, squareCycles / tSquare / 1e9,
-               squareCycles / clock / tSquare);
-    fmt::print("  s15.16 divide   : {:9.0f} ns  {:7.0f} machine cycles  {:6.3g} Gcycles/host s  "
-               "real-time factor {:.1f}\n", tDiv * 1e9, divCycles, divCycles / tDiv / 1e9,
-               divCycles / clock / tDiv);
-    fmt::print("  s15.16 sqrt     : {:9.0f} ns  {:7.0f} machine cycles  {:6.3g} Gcycles/host s  "
-               "real-time factor {:.1f}\n", tSqrt * 1e9, sqrtCycles, sqrtCycles / tSqrt / 1e9,
-               sqrtCycles / clock / tSqrt);
+    auto line = [&](const char* name, double seconds, double cycles) {
+      fmt::print("  {:<16}: {:9.0f} ns  {:7.0f} machine cycles  {:6.3g} Gcycles/host s  "
+                 "real-time factor {:.1f}\n", name, seconds * 1e9, cycles, cycles / seconds / 1e9,
+                 cycles / clock / seconds);
+    };
+    line("32-bit add", tAdd, addCycles);
+    line("16x16 multiply", tMul, mulCycles);
+    line("21b x 22b const", tMulUni, mulUniCycles);
+    line("21-bit square", tSquare, squareCycles);
+    line("s15.16 divide", tDiv, divCycles);
+    line("s15.16 sqrt", tSqrt, sqrtCycles);
     if (pes == 8192) {
       NaiveMulti na = NaiveFrom(a, 8192), nb = NaiveFrom(b, 8192), no = na;
       NaiveMulti na16 = NaiveFrom(a16, 8192), nb16 = NaiveFrom(b16, 8192), no32 = na;
