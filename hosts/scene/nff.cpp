@@ -4,6 +4,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -20,57 +21,77 @@ struct Token {
   int line = 0, column = 0;
 };
 
-struct Tokens {
-  std::vector<Token> tokens;
-  int endLine = 1, endColumn = 1;  // just past the last byte, for "missing ..." errors
+// Splits NFF text into whitespace-separated tokens, dropping `#` comments, one token at a
+// time (a file of 33 million tokens is never held as a list). SPD writes a cone on one line
+// or two, so the grammar works on the token stream, not on lines. A line ends at LF, CRLF
+// or a lone CR (classic Mac files), so comments and line numbers are right in all three; a
+// leading UTF-8 byte-order mark is skipped.
+class TokenStream {
+ public:
+  explicit TokenStream(std::string_view text) : text_(text) {
+    if (text_.substr(0, 3) == "\xEF\xBB\xBF") i_ = 3;
+  }
+  bool AtEnd() { return !Fill(); }
+  // The next token, or the last one read when the text is used up (where "missing ..."
+  // errors point inside a statement).
+  const Token& Peek() { return Fill() ? next_ : last_; }
+  Token Take() {
+    Fill();
+    has_ = false;
+    last_ = next_;
+    return last_;
+  }
+  // Just past the last byte, for "unexpected end of file" errors (valid once AtEnd()).
+  int EndLine() const { return line_; }
+  int EndColumn() const { return column_; }
+
+ private:
+  bool LineEnd(size_t at) const { return text_[at] == '\n' || text_[at] == '\r'; }
+  bool IsSpace(size_t at) const {
+    const char c = text_[at];
+    return c == ' ' || c == '\t' || c == '\f' || c == '\v' || c == '\n' || c == '\r';
+  }
+  bool Fill() {
+    if (has_) return true;
+    while (i_ < text_.size()) {
+      const char c = text_[i_];
+      if (LineEnd(i_)) {
+        if (c == '\r' && i_ + 1 < text_.size() && text_[i_ + 1] == '\n') ++i_;  // CRLF is one end
+        ++line_;
+        column_ = 1;
+        ++i_;
+      } else if (IsSpace(i_)) {
+        ++column_;
+        ++i_;
+      } else if (c == '#') {
+        while (i_ < text_.size() && !LineEnd(i_)) ++i_, ++column_;
+      } else {
+        const size_t start = i_;
+        const int startColumn = column_;
+        while (i_ < text_.size() && !IsSpace(i_) && text_[i_] != '#') {
+          ++i_;
+          ++column_;
+        }
+        next_ = {text_.substr(start, i_ - start), line_, startColumn};
+        has_ = true;
+        return true;
+      }
+    }
+    return false;
+  }
+
+  std::string_view text_;
+  size_t i_ = 0;
+  int line_ = 1, column_ = 1;
+  Token next_, last_;
+  bool has_ = false;
 };
 
-// Splits NFF text into whitespace-separated tokens, dropping `#` comments. SPD writes a
-// cone on one line or two, so the grammar works on the token stream, not on lines. A line
-// ends at LF, CRLF or a lone CR (classic Mac files), so comments and line numbers are
-// right in all three; a leading UTF-8 byte-order mark is skipped.
-Tokens Tokenize(std::string_view text) {
-  Tokens out;
-  int line = 1, column = 1;
-  size_t i = 0;
-  if (text.substr(0, 3) == "\xEF\xBB\xBF") i = 3;
-  auto lineEnd = [&](size_t at) { return text[at] == '\n' || text[at] == '\r'; };
-  auto isSpace = [&](size_t at) {
-    const char c = text[at];
-    return c == ' ' || c == '\t' || c == '\f' || c == '\v' || c == '\n' || c == '\r';
-  };
-  while (i < text.size()) {
-    const char c = text[i];
-    if (lineEnd(i)) {
-      if (c == '\r' && i + 1 < text.size() && text[i + 1] == '\n') ++i;  // CRLF is one end
-      ++line;
-      column = 1;
-      ++i;
-    } else if (isSpace(i)) {
-      ++column;
-      ++i;
-    } else if (c == '#') {
-      while (i < text.size() && !lineEnd(i)) ++i, ++column;
-    } else {
-      const size_t start = i;
-      const int startColumn = column;
-      while (i < text.size() && !isSpace(i) && text[i] != '#') {
-        ++i;
-        ++column;
-      }
-      out.tokens.push_back({text.substr(start, i - start), line, startColumn});
-    }
-  }
-  out.endLine = line;
-  out.endColumn = column;
-  return out;
-}
-
-// Text from the file as a message can show it: bytes outside printable ASCII become \xNN
-// (a NUL would otherwise cut the message where it is printed, and a stray byte-order mark
-// or control byte would be invisible), and a long token is cut to its first 40 bytes.
-std::string Printable(std::string_view s) {
-  constexpr size_t kShown = 40;
+// Text as a message can show it: bytes outside printable ASCII become \xNN (a NUL would
+// otherwise cut the message where it is printed, and a stray byte-order mark or control
+// byte would be invisible), and a token from the file is cut to its first 40 bytes. A file
+// name is never cut (PrintablePath): editors jump to the location a message gives.
+std::string Printable(std::string_view s, size_t kShown = 40) {
   std::string out;
   for (size_t i = 0; i < s.size() && i < kShown; ++i) {
     const unsigned char c = static_cast<unsigned char>(s[i]);
@@ -86,6 +107,8 @@ std::string Printable(std::string_view s) {
   return out;
 }
 
+std::string PrintablePath(std::string_view path) { return Printable(path, path.size()); }
+
 bool LooksNumeric(std::string_view s) {
   if (s.empty()) return false;
   const char c = s[0];
@@ -100,28 +123,27 @@ struct StatementError {
 
 class NffParser {
  public:
-  NffParser(std::string_view text, const std::string& fileName, std::vector<std::string>& errors)
-      : file_(Printable(fileName)), errors_(errors) {
-    Tokens t = Tokenize(text);
-    tokens_ = std::move(t.tokens);
-    endLine_ = t.endLine;
-    endColumn_ = t.endColumn;
-  }
+  NffParser(std::string_view text, const std::string& fileName, NffErrors& errors)
+      : tokens_(text), file_(PrintablePath(fileName)), errors_(errors) {}
 
   std::optional<Scene> Parse() {
     scene_.source = file_;
-    while (pos_ < tokens_.size()) {
-      const Token keyword = tokens_[pos_++];
+    while (!tokens_.AtEnd()) {
+      const Token keyword = tokens_.Take();
       try {
         Statement(keyword);
       } catch (const StatementError& e) {
-        errors_.push_back(e.message);
+        Add(e.message);
         // Resume at the next token that is not a number: the next keyword.
-        while (pos_ < tokens_.size() && LooksNumeric(tokens_[pos_].text)) ++pos_;
+        while (!tokens_.AtEnd() && LooksNumeric(tokens_.Peek().text)) tokens_.Take();
+      }
+      if (errors_.count >= kMaxNffErrors) {  // as compilers do: the rest would only repeat
+        errors_.stoppedAtLine = keyword.line;
+        break;
       }
     }
-    CheckComplete();
-    if (!errors_.empty()) return std::nullopt;
+    if (errors_.stoppedAtLine == 0) CheckComplete();
+    if (errors_.count > 0) return std::nullopt;
     return std::move(scene_);
   }
 
@@ -129,26 +151,44 @@ class NffParser {
   std::string Where(const Token& t) const {
     return SourceLocation{file_, t.line, t.column}.ToString();
   }
-  std::string WhereEnd() const { return SourceLocation{file_, endLine_, endColumn_}.ToString(); }
+  std::string WhereEnd() const {
+    return SourceLocation{file_, tokens_.EndLine(), tokens_.EndColumn()}.ToString();
+  }
   [[noreturn]] void Fail(const Token& at, const std::string& what) {
     throw StatementError{Where(at) + ": " + what};
   }
-  void Report(const Token& at, const std::string& what) { errors_.push_back(Where(at) + ": " + what); }
+  // Counts every error; keeps the first kKeptNffErrors messages (memory stays bounded
+  // whatever the file holds).
+  void Add(std::string message) {
+    ++errors_.count;
+    if (errors_.messages.size() < kKeptNffErrors) errors_.messages.push_back(std::move(message));
+  }
+  void Report(const Token& at, const std::string& what) { Add(Where(at) + ": " + what); }
 
-  const Token& Next(const char* what) {
-    if (pos_ >= tokens_.size())
+  Token Next(const char* what) {
+    if (tokens_.AtEnd())
       throw StatementError{WhereEnd() + ": unexpected end of file, expected " + what};
-    return tokens_[pos_++];
+    return tokens_.Take();
   }
 
   double Number(const char* what) {
-    const Token& t = Next(what);
+    const Token t = Next(what);
     std::string_view s = t.text;
     if (!s.empty() && s[0] == '+') s.remove_prefix(1);
     double value = 0;
     const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), value);
-    if (ec == std::errc::result_out_of_range || (ec == std::errc() && end == s.data() + s.size() &&
-                                                 !std::isfinite(value)))
+    if (ec == std::errc::result_out_of_range && end == s.data() + s.size()) {
+      // Out of double's range either way: too large (overflow) or too small (underflow,
+      // below the smallest normal 2.2e-308); say which.
+      const std::string copy(s);
+      const double nearest = std::strtod(copy.c_str(), nullptr);
+      if (std::abs(nearest) < 1)
+        Fail(t, std::string("expected a number for ") + what + ", got '" + Printable(t.text) +
+                    "', which underflows double (its magnitude is below 2.2e-308; write 0 if that is meant)");
+      Fail(t, std::string("expected a finite number for ") + what + ", got '" + Printable(t.text) +
+                  "', which overflows double (beyond 1.8e308)");
+    }
+    if (ec == std::errc() && end == s.data() + s.size() && !std::isfinite(value))
       Fail(t, std::string("expected a finite number for ") + what + ", got '" +
                   Printable(t.text) + "'");
     if (ec != std::errc() || end != s.data() + s.size())
@@ -165,7 +205,7 @@ class NffParser {
   }
 
   long Integer(const char* what, long lo, long hi) {
-    const Token& t = tokens_[pos_ < tokens_.size() ? pos_ : tokens_.size() - 1];
+    const Token t = tokens_.Peek();
     const double v = Number(what);
     if (v != std::floor(v) || v < double(lo) || v > double(hi))
       Fail(t, std::string("expected an integer from ") + std::to_string(lo) + " to " +
@@ -173,7 +213,7 @@ class NffParser {
     return long(v);
   }
 
-  bool NextIsNumber() const { return pos_ < tokens_.size() && LooksNumeric(tokens_[pos_].text); }
+  bool NextIsNumber() { return !tokens_.AtEnd() && LooksNumeric(tokens_.Peek().text); }
 
   void Once(bool& seen, const Token& keyword) {
     if (seen) Fail(keyword, "'" + Printable(keyword.text) + "' given twice");
@@ -267,7 +307,7 @@ class NffParser {
   // A number that must lie in [lo, hi] (hi = inf: no upper end); an error points at the
   // number itself and names the range.
   double NumberIn(const char* what, double lo, double hi) {
-    const Token& t = tokens_[pos_ < tokens_.size() ? pos_ : tokens_.size() - 1];
+    const Token t = tokens_.Peek();
     const double v = Number(what);
     if (!(v >= lo && v <= hi)) {
       char range[64];
@@ -293,7 +333,7 @@ class NffParser {
     m.ks = NumberIn("the specular and mirror weight Ks", 0, 1);
     m.shine = NumberIn("the Phong exponent Shine", 0, kInf);
     m.t = NumberIn("the transmission T", 0, 1);
-    const Token& iorToken = tokens_[pos_ < tokens_.size() ? pos_ : tokens_.size() - 1];
+    const Token iorToken = tokens_.Peek();
     m.ior = NumberIn("the index of refraction ior", 0, kInf);
     // SPD writes ior 0 for opaque materials; a transparent one needs a real index.
     if (m.t > 0 && !(m.ior > 0))
@@ -312,7 +352,7 @@ class NffParser {
     for (long i = 0; i < n; ++i) {
       p.vertices.push_back(Triple("a polygon vertex"));
       if (withNormals) {
-        const Token& at = tokens_[pos_ < tokens_.size() ? pos_ : tokens_.size() - 1];
+        const Token at = tokens_.Peek();
         const Vec3 nrm = Triple("a vertex normal");
         const double len = Length(nrm);
         if (!(len > 0) || !std::isfinite(len)) Fail(at, "expected a non-zero vertex normal");
@@ -345,8 +385,8 @@ class NffParser {
   }
 
   void TransformStatement(const Token& k) {
-    if (pos_ < tokens_.size() && tokens_[pos_].text == "identity") {
-      ++pos_;
+    if (!tokens_.AtEnd() && tokens_.Peek().text == "identity") {
+      tokens_.Take();
       transform_.reset();
       return;
     }
@@ -383,7 +423,7 @@ class NffParser {
                           {seenAngle_, "'angle'"},               {seenHither_, "'hither'"},
                           {seenResolution_, "'resolution'"},     {seenBackground_, "'b' (background)"}};
     for (const Need& n : needs)
-      if (!n.seen) errors_.push_back(end + "missing " + std::string(n.what));
+      if (!n.seen) Add(end + "missing " + std::string(n.what));
     if (readFrom_ && readAt_ && readUp_) {  // not when one of them was malformed (its own error)
       // Reported at the item's own line. Both vectors are scaled by their largest component
       // first, so the test cannot overflow.
@@ -398,24 +438,21 @@ class NffParser {
       }
     }
     // Values whose squares overflow double would give a silently wrong image (an r² of
-    // inf misses everything): rejected here with their line (docs/scene-format.md).
-    if (errors_.empty()) {
-      if (const auto fault = FindMagnitudeOver(scene_, kMagnitudeLimitDouble)) {
-        char what[320];
-        std::snprintf(what, sizeof what,
-                      ": %s reaches %.3g; every method squares coordinates in double, so values "
-                      "must stay within %.0e (scale the scene down)",
-                      fault->what.c_str(), fault->magnitude, kMagnitudeLimitDouble);
-        errors_.push_back(fault->where.ToString() + what);
-      }
+    // inf misses everything): rejected here with their line (docs/scene-format.md), also
+    // when other lines have errors (the objects read whole are checked).
+    if (const auto fault = FindMagnitudeOver(scene_, kMagnitudeLimitDouble)) {
+      char what[320];
+      std::snprintf(what, sizeof what,
+                    ": %s reaches %.3g; every method squares coordinates in double, so values "
+                    "must stay within %.0e (scale the scene down)",
+                    fault->what.c_str(), fault->magnitude, kMagnitudeLimitDouble);
+      Add(fault->where.ToString() + what);
     }
   }
 
-  std::vector<Token> tokens_;
+  TokenStream tokens_;
   std::string file_;
-  std::vector<std::string>& errors_;
-  size_t pos_ = 0;
-  int endLine_ = 1, endColumn_ = 1;
+  NffErrors& errors_;
   Scene scene_;
   int current_ = -1;
   std::optional<Affine> transform_;
@@ -427,32 +464,48 @@ class NffParser {
 
 }  // namespace
 
-std::optional<Scene> ParseNff(std::string_view text, const std::string& fileName,
-                              std::vector<std::string>& errors) {
-  errors.clear();
+std::optional<Scene> ParseNff(std::string_view text, const std::string& fileName, NffErrors& errors) {
+  errors = NffErrors{};
   return NffParser(text, fileName, errors).Parse();
 }
 
+std::optional<Scene> ParseNff(std::string_view text, const std::string& fileName,
+                              std::vector<std::string>& errors) {
+  NffErrors all;
+  std::optional<Scene> scene = ParseNff(text, fileName, all);
+  errors = std::move(all.messages);
+  return scene;
+}
+
+std::string NffErrors::Summary() const {
+  std::string message = std::to_string(count) + (stoppedAtLine ? " or more" : "") + " error" +
+                        (count > 1 ? "s" : "") + " in scene:";
+  for (const std::string& m : messages) message += "\n  " + m;
+  if (count > messages.size()) message += "\n  ... and " + std::to_string(count - messages.size()) + " more";
+  if (stoppedAtLine)
+    message += "; reading stopped at line " + std::to_string(stoppedAtLine) + " after " +
+               std::to_string(kMaxNffErrors) + " errors";
+  return message;
+}
+
 Scene ParseNffOrThrow(std::string_view text, const std::string& fileName) {
-  std::vector<std::string> errors;
+  NffErrors errors;
   std::optional<Scene> scene = ParseNff(text, fileName, errors);
   if (scene) return std::move(*scene);
-  constexpr size_t kShown = 20;
-  std::string message = std::to_string(errors.size()) + " error" + (errors.size() > 1 ? "s" : "") +
-                        " in scene:";
-  for (size_t i = 0; i < errors.size() && i < kShown; ++i) message += "\n  " + errors[i];
-  if (errors.size() > kShown)
-    message += "\n  ... and " + std::to_string(errors.size() - kShown) + " more";
-  throw UserError(message);
+  throw UserError(errors.Summary());
 }
 
 Scene ReadNffFile(const std::string& path) {
   // Only a regular file is read: a directory would read as empty, and a device or a pipe
   // (/dev/zero) may never end. Its size is checked before any byte is read.
-  const std::string shown = Printable(path);
+  const std::string shown = PrintablePath(path);
   namespace fs = std::filesystem;
   std::error_code ec;
   const fs::file_status status = fs::status(path, ec);
+  // The system's own reason: a symbolic-link loop (ELOOP) or a directory that may not be
+  // searched (EACCES) is not "no such file".
+  if (ec && ec != std::errc::no_such_file_or_directory && ec != std::errc::not_a_directory)
+    throw UserError(shown + ": cannot open the scene file (" + ec.message() + ")");
   if (ec || !fs::exists(status)) throw UserError(shown + ": cannot open the scene file (no such file)");
   if (fs::is_directory(status))
     throw UserError(shown + ": is a directory, expected an NFF scene file");

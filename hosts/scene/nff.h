@@ -7,6 +7,7 @@
 // UserError listing them all.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -24,12 +25,30 @@ inline constexpr int kMaxPolygonVertices = 1 << 20;
 // than an exhaustive tracer (every ray against every object) can render.
 inline constexpr std::uintmax_t kMaxSceneBytes = std::uintmax_t(64) << 20;
 
+// How many error messages a parse keeps (the first, in file order) and after how many
+// errors it stops reading, as compilers do (clang's -ferror-limit): a file of 33 million
+// bad lines costs milliseconds and a few kilobytes, not minutes and gigabytes (issue 23).
+inline constexpr std::size_t kKeptNffErrors = 20;
+inline constexpr std::size_t kMaxNffErrors = 1000;
+
+// The errors of one parse: every error is counted, the first kKeptNffErrors are kept as
+// "file:line:column: what was expected".
+struct NffErrors {
+  std::vector<std::string> messages;  // at most kKeptNffErrors
+  std::size_t count = 0;              // all errors found (at most kMaxNffErrors)
+  int stoppedAtLine = 0;              // > 0: reading stopped there, at kMaxNffErrors errors
+  // "N errors in scene:", the kept messages, "... and M more", where reading stopped.
+  std::string Summary() const;
+};
+
 // Parses NFF text. On success returns the scene and leaves errors empty; otherwise returns
-// nullopt with every error found (at least one).
+// nullopt with the errors found (count >= 1).
+std::optional<Scene> ParseNff(std::string_view text, const std::string& fileName, NffErrors& errors);
+// The same, keeping only the messages (the first kKeptNffErrors).
 std::optional<Scene> ParseNff(std::string_view text, const std::string& fileName,
                               std::vector<std::string>& errors);
 
-// ParseNff, throwing a UserError that lists every error.
+// ParseNff, throwing a UserError with NffErrors::Summary().
 Scene ParseNffOrThrow(std::string_view text, const std::string& fileName);
 
 // Reads a file; a missing or unreadable file, a directory, anything but a regular file, and

@@ -1,6 +1,7 @@
 // Tests for the NFF reader, its error reports and the scene generators.
 #include <gtest/gtest.h>
 
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -375,6 +376,171 @@ TEST(SceneGen, SphereflakeHasNinePowerCounts) {
   }
   EXPECT_EQ(above, 3);
   EXPECT_THROW(GenerateSphereflake(7), UserError);
+}
+
+}  // namespace
+}  // namespace zephyr
+
+namespace zephyr {
+namespace {
+
+// Issue 23: the reader keeps the first kKeptNffErrors messages, counts the rest and stops
+// reading at kMaxNffErrors, so a file of bad lines costs a bounded memory whatever its size.
+TEST(SceneNff, ErrorsAreCountedKeptBoundedAndReadingStopsAtTheCap) {
+  std::string text = std::string(kView) + "f 1 1 1 1 0 0 0 0\n";
+  const int viewLines = 9;
+  for (int i = 0; i < 5000; ++i) text += "z\n";
+  NffErrors errors;
+  EXPECT_FALSE(ParseNff(text, "t.nff", errors).has_value());
+  EXPECT_EQ(errors.count, kMaxNffErrors);
+  EXPECT_EQ(errors.messages.size(), kKeptNffErrors);
+  EXPECT_EQ(errors.stoppedAtLine, viewLines + int(kMaxNffErrors));
+  EXPECT_NE(errors.messages.front().find("t.nff:10:1: unknown keyword 'z'"), std::string::npos)
+      << errors.messages.front();
+  const std::string summary = errors.Summary();
+  EXPECT_NE(summary.find("1000 or more errors in scene:"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("... and 980 more; reading stopped at line 1009 after 1000 errors"),
+            std::string::npos) << summary;
+  // Below the cap every error is counted and the file is read to its end (the missing view
+  // items at the end are reported).
+  NffErrors few;
+  EXPECT_FALSE(ParseNff("z\nz\nz\n", "t.nff", few).has_value());
+  EXPECT_EQ(few.stoppedAtLine, 0);
+  EXPECT_EQ(few.count, 3u + 8u);  // three 'z' and the eight missing view items
+}
+
+// The 64 MiB file of the issue (a view, then 33 million lines 'z') ends with exit 1 and the
+// capped list, under a 1 GiB address-space limit (it reached 6.1 GB and died before).
+TEST(SceneNff, A64MiBFileOfBadLinesEndsWithACleanErrorInBoundedMemory) {
+  const std::string dir = std::filesystem::temp_directory_path() / ("zephyr-nff-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string path = dir + "/bad.nff";
+  {
+    std::ofstream out(path, std::ios::binary);
+    out << kView << "f 1 1 1 1 0 0 0 0\n";
+    std::string lines;  // 1 MiB of lines "z", written 63 times
+    for (size_t i = 0; i < (size_t(1) << 19); ++i) lines += "z\n";
+    const size_t room = kMaxSceneBytes - 200;
+    for (size_t written = 0; written + lines.size() <= room; written += lines.size()) out << lines;
+  }
+  ASSERT_GT(std::filesystem::file_size(path), uintmax_t(60) << 20);
+  const std::string zephyr = (std::filesystem::read_symlink("/proc/self/exe").parent_path() / "zephyr").string();
+  FILE* pipe = ::popen(("bash -c 'ulimit -v 1048576; " + zephyr + " render --method seq " + path + "' 2>&1").c_str(), "r");
+  ASSERT_NE(pipe, nullptr);
+  std::string output;
+  char buffer[4096];
+  while (size_t n = std::fread(buffer, 1, sizeof buffer, pipe)) output.append(buffer, n);
+  const int raw = ::pclose(pipe);
+  std::filesystem::remove_all(dir);
+  EXPECT_TRUE(WIFEXITED(raw) && WEXITSTATUS(raw) == 1) << raw << "\n" << output;
+  EXPECT_NE(output.find("reading stopped at line 1009 after 1000 errors"), std::string::npos) << output;
+  EXPECT_EQ(output.find("bad_alloc"), std::string::npos) << output;
+  EXPECT_LT(output.size(), 4000u);
+}
+
+// A file name is printed whole in every message (editors jump to it); tokens are cut.
+TEST(SceneNff, FileNamesArePrintedWholeInEveryError) {
+  const std::string name = "runs/a_very_long_directory_name_for_testing_paths_longer_than_forty/s.nff";
+  std::vector<std::string> errors;
+  EXPECT_FALSE(ParseNff(std::string(kView) + "f 1 1 1 1 0 0 0 0\ns 0 0 0 -1\n" + std::string(60, 'q') + "\n",
+                        name, errors).has_value());
+  ASSERT_EQ(errors.size(), 2u);
+  EXPECT_EQ(errors[0].rfind(name + ":10:1: expected a sphere radius > 0", 0), 0u) << errors[0];
+  EXPECT_EQ(errors[1].rfind(name + ":11:1: unknown keyword '" + std::string(40, 'q') + "...'", 0), 0u) << errors[1];
+  try {
+    ReadNffFile("/nonexistent/" + name);
+    ADD_FAILURE() << "no error";
+  } catch (const UserError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("/nonexistent/" + name + ": cannot open", 0), 0u) << e.what();
+  }
+}
+
+// Issue 23, smaller faults: a number that underflows is called so (not "not finite"); a
+// file with parse errors still lists its magnitude error; a symbolic-link loop is ELOOP,
+// not "no such file".
+TEST(SceneNff, UnderflowMagnitudeWithOtherErrorsAndLinkLoopsAreNamedForWhatTheyAre) {
+  const std::string f = "f 1 1 1 1 0 0 0 0\n";
+  auto under = Errors(std::string(kView) + f + "s 0 0 1e-400 1\n");
+  ASSERT_EQ(under.size(), 1u);
+  EXPECT_NE(under[0].find("t.nff:10:7: expected a number for the sphere centre"), std::string::npos) << under[0];
+  EXPECT_NE(under[0].find("'1e-400', which underflows double"), std::string::npos) << under[0];
+  auto over = Errors(std::string(kView) + f + "s 0 0 1e400 1\n");
+  ASSERT_EQ(over.size(), 1u);
+  EXPECT_NE(over[0].find("which overflows double"), std::string::npos) << over[0];
+  auto both = Errors(std::string(kView) + f + "s 0 0 0 1e308\nbogus\n");
+  ASSERT_EQ(both.size(), 2u);
+  EXPECT_NE(both[0].find("t.nff:11:1: unknown keyword 'bogus'"), std::string::npos) << both[0];
+  EXPECT_NE(both[1].find("t.nff:10:1: sphere reaches"), std::string::npos) << both[1];
+  const std::string dir = std::filesystem::temp_directory_path() / ("zephyr-loop-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  std::filesystem::create_symlink(dir + "/b.nff", dir + "/a.nff");
+  std::filesystem::create_symlink(dir + "/a.nff", dir + "/b.nff");
+  std::string message;
+  try {
+    ReadNffFile(dir + "/a.nff");
+  } catch (const UserError& e) {
+    message = e.what();
+  }
+  std::filesystem::remove_all(dir);
+  EXPECT_NE(message.find("a.nff: cannot open the scene file (Too many levels of symbolic links)"),
+            std::string::npos) << message;
+}
+
+}  // namespace
+}  // namespace zephyr
+
+namespace zephyr {
+namespace {
+
+// Every number of every statement, when it is not a number or not a finite one, is reported
+// at its own line and column (issue 29, item 8): each view item, the background, a light with
+// and without colour, the material, a sphere, a cone, a polygon's count and vertices, a `pp`
+// normal's components and the 12 entries of a transform.
+TEST(SceneNff, EveryNumberOfEveryStatementIsLocatedAtItsOwnColumn) {
+  const std::vector<std::string> view = {"b 0.1 0.2 0.3", "v",           "from 0 0 10",     "at 0 0 0",
+                                         "up 0 1 0",      "angle 30",    "hither 0.01",     "resolution 64 48",
+                                         "f 1 1 1 1 0 0 0 0"};
+  const std::vector<std::string> statements = {
+      "b 0.1 0.2 0.3", "from 0 0 10", "at 0 0 0", "up 0 1 0", "angle 30", "hither 0.01",
+      "resolution 64 48", "l 1 2 3", "l 1 2 3 0.5 0.5 0.5", "f 0.5 0.5 0.5 0.7 0.3 20 0.1 1.5",
+      "s 1 2 3 0.5", "c 0 0 0 1 0 0 2 0.5", "p 3 0 0 0 1 0 0 0 1 0",
+      "pp 3 0 0 0 0 0 1 1 0 0 0 0 1 0 1 0 0 0 1", "transform 2 0 0 1 0 2 0 1 0 0 2 1"};
+  int checked = 0;
+  for (const std::string& statement : statements) {
+    std::vector<std::string> tokens;
+    for (size_t at = 0; at < statement.size();) {
+      const size_t end = std::min(statement.find(' ', at), statement.size());
+      tokens.push_back(statement.substr(at, end - at));
+      at = end + 1;
+    }
+    // A view item replaces its own line; anything else is line 10, after the material.
+    std::vector<std::string> lines = view;
+    int line = 10;
+    for (size_t i = 0; i < lines.size(); ++i)
+      if (lines[i].substr(0, lines[i].find(' ')) == tokens[0] && tokens[0] != "f") line = int(i) + 1;
+    if (line == 10) lines.push_back("");
+    for (size_t k = 1; k < tokens.size(); ++k) {
+      int column = 1;
+      for (size_t j = 0; j < k; ++j) column += int(tokens[j].size()) + 1;
+      for (const char* bad : {"x", "1e999"}) {
+        std::vector<std::string> t = tokens;
+        t[k] = bad;
+        std::string changed = t[0];
+        for (size_t j = 1; j < t.size(); ++j) changed += " " + t[j];
+        lines[line - 1] = changed;
+        std::string text;
+        for (const std::string& l : lines) text += l + "\n";
+        text += "s 0 0 0 1\n";  // an object after it, so a statement cut short cannot pass unseen
+        std::vector<std::string> errors;
+        EXPECT_FALSE(ParseNff(text, "t.nff", errors).has_value()) << changed;
+        ASSERT_FALSE(errors.empty()) << changed;
+        const std::string where = "t.nff:" + std::to_string(line) + ":" + std::to_string(column) + ": ";
+        EXPECT_EQ(errors[0].rfind(where, 0), 0u) << changed << "\n  expected " << where << "\n  got " << errors[0];
+        ++checked;
+      }
+    }
+  }
+  EXPECT_EQ(checked, 2 * (3 + 3 + 3 + 3 + 1 + 1 + 2 + 3 + 6 + 8 + 4 + 8 + 10 + 19 + 12));
 }
 
 }  // namespace
