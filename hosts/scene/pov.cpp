@@ -5,6 +5,9 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <map>
+#include <variant>
+#include <vector>
 
 #include "fixed/check.h"
 #include "hosts/scene/nff.h"
@@ -25,7 +28,8 @@ std::string Vec(const Vec3& v) { return "<" + Num(v.x) + ", " + Num(v.y) + ", " 
 // Reflection and transmission are not weighted, in either renderer.
 // The ambient term (docs/shading.md: A · Kd · C) is POV-Ray's finish ambient Kd against
 // ambient_light A, divided by the opacity like the diffuse weight.
-std::string Texture(const Material& m) {
+// withInterior false: the interior goes on the union that holds the object (ExportPov).
+std::string Texture(const Material& m, bool withInterior) {
   const double opacity = 1 - m.t;
   const double scale = opacity > 1e-6 ? 1 / opacity : 0;
   std::string s = "  pigment { rgb " + Vec(m.colour);
@@ -36,7 +40,7 @@ std::string Texture(const Material& m) {
     s += " reflection { " + Num(m.ks) + " }";
   }
   s += " }\n";
-  if (m.t > 0) s += "  interior { ior " + Num(m.ior) + " }\n";
+  if (m.t > 0 && withInterior) s += "  interior { ior " + Num(m.ior) + " }\n";
   return s;
 }
 
@@ -69,6 +73,18 @@ std::string ExportPov(const Scene& scene, int depth) {
   // Lights with the intensity every method shades with (SPD's √N/(2N) when a light has no colour).
   for (size_t i = 0; i < scene.lights.size(); ++i)
     out += "light_source { " + Vec(scene.lights[i].position) + " color rgb " + Vec(scene.LightColour(i)) + " }\n";
+  // Ours refracts by the side of the surface a ray meets (docs/shading.md: entering against
+  // the normal, leaving along it); POV-Ray by the interiors the ray has entered: a ray meeting
+  // an object whose interior it is not in enters it, with the ratio of that ior to the one it
+  // is in. A polygon has no inside of its own, so a glass solid made of polygons (SPD gears:
+  // two 144-gons and 144 quads) exported polygon by polygon would have as many interiors as
+  // faces: a ray would bend entering the first face and pass every later face straight
+  // (1.1/1.1). The transmissive polygons of one material therefore share one interior, that
+  // of one union around them: leaving through any face leaves it, as the outward normals of a
+  // closed solid say in our tracer. Disjoint solids of one material may share it (each is
+  // entered and left in turn).
+  std::vector<int> unionOrder;             // materials with transmissive polygons, first seen first
+  std::map<int, std::string> unionBodies;  // material -> the polygons of its union
   for (const Primitive& o : scene.objects) {
     std::string body;
     if (auto* s = std::get_if<Sphere>(&o.shape)) {
@@ -93,10 +109,21 @@ std::string ExportPov(const Scene& scene, int depth) {
                   Vec(p.normals[i + 1]) + " }\n";
       }
     }
-    out += body + Texture(scene.materials.at(o.material));
-    if (o.transform) out += Matrix(*o.transform);
-    out += "}\n";
+    const Material& m = scene.materials.at(o.material);
+    const bool joined = m.t > 0 && std::holds_alternative<Polygon>(o.shape);
+    body += Texture(m, !joined);
+    if (o.transform) body += Matrix(*o.transform);
+    body += "}\n";
+    if (!joined) {
+      out += body;
+      continue;
+    }
+    if (unionBodies.find(o.material) == unionBodies.end()) unionOrder.push_back(o.material);
+    unionBodies[o.material] += body;
   }
+  for (const int material : unionOrder)
+    out += "union {\n" + unionBodies[material] + "  interior { ior " + Num(scene.materials[material].ior) +
+           " }\n}\n";
   return out;
 }
 

@@ -83,7 +83,38 @@ TEST(TracePov, LightsWithoutColourMatchPovray) {
   if (!HavePovray()) GTEST_SKIP() << "povray is not installed";
   const double psnr = CompareWithPovray(s, "spd");
   RecordProperty("psnr_db", std::to_string(psnr));
-  EXPECT_GE(psnr, 30);
+  EXPECT_GE(psnr, 45);  // 47.4 dB with povray 3.7 (Debian bookworm)
+}
+
+// Issue 23: a glass solid made of polygons is one POV-Ray object with one interior. POV-Ray
+// refracts by the interiors a ray has entered; with one per exported face, a ray bent entering
+// the slab's top and passed its bottom straight (1.5/1.5), so the sphere under it showed
+// displaced: 23.6 dB (SPD gears_s1 29.7 dB). With the union, 37.4 dB here (gears 41.5 dB at
+// 512×512): what is left is total internal reflection at the side faces, which POV-Ray weights
+// 1 and ours T (docs/shading.md, "Mapping onto POV-Ray").
+TEST(TracePov, GlassPolygonSolidIsOneInterior) {
+  const Scene s = ParseNffOrThrow(
+      "v\nfrom 0 -3 3\nat 0 0 0.2\nup 0 0 1\nangle 40\nhither 0.01\nresolution 96 96\nb 0.078 0.361 0.753\n"
+      "l 3 -2 6\nl -4 -3 5\nl 1 4 7\nf 1 1 1 1 0 100000 0 0\np 4\n-2 -2 0\n2 -2 0\n2 2 0\n-2 2 0\n"
+      "f 1 0 0 0.7 0.3 30 0 0\ns 0 0 0.2 0.2\nf 0.9 0.9 0.9 0.1 0 100000 0.8 1.5\n"
+      // A 2 × 2 × 0.1 slab, every face counter-clockwise from outside: top, bottom, y = −1,
+      // y = 1, x = 1, x = −1.
+      "p 4\n-1 -1 0.55\n1 -1 0.55\n1 1 0.55\n-1 1 0.55\n"
+      "p 4\n-1 -1 0.45\n-1 1 0.45\n1 1 0.45\n1 -1 0.45\n"
+      "p 4\n-1 -1 0.45\n1 -1 0.45\n1 -1 0.55\n-1 -1 0.55\n"
+      "p 4\n1 1 0.45\n-1 1 0.45\n-1 1 0.55\n1 1 0.55\n"
+      "p 4\n1 -1 0.45\n1 1 0.45\n1 1 0.55\n1 -1 0.55\n"
+      "p 4\n-1 1 0.45\n-1 -1 0.45\n-1 -1 0.55\n-1 1 0.55\n",
+      "slab.nff");
+  const std::string pov = ExportPov(s, 5);
+  int interiors = 0;
+  for (size_t at = pov.find("interior {"); at != std::string::npos; at = pov.find("interior {", at + 1)) ++interiors;
+  EXPECT_EQ(interiors, 1) << pov;
+  EXPECT_NE(pov.find("union {"), std::string::npos) << pov;
+  if (!HavePovray()) GTEST_SKIP() << "povray is not installed";
+  const double psnr = CompareWithPovray(s, "slab");
+  RecordProperty("psnr_db", std::to_string(psnr));
+  EXPECT_GE(psnr, 37);
 }
 
 TEST(TracePov, ExportMapsOpacityAndTransforms) {
