@@ -113,7 +113,7 @@ FUZZ_BIN  := $(BUILD)/fuzz/nff_fuzz
 # The reader, the host tracer and the SIMD planner (with the arithmetic and array it
 # plans for); not the pass itself, which runs the array and is far too slow per input,
 # nor the OpenMP layer blocks (bitserial/blocks.cpp) the planner never calls.
-FUZZ_SRCS := tests/fuzz/nff_fuzz.cpp hosts/scene/nff.cpp hosts/scene/scene.cpp \
+FUZZ_SRCS := tests/fuzz/nff_fuzz.cpp hosts/scene/nff.cpp hosts/scene/scene.cpp hosts/io/output_file.cpp \
              hosts/scene/geometry.cpp hosts/trace/tracer.cpp hosts/trace/sphere_kernels.cpp \
              $(filter-out $(OPENMP_SRCS),$(wildcard fixed/*.cpp bitserial/*.cpp)) \
              hosts/trace/exact.cpp \
@@ -133,7 +133,7 @@ $(FUZZ_BIN): $(FUZZ_OBJS)
 	  $$(pkg-config --libs libhwy fmt)
 -include $(FUZZ_OBJS:.o=.d)
 
-fuzz: ## Fuzz the NFF reader, tracer and SIMD planner: FUZZ_RUNS inputs (default 10^6) under ASan+UBSan
+fuzz: ## Fuzz the NFF reader, tracer, SIMD planner and output pre-flight: FUZZ_RUNS inputs (default 10^6) under ASan+UBSan
 	$(Q)$(MAKE) --no-print-directory -j$(JOBS) $(FUZZ_BIN)
 	$(Q)$(FUZZ_RUN) -runs=$(FUZZ_RUNS)
 

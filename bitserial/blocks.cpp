@@ -18,8 +18,8 @@ int DefaultBlockLayers() { return 2; }
 int HardwareThreads() { return std::max(1, omp_get_num_procs()); }
 
 int CheckThreads(int threads) {
-  if (threads < 1 || threads > 1024)
-    throw UserError(fmt::format("--threads: expected 1 to 1024 threads, got {}", threads));
+  if (threads < 1 || threads > kMaxThreads)
+    throw UserError(fmt::format("--threads: expected 1 to {} threads, got {}", kMaxThreads, threads));
   return threads;
 }
 

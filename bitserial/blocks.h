@@ -40,7 +40,9 @@ struct BlockOptions {
 int DefaultBlockLayers();
 // The cores OpenMP may use (omp_get_num_procs).
 int HardwareThreads();
-// UserError unless 1 <= threads <= 1024 (the --threads flag's check).
+// The most host threads a run may ask for (--threads): far past any host's cores.
+inline constexpr int kMaxThreads = 1024;
+// UserError unless 1 <= threads <= kMaxThreads (the --threads flag's check).
 int CheckThreads(int threads);
 
 struct BlockedRun {

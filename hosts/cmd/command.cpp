@@ -6,6 +6,7 @@
 #include <map>
 
 #include "fixed/check.h"
+#include "hosts/cmd/flags.h"
 
 namespace zephyr {
 
@@ -30,6 +31,18 @@ int RunZephyr(int argc, const char* const* argv) {
       "ray-tracing methods"};
   program.require_subcommand(1);
   AddRegisteredCommands(program);
+  // A command line's mistake is the same on every rank of an mpirun: rank 0 alone says it
+  // (the others exit with the same status, silently).
+  const bool speak = LauncherRank() == 0;
+  program.failure_message([speak](const CLI::App* app, const CLI::Error& e) -> std::string {
+    if (!speak) return "";
+    std::string where = "zephyr";  // the subcommands as far as they were read: "zephyr gen spheres"
+    for (const CLI::App* a = app; a && !a->get_subcommands().empty();) {
+      a = a->get_subcommands().front();
+      where += " " + a->get_name();
+    }
+    return "zephyr: error: " + std::string(e.what()) + "\n(run '" + where + " --help' for the flags)\n";
+  });
   try {
     program.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -39,6 +52,12 @@ int RunZephyr(int argc, const char* const* argv) {
   } catch (const UserError& e) {
     std::fprintf(stderr, "zephyr: error: %s\n", e.what());
     return e.ExitCode();
+  } catch (const std::bad_alloc&) {
+    // The runs' own estimates refuse what cannot fit before any work (docs/errors.md,
+    // "Memory"); this is the last line, for what no estimate foresaw.
+    std::fprintf(stderr, "zephyr: error: out of memory (the process could not allocate what this run "
+                         "needs; try a smaller resolution, fewer threads or a larger memory limit)\n");
+    return 1;
   }
   return 0;
 }

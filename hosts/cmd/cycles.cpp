@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <climits>
 #include <functional>
 #include <map>
 
@@ -14,6 +15,7 @@
 #include "bitserial/multi.h"
 #include "fixed/check.h"
 #include "hosts/cmd/command.h"
+#include "hosts/cmd/flags.h"
 
 namespace zephyr {
 namespace {
@@ -177,10 +179,11 @@ CommandRegistration reg("cycles", [](CLI::App& program) {
   cmd->add_option("--float", opts->floatFormat,
                   "Float format of the f* operations, eXmY[ftz] (default: binary16/32/64 by --bits; "
                   "binary32 for ftofixed/ffromfixed, whose fixed side is --bits/--frac)");
-  cmd->add_option("--bits", opts->bits, "Width of the first operand (and of the result)");
-  cmd->add_option("--bits2", opts->bits2, "Width of the second operand / the constant (default --bits)");
-  cmd->add_option("--frac", opts->frac, "Fraction bits of the operands");
-  cmd->add_option("--constant", opts->constant, "The uni constant's bits for mul-uni");
+  AddInteger(*cmd, "--bits", opts->bits, 1, fixed::kMaxWidth, "Width of the first operand (and of the result)");
+  AddInteger(*cmd, "--bits2", opts->bits2, 1, fixed::kMaxWidth,
+             "Width of the second operand / the constant (default --bits)");
+  AddInteger(*cmd, "--frac", opts->frac, 0, fixed::kMaxWidth, "Fraction bits of the operands");
+  AddInteger(*cmd, "--constant", opts->constant, LLONG_MIN, LLONG_MAX, "The uni constant's bits for mul-uni");
   cmd->add_flag("--unsigned", opts->isUnsigned, "Unsigned operands (default signed)");
   cmd->add_flag("--external", opts->external, "Operands and result in external PE memory");
   cmd->add_option("--rounding", opts->rounding, "floor or nearest");

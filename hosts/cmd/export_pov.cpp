@@ -5,9 +5,11 @@
 
 #include "fixed/check.h"
 #include "hosts/cmd/command.h"
+#include "hosts/cmd/flags.h"
 #include "hosts/io/output_file.h"
 #include "hosts/scene/nff.h"
 #include "hosts/scene/pov.h"
+#include "hosts/trace/tracer.h"
 
 namespace zephyr {
 namespace {
@@ -19,11 +21,9 @@ CommandRegistration reg("export-pov", [](CLI::App& program) {
   auto depth = std::make_shared<int>(5);
   cmd->add_option("scene", *scene, "NFF scene file")->required();
   cmd->add_option("--out", *out, "Output .pov file (default: standard output)");
-  cmd->add_option("--depth", *depth, "Trace depth (POV-Ray max_trace_level)")->capture_default_str();
+  AddInteger(*cmd, "--depth", *depth, 1, kMaxDepth, "Trace depth (POV-Ray max_trace_level)");
   cmd->callback([scene, out, depth] {
-    if (*depth < 1 || *depth > 64) throw UserError("--depth: expected 1..64");
-    if (!out->empty() && SameFile(*out, *scene))
-      throw UserError("--out " + *out + ": is the scene file being exported; choose another name");
+    CheckOutputs({{"--out", *out}}, {{"the scene file", *scene}});
     const Scene s = ReadNffFile(*scene);
     const std::string text = ExportPov(s, *depth);
     if (out->empty()) {

@@ -6,6 +6,7 @@
 
 #include "fixed/check.h"
 #include "hosts/cmd/command.h"
+#include "hosts/cmd/flags.h"
 #include "hosts/io/output_file.h"
 #include "hosts/scene/gen.h"
 #include "hosts/scene/nff.h"
@@ -14,7 +15,7 @@ namespace zephyr {
 namespace {
 
 void WriteSceneTo(const Scene& scene, const std::string& out) {
-  const std::string text = WriteNff(scene);
+  const std::string text = WriteNff(scene);  // (--out was checked before the scene was made)
   if (out.empty() || out == "-") {
     std::fwrite(text.data(), 1, text.size(), stdout);
     return;
@@ -43,11 +44,13 @@ CommandRegistration reg("gen", [](CLI::App& program) {
   };
   auto args = std::make_shared<Args>();
   auto* spheres = gen->add_subcommand("spheres", "The paper's random-sphere scene");
-  spheres->add_option("--count", args->count, "Number of spheres")->required();
-  spheres->add_option("--seed", args->seed, "Random seed")->required();
+  AddInteger(*spheres, "--count", args->count, 1, kMaxRandomSpheres, "Number of spheres")->required();
+  AddInteger(*spheres, "--seed", args->seed, uint64_t(0), UINT64_MAX, "Random seed")->required();
   spheres->add_option("--out", args->out, "Output file (default: standard output)");
   spheres->add_option("--size", args->size, "Image size WxH (default 384x384)");
+  // Every generator checks --out before it generates (a flake of depth 6 takes a while).
   spheres->callback([args] {
+    CheckOutputs({{"--out", args->out}});
     RandomSpheresOptions o;
     o.count = args->count;
     o.seed = args->seed;
@@ -55,10 +58,11 @@ CommandRegistration reg("gen", [](CLI::App& program) {
     WriteSceneTo(GenerateRandomSpheres(o), args->out);
   });
   auto* flake = gen->add_subcommand("flake", "A sphereflake like SPD balls");
-  flake->add_option("--depth", args->depth, "Recursion depth (0..6)")->required();
+  AddInteger(*flake, "--depth", args->depth, 0, kMaxFlakeDepth, "Recursion depth (6 is 597,871 spheres)")->required();
   flake->add_option("--out", args->out, "Output file (default: standard output)");
   flake->add_option("--size", args->size, "Image size WxH (default 512x512)");
   flake->callback([args] {
+    CheckOutputs({{"--out", args->out}});
     int w = 512, h = 512;
     ParseSize(args->size, w, h);
     WriteSceneTo(GenerateSphereflake(args->depth, w, h), args->out);
@@ -67,6 +71,7 @@ CommandRegistration reg("gen", [](CLI::App& program) {
   showcase->add_option("--out", args->out, "Output file (default: standard output)");
   showcase->add_option("--size", args->size, "Image size WxH (default 384x384)");
   showcase->callback([args] {
+    CheckOutputs({{"--out", args->out}});
     int w = 384, h = 384;
     ParseSize(args->size, w, h);
     WriteSceneTo(GenerateTransformedShowcase(w, h), args->out);

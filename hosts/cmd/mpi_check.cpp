@@ -16,6 +16,10 @@
 
 #include "fixed/check.h"
 #include "hosts/cmd/command.h"
+#include "hosts/cmd/flags.h"
+#include "hosts/methods/memory_budget.h"
+#include "hosts/methods/render.h"
+#include "hosts/scene/nff.h"
 #include "hosts/farm/farm.h"
 #include "hosts/farm/checkpoint.h"
 #include "hosts/io/output_file.h"
@@ -170,6 +174,12 @@ void RunCheck(CheckArgs& a) {
     throw UserError("--mode must be dist or hetero, got '" + o.mode + "'");
   if (!a.report.empty() && (SameFile(a.report, a.out) || SameFile(a.report, CheckpointPathFor(a.out))))
     throw UserError("--report " + a.report + ": is the image or its checkpoint; choose another name");
+  if (LauncherRank() == 0) {  // children write no file and hold frames only
+    CheckOutputs({{"--out", a.out}, {"--report", a.report}});
+    // The parent's image (12 bytes a pixel), the farm's copy and, for hetero, the matrix (40).
+    CheckMemoryFits("mpi-check at " + std::to_string(o.width) + "x" + std::to_string(o.height),
+                    {.perPixel = 72, .pixels = uint64_t(o.width) * uint64_t(o.height)});
+  }
   if (a.local) {
     Pattern pattern(o);
     PatternWork work(o);
@@ -235,24 +245,21 @@ CommandRegistration reg("mpi-check", [](CLI::App& program) {
       "Run the frame farm of dist/hetero on a synthetic pattern (check an MPI set-up; "
       "launch with mpirun -np K+1)");
   cmd->add_option("--mode", args->pattern.mode, "dist or hetero")->capture_default_str();
-  cmd->add_option("--width", args->pattern.width, "image width")->check(CLI::Range(1, 16384));
-  cmd->add_option("--height", args->pattern.height, "image height")->check(CLI::Range(1, 16384));
-  cmd->add_option("--objects", args->pattern.objects, "discs in the pattern")
-      ->check(CLI::Range(0, 1000));
-  cmd->add_option("--work", args->pattern.work, "stand-in shading iterations per pixel")
-      ->check(CLI::Range(0, 100000000));
-  cmd->add_option("--seed", args->pattern.seed, "pattern seed");
-  cmd->add_option("--frame", args->frame, "frame size F (F×F frames)")->capture_default_str();
+  AddInteger(*cmd, "--width", args->pattern.width, 1, kMaxResolution, "image width");
+  AddInteger(*cmd, "--height", args->pattern.height, 1, kMaxResolution, "image height");
+  AddInteger(*cmd, "--objects", args->pattern.objects, 0, 1000, "discs in the pattern");
+  AddInteger(*cmd, "--work", args->pattern.work, 0, 100000000, "stand-in shading iterations per pixel");
+  AddInteger(*cmd, "--seed", args->pattern.seed, std::uint32_t(0), UINT32_MAX, "pattern seed");
+  AddInteger(*cmd, "--frame", args->frame, 1, kMaxResolution, "frame size F (F×F frames)");
   cmd->add_flag("--local", args->local, "render in this process, without MPI (the reference)");
   cmd->add_option("--out", args->out, "output image (.pfm)")->required();
   cmd->add_option("--report", args->report, "JSON report (parent)");
   cmd->add_flag("--resume", args->farm.resume,
                 "render only the frames missing from the checkpoint");
-  cmd->add_option("--child-timeout", args->farm.childTimeoutSeconds,
-                  "seconds before a silent child holding frames is declared lost")
-      ->capture_default_str();
-  cmd->add_option("--in-flight", args->farm.framesInFlight, "frames handed to a child at once")
-      ->capture_default_str();
+  AddNumber(*cmd, "--child-timeout", args->farm.childTimeoutSeconds, kMinChildTimeoutSeconds, kNoUpperEnd,
+            "seconds before a silent child holding frames is declared lost");
+  AddInteger(*cmd, "--in-flight", args->farm.framesInFlight, 1, kMaxFramesInFlight,
+             "frames handed to a child at once");
   cmd->callback([args] { RunCheck(*args); });
 });
 

@@ -8,9 +8,11 @@
 
 #include "fixed/check.h"
 #include "hosts/cmd/command.h"
+#include "hosts/cmd/flags.h"
 #include "hosts/cmd/simd_flags.h"
 #include "hosts/methods/phases.h"
 #include "hosts/methods/render.h"
+#include "hosts/scene/nff.h"
 
 namespace zephyr {
 // One line a user reads after a render: what was made, how long it took, where it went;
@@ -62,21 +64,20 @@ CommandRegistration reg("render", [](CLI::App& program) {
       cmd->add_option("--out", o->out, "Output PNG"),
       cmd->add_option("--report", o->report, "JSON report: time per phase, rays, tests"),
       cmd->add_option("--dump-primary", o->dumpPrimary, "CSV of primary hits: x,y,dx,dy,dz,object,t,flags")};
-  cmd->add_option("--depth", o->trace.depth, "Ray-tree depth limit (1 = primary rays only)")
-      ->capture_default_str();
+  AddInteger(*cmd, "--depth", o->trace.depth, 1, kMaxDepth, "Ray-tree depth limit (1 = primary rays only)");
   cmd->add_option("--precision", *precision, "Host tracer scalar: float or double")->capture_default_str();
   cmd->add_option("--sphere-test", *sphereTest, "Sphere test form: hb (Hearn-Baker) or naive")
       ->capture_default_str();
   cmd->add_flag("--no-progress", *noProgress, "No progress bar even on a terminal");
   auto simdFlags = std::make_shared<SimdFlags>();
   simdFlags->AddTo(*cmd, "simd: ");
-  cmd->add_option("--frame", o->dist.frameSize, "dist/hetero: frame size F (F×F frames; default 64)");
+  AddInteger(*cmd, "--frame", o->dist.frameSize, 1, kMaxResolution, "dist/hetero: frame size F (F×F frames)");
   cmd->add_flag("--resume", o->dist.resume,
                 "dist/hetero: render only the frames missing from OUT.frames (the checkpoint)");
-  cmd->add_option("--child-timeout", o->dist.childTimeoutSeconds,
-                  "dist/hetero: seconds a child may hold frames without answering (default 60)");
-  cmd->add_option("--in-flight", o->dist.framesInFlight,
-                  "dist/hetero: frames handed to a child before it returns one (default 2)");
+  AddNumber(*cmd, "--child-timeout", o->dist.childTimeoutSeconds, kMinChildTimeoutSeconds, kNoUpperEnd,
+            "dist/hetero: seconds a child may hold frames without answering");
+  AddInteger(*cmd, "--in-flight", o->dist.framesInFlight, 1, kMaxFramesInFlight,
+             "dist/hetero: frames handed to a child before it returns one");
   cmd->add_option("--testbed", o->testbed,
                   "Model the paper's 1992 system (ufmg1992): the report's \"testbed\" gives "
                   "modelled seconds (dist/hetero: under smpirun, docs/testbed.md)");

@@ -4,20 +4,26 @@
 #include <string>
 
 #include "bitserial/blocks.h"
+#include "bitserial/profile.h"
 #include "fixed/check.h"
+#include "hosts/cmd/flags.h"
 
 namespace zephyr {
 
 void SimdFlags::AddTo(CLI::App& command, const std::string& helpPrefix, bool withUncertain) {
-  auto bits = [&](const char* name, int& value, const char* help) {
-    added_.push_back(command.add_option(name, value, helpPrefix + help)
-                         ->check(CLI::NonNegativeNumber)
-                         ->option_text("UINT"));
+  // The widths' ranges: the narrowest at which the pass's error bounds are tested and the
+  // widest it supports (hosts/simd/plan.h).
+  auto bits = [&](const char* name, int& value, int lo, int hi, const char* help) {
+    added_.push_back(AddInteger(command, name, value, lo, hi, helpPrefix + help,
+                                "the SIMD pass's error bounds are tested from " + std::to_string(lo) +
+                                    " bits and it supports up to " + std::to_string(hi) + ", docs/simd.md"));
   };
-  bits("--frac-bits", options_.formats.fracBits,
+  bits("--frac-bits", options_.formats.fracBits, simd::kMinFracBits, simd::kMaxFracBits,
        "fraction bits of lengths, t and directions (default: planned per scene)");
-  bits("--dir-frac-bits", options_.formats.dirFracBits, "fraction bits of the directions only");
-  bits("--int-bits", options_.formats.intBits, "integer bits of distances");
+  bits("--dir-frac-bits", options_.formats.dirFracBits, simd::kMinFracBits, simd::kMaxDirFracBits,
+       "fraction bits of the directions only");
+  bits("--int-bits", options_.formats.intBits, simd::kMinIntBits, simd::kMaxIntBits,
+       "integer bits of distances");
   added_.push_back(command.add_option(
       "--number", number_,
       helpPrefix + "number system of the ray-object intersections on the array: fixed (default) or float "
@@ -34,25 +40,14 @@ void SimdFlags::AddTo(CLI::App& command, const std::string& helpPrefix, bool wit
                      "array pass on them first), keep, fail"));
   added_.push_back(command.add_option("--machine", options_.profile,
                                       helpPrefix + "machine profile (wavetracer, mpp)"));
-  added_.push_back(command.add_option("--threads", options_.threads,
-                                      helpPrefix + "host threads emulating the array and recomputing uncertain "
-                                                   "pixels (default or 0: every core; the results do not depend on it)")
-                       ->option_text("N"));
+  added_.push_back(AddInteger(command, "--threads", options_.threads, 0, bitserial::kMaxThreads,
+                              helpPrefix + "host threads emulating the array and recomputing uncertain "
+                                           "pixels (default or 0: every core; the results do not depend on it)"));
 }
 
 simd::SimdOptions SimdFlags::Options() const {
   simd::SimdOptions o = options_;
-  // A width given below what the error bounds are tested at (docs/simd.md) is refused here,
-  // before any work; unset widths (-1) are the planner's choice.
-  auto atLeast = [](const char* flag, int value, int minimum, const char* unit) {
-    if (value >= 0 && value < minimum)
-      throw UserError(std::string(flag) + " " + std::to_string(value) + ": the SIMD pass needs at least " +
-                      std::to_string(minimum) + " " + unit +
-                      " (the narrowest width its error bounds are tested at, docs/simd.md)");
-  };
-  atLeast("--frac-bits", o.formats.fracBits, simd::kMinFracBits, "fraction bits");
-  atLeast("--dir-frac-bits", o.formats.dirFracBits, simd::kMinFracBits, "direction fraction bits");
-  atLeast("--int-bits", o.formats.intBits, simd::kMinIntBits, "integer bits");
+  // The widths and --threads were range-checked as the command line was parsed (flags.h).
   if (!number_.empty()) o.number = simd::ParseNumberSystem(number_);
   if (!floatFormat_.empty()) {
     if (o.number != simd::NumberSystem::kFloat)
@@ -61,6 +56,7 @@ simd::SimdOptions SimdFlags::Options() const {
   }
   o.uncertain = simd::ParseUncertainPolicy(uncertain_.empty() ? "auto" : uncertain_);
   if (o.threads != 0) bitserial::CheckThreads(o.threads);  // 0: not given, every core
+  simd::MachineProfileOf(o);  // an unknown --machine before any work (UserError naming the known ones)
   return o;
 }
 

@@ -27,10 +27,9 @@ class SimdFlags {
   // prints formats and has no pixels to be uncertain about).
   void AddTo(CLI::App& command, const std::string& helpPrefix, bool withUncertain = true);
   // The options the flags give (the defaults where none was given). UserError for an
-  // unknown --uncertain policy or --number, a bad --float-format or one without --number
-  // float, a width below simd::kMinFracBits / kMinIntBits (the
-  // message says the minimum) or --threads outside 1..1024; an unknown machine profile
-  // name is refused by the pass.
+  // unknown --uncertain policy, --number or --machine, a bad --float-format or one without
+  // --number float. The widths (simd::kMinFracBits..kMaxFracBits, ...) and --threads
+  // (0..bitserial::kMaxThreads) are checked as the command line is parsed (flags.h).
   simd::SimdOptions Options() const;
   // The names of the flags given on the command line ("--frac-bits", ...).
   std::vector<std::string> Given() const;

@@ -30,6 +30,7 @@
 #include "fixed/reference.h"
 #include "hosts/io/output_file.h"
 #include "hosts/cmd/command.h"
+#include "hosts/cmd/flags.h"
 #include "hosts/scene/geometry.h"
 #include "hosts/trace/exact.h"
 #include "hosts/trace/intersect.h"
@@ -286,18 +287,24 @@ CommandRegistration reg("stability", [](CLI::App& program) {
   dist->add_option("--out", a->out, "CSV file ('-' = standard output)")->capture_default_str();
   dist->add_option("--formats", a->formats, "Formats: float32, float64, sI.F (fixed)")
       ->delimiter(',')->capture_default_str();
-  dist->add_option("--rays", a->rays, "Rays in the fan (closest approach 0..1.25 r)")->capture_default_str();
-  dist->add_option("--max-log2", a->maxLog2, "Largest distance 2^N")->capture_default_str();
-  dist->add_option("--steps", a->steps, "Distances per octave")->capture_default_str();
-  dist->callback([a] { RunDistance(a->out, a->formats, a->rays, a->maxLog2, a->steps); });
+  AddInteger(*dist, "--rays", a->rays, 1, 1 << 20, "Rays in the fan (closest approach 0..1.25 r)");
+  AddInteger(*dist, "--max-log2", a->maxLog2, 1, 60, "Largest distance 2^N");
+  AddInteger(*dist, "--steps", a->steps, 1, 1024, "Distances per octave");
+  dist->callback([a] {
+    CheckOutputs({{"--out", a->out}});
+    RunDistance(a->out, a->formats, a->rays, a->maxLog2, a->steps);
+  });
 
   auto* over = cmd->add_subcommand(
       "overflow", "Largest scene extent each fixed format sI.F holds, naive vs Hearn-Baker");
   over->add_option("--out", a->out, "CSV file ('-' = standard output)")->capture_default_str();
-  over->add_option("--frac-bits", a->fracBits, "Fraction bits F")->capture_default_str();
-  over->add_option("--max-int-bits", a->maxIntBits, "Integer bits I from 2 to this")->capture_default_str();
-  over->add_option("--rays", a->overflowRays, "Rays in the fan")->capture_default_str();
-  over->callback([a] { RunOverflow(a->out, a->fracBits, a->maxIntBits, a->overflowRays); });
+  AddInteger(*over, "--frac-bits", a->fracBits, 4, 64, "Fraction bits F");
+  AddInteger(*over, "--max-int-bits", a->maxIntBits, 2, fixed::kMaxWidth, "Integer bits I from 2 to this (I + F + 1 within 128)");
+  AddInteger(*over, "--rays", a->overflowRays, 1, 1 << 20, "Rays in the fan");
+  over->callback([a] {
+    CheckOutputs({{"--out", a->out}});
+    RunOverflow(a->out, a->fracBits, a->maxIntBits, a->overflowRays);
+  });
 });
 
 }  // namespace

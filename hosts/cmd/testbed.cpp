@@ -10,6 +10,7 @@
 
 #include "fixed/check.h"
 #include "hosts/cmd/command.h"
+#include "hosts/cmd/flags.h"
 #include "hosts/io/output_file.h"
 #include "hosts/testbed/host_profile.h"
 #include "hosts/testbed/testbed.h"
@@ -37,13 +38,13 @@ CommandRegistration testbedCommand("testbed", [](CLI::App& program) {
   auto out = std::make_shared<std::string>();
   auto hostfile = std::make_shared<std::string>();
   platform->add_option("--testbed", *bed, "Testbed name")->capture_default_str();
-  platform->add_option("--children", *children, "Number of child hosts")->capture_default_str();
+  AddInteger(*platform, "--children", *children, 1, kMaxPlatformChildren, "Number of child hosts");
   platform->add_option("--out", *out, "Platform XML (default: standard output)");
   platform->add_option("--hostfile", *hostfile, "Also write smpirun's hostfile: the parent, then the children");
   auto bps = std::make_shared<double>(0);
-  platform->add_option("--ethernet-bps", *bps, "Override the Ethernet's bandwidth, bit/s (what-if runs)");
+  AddNumber(*platform, "--ethernet-bps", *bps, 1e3, kNoUpperEnd, "Override the Ethernet's bandwidth, bit/s (what-if runs)");
   auto hostOps = std::make_shared<double>(0);
-  platform->add_option("--host-ops", *hostOps,
+  AddNumber(*platform, "--host-ops", *hostOps, 1e3, kNoUpperEnd,
                        "Parent and children run this many counted operations per second, no profile "
                        "(the this-host speed from `zephyr testbed calibrate`)");
   platform->callback([bed, children, out, hostfile, bps, hostOps] {
@@ -53,6 +54,7 @@ CommandRegistration testbedCommand("testbed", [](CLI::App& program) {
     if (*bps > 0) t.ethernetBandwidth = {*bps, "bit/s", "--ethernet-bps (what-if; not the paper's network)"};
     if (*hostOps < 0 || (*hostOps > 0 && *hostOps < 1e3))
       throw UserError("--host-ops: expected at least 1000 operations per second");
+    CheckOutputs({{"--out", *out}, {"--hostfile", *hostfile}});
     const std::string xml = PlatformXml(t, *children, *hostOps);
     if (out->empty()) std::fputs(xml.c_str(), stdout);
     else WriteOutputFile(*out, "platform file", xml);

@@ -40,11 +40,30 @@ mode_t CreateMode() {  // what open(…, 0666) would give under the current umas
   return 0666 & ~mask;
 }
 
+// What stands at `path` now, as a reason it may not be replaced ("" when it may: nothing,
+// or a regular file, or a link to one). stat follows links: a link to /dev/full is a device.
+std::string Unreplaceable(const std::string& path) {
+  struct stat s;
+  if (::stat(path.c_str(), &s) != 0) {
+    // A new name (or a dangling link, replaced like one); ENOTDIR (a file on the way) is
+    // the directory's fault, said by the directory check.
+    if (errno == ENOENT || errno == ENOTDIR) return "";
+    return std::string("cannot check it: ") + std::strerror(errno);  // e.g. a symbolic-link loop
+  }
+  if (S_ISDIR(s.st_mode)) return "is a directory";
+  if (!S_ISREG(s.st_mode))
+    return "not a regular file (a device, pipe or socket; outputs are written to a temporary file "
+           "and renamed into place, which would replace it)";
+  return "";
+}
+
 }  // namespace
 
 OutputFile::OutputFile(std::string path, std::string what)
     : path_(std::move(path)), what_(std::move(what)) {
   if (path_.empty()) throw UserError("cannot write the " + what_ + ": empty path");
+  if (const std::string why = Unreplaceable(path_); !why.empty())
+    throw UserError(path_ + ": cannot write the " + what_ + ": " + why);
   const int fd = MakeTemporary(path_, temporary_);
   if (fd < 0)
     throw UserError(path_ + ": cannot create the " + what_ + " (in " + DirectoryOf(path_) +
@@ -96,14 +115,8 @@ void WriteOutputFile(const std::string& path, const std::string& what, std::stri
 
 void CheckOutputPath(const std::string& flag, const std::string& path) {
   if (path.empty()) throw UserError(flag + ": empty path (give a file name, or leave the flag out)");
+  if (const std::string why = Unreplaceable(path); !why.empty()) throw UserError(flag + " " + path + ": " + why);
   struct stat s;
-  if (::stat(path.c_str(), &s) == 0) {
-    if (S_ISDIR(s.st_mode)) throw UserError(flag + " " + path + ": is a directory");
-    if (!S_ISREG(s.st_mode))
-      throw UserError(flag + " " + path +
-                      ": not a regular file (outputs are written to a temporary file and "
-                      "renamed into place)");
-  }
   const std::string dir = DirectoryOf(path);
   if (::stat(dir.c_str(), &s) != 0)
     throw UserError(flag + " " + path + ": directory " + dir + " does not exist");
@@ -115,6 +128,22 @@ void CheckOutputPath(const std::string& flag, const std::string& path) {
                     std::strerror(errno));
   ::close(fd);
   ::unlink(probe.c_str());
+}
+
+void CheckOutputs(const std::vector<PlannedOutput>& outputs, const std::vector<RunInput>& inputs) {
+  std::vector<const PlannedOutput*> seen;
+  for (const PlannedOutput& o : outputs) {
+    if (o.path.empty() || o.path == "-") continue;
+    for (const RunInput& in : inputs)
+      if (!in.path.empty() && SameFile(o.path, in.path))
+        throw UserError(o.flag + " " + o.path + ": is " + in.what + " this run reads; choose another name");
+    for (const PlannedOutput* earlier : seen)
+      if (SameFile(o.path, earlier->path))
+        throw UserError(earlier->flag + " and " + o.flag + " name the same file (" + o.path +
+                        "); give each output its own name");
+    CheckOutputPath(o.flag, o.path);
+    seen.push_back(&o);
+  }
 }
 
 bool SameFile(const std::string& a, const std::string& b) {

@@ -15,14 +15,16 @@
 #include <cstdio>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace zephyr {
 
 class OutputFile {
  public:
   // Creates the temporary file in `path`'s directory. `what` names the file in messages
-  // ("PNG file", "report"). UserError when it cannot be created (missing directory, no
-  // permission, read-only or full file system).
+  // ("PNG file", "report"). UserError when `path` exists and is not a regular file (a device
+  // node, a directory, a pipe: renaming over it would replace it) or when the temporary
+  // cannot be created (missing directory, no permission, read-only or full file system).
   OutputFile(std::string path, std::string what);
   OutputFile(const OutputFile&) = delete;
   OutputFile& operator=(const OutputFile&) = delete;
@@ -49,6 +51,21 @@ void WriteOutputFile(const std::string& path, const std::string& what, std::stri
 // exists and takes a new file (tried by creating and removing a temporary file there).
 // UserError "flag PATH: reason" otherwise.
 void CheckOutputPath(const std::string& flag, const std::string& path);
+
+// One file a run will write: the flag that names it ("--out") and its path.
+struct PlannedOutput {
+  std::string flag, path;
+};
+// One file the same run reads: what it is ("the scene file") and its path.
+struct RunInput {
+  std::string what, path;
+};
+
+// The pre-flight every command that writes files runs before any work: each output through
+// CheckOutputPath (so a device node, a directory or a missing directory is refused, never
+// replaced), none the same file as an input of the run or as another output. Outputs with
+// an empty path or "-" (standard output) are skipped. UserError naming the flag otherwise.
+void CheckOutputs(const std::vector<PlannedOutput>& outputs, const std::vector<RunInput>& inputs = {});
 
 // True when `a` and `b` name the same file: the same inode when both exist, else the same
 // absolute path after resolving the directories' symbolic links and `..`.

@@ -148,6 +148,7 @@ void HeteroChildEntry(const RenderOptions& options) {
 void RenderHetero(const Scene& scene, const RenderOptions& options, RenderOutput& out) {
   const Camera& c = scene.camera;
   FrameGrid(c.width, c.height, options.dist.frameSize);
+  const auto tracer = Tracer::Create(scene, options.trace);  // its option errors before the pass
   testbed::StartLinkAccounting();  // simulated testbed only (before the matrix crosses SCSI)
   FramedJob job;
   job.method = "hetero";
@@ -160,8 +161,7 @@ void RenderHetero(const Scene& scene, const RenderOptions& options, RenderOutput
   if (testbed::Simulated()) job.parentPassSeconds = testbed::ChargeArrayPass(pass, scene);
   job.setup = farmed::SetupText("hetero", scene, options.trace,
                                 {{"dirFracBits", pass.plan.dirFracBits}});
-  std::fprintf(stderr, "cycle report (SIMD primary pass):\n%s", pass.cycleTable.c_str());
-  const auto tracer = Tracer::Create(scene, options.trace);
+  std::fprintf(stdout, "cycle report (SIMD primary pass):\n%s", pass.cycleTable.c_str());
   // The parent's own work, charged under the simulated testbed: packing each frame's slice,
   // shading the degenerate frames, pasting the children's frames.
   job.sliceFor = [&](const Frame& f) {

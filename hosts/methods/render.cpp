@@ -7,6 +7,7 @@
 
 #include "fixed/check.h"
 #include "hosts/io/output_file.h"
+#include "hosts/methods/memory_budget.h"
 #include "hosts/methods/methods.h"
 #include "hosts/methods/phases.h"
 #include "hosts/scene/nff.h"
@@ -18,19 +19,20 @@ namespace {
 
 // The table of methods (docs/background.md, "The four methods").
 constexpr RenderMethodEntry kMethods[] = {
-    {"seq", "sequential: the host traces every ray in floating point", RenderSeq},
+    {"seq", "sequential: the host traces every ray in floating point", RenderSeq, nullptr, nullptr,
+     /*bytesPerPixel=*/32, /*dumpBytesPerPixel=*/110},
     {"simd",
      "SIMD/sequential: primary rays on the emulated array in fixed point, secondary rays on "
      "the host",
-     RenderSimd},
+     RenderSimd, nullptr, nullptr, /*bytesPerPixel=*/104, /*dumpBytesPerPixel=*/60},
     {"dist",
      "distributed: under mpirun, children trace whole F×F frames handed out on demand "
      "(bit-identical to seq)",
-     RenderDist, DistChildEntry, CheckDistOptions},
+     RenderDist, DistChildEntry, CheckDistOptions, /*bytesPerPixel=*/64, /*dumpBytesPerPixel=*/0},
     {"hetero",
      "heterogeneous: the SIMD primary pass at the parent, children shade the frames with a hit "
      "(under mpirun; bit-identical to simd)",
-     RenderHetero, HeteroChildEntry, CheckHeteroOptions},
+     RenderHetero, HeteroChildEntry, CheckHeteroOptions, /*bytesPerPixel=*/122, /*dumpBytesPerPixel=*/60},
 };
 
 }  // namespace
@@ -60,21 +62,8 @@ void WritePrimaryCsv(const std::string& path, int width, int height,
 }
 
 void CheckRenderOutputs(const RenderOptions& options) {
-  std::vector<std::pair<std::string, std::string>> outputs;  // flag, path
-  for (const auto& [flag, path] : {std::pair{"--out", &options.out},
-                                   std::pair{"--dump-primary", &options.dumpPrimary},
-                                   std::pair{"--report", &options.report}})
-    if (!path->empty()) outputs.emplace_back(flag, *path);
-  for (std::size_t i = 0; i < outputs.size(); ++i) {
-    const auto& [flag, path] = outputs[i];
-    if (!options.scenePath.empty() && SameFile(path, options.scenePath))
-      throw UserError(flag + " " + path + ": is the scene file being rendered; choose another name");
-    for (std::size_t j = 0; j < i; ++j)
-      if (SameFile(path, outputs[j].second))
-        throw UserError(outputs[j].first + " and " + flag + " name the same file (" + path +
-                        "); give each output its own name");
-    CheckOutputPath(flag, path);
-  }
+  CheckOutputs({{"--out", options.out}, {"--dump-primary", options.dumpPrimary}, {"--report", options.report}},
+               {{"the scene file", options.scenePath}});
 }
 
 RenderOutput RunRender(const RenderOptions& options) {
@@ -91,6 +80,7 @@ RenderOutput RunRender(const RenderOptions& options) {
   // output that could not be written.
   CheckRenderOutputs(options);
   if (it->check) it->check(options);
+  testbed::CheckModelledTimeRequest(options.testbed, options.method, options.simd.profile);
   out.report["method"] = options.method;
   Scene scene;
   {
@@ -99,6 +89,10 @@ RenderOutput RunRender(const RenderOptions& options) {
   }
   for (const std::string& w : scene.warnings) std::fprintf(stderr, "zephyr: %s\n", w.c_str());
   const Camera& c = scene.camera;
+  CheckMemoryFits("render --method " + options.method + " at " + std::to_string(c.width) + "x" +
+                      std::to_string(c.height),
+                  {.perPixel = it->bytesPerPixel + (options.dumpPrimary.empty() ? 0 : it->dumpBytesPerPixel),
+                   .pixels = uint64_t(c.width) * uint64_t(c.height)});
   out.report["scene"] = {{"path", options.scenePath}, {"objects", scene.objects.size()},
                          {"lights", scene.lights.size()}, {"width", c.width}, {"height", c.height}};
   out.report["options"] = {{"depth", options.trace.depth},

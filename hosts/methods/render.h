@@ -22,10 +22,15 @@
 namespace zephyr {
 
 // The options of dist and hetero (the frame farm; docs/distributed.md).
+// The flags' ranges (checked as the command line is parsed, hosts/cmd/flags.h): a frame
+// is at most an image's side (kMaxResolution), a child holds at most kMaxFramesInFlight.
+inline constexpr int kMaxFramesInFlight = 1024;
+inline constexpr double kMinChildTimeoutSeconds = 1e-3;  // --child-timeout must be > 0: 1 ms at least
+
 struct DistOptions {
   int frameSize = 64;                // --frame: F×F frames (UserError if < 1)
   bool resume = false;               // --resume: render only the frames missing from OUT.frames
-  double childTimeoutSeconds = 60;   // --child-timeout: a silent child holding frames is lost
+  double childTimeoutSeconds = 60;   // --child-timeout: a silent child holding frames is lost (> 0 s)
   int framesInFlight = 2;            // --in-flight: frames handed to a child before it answers
 };
 

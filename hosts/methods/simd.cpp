@@ -10,21 +10,21 @@ namespace zephyr {
 
 void RenderSimd(const Scene& scene, const RenderOptions& options, RenderOutput& out) {
   const Camera& c = scene.camera;
+  const auto tracer = Tracer::Create(scene, options.trace);  // its option errors before the pass
   simd::PrimaryPass pass;
   {
     PhaseTimer timer(out.report, "primary_pass");
     pass = simd::RunPrimaryPass(scene, options.simd);
   }
-  std::fprintf(stderr, "cycle report (SIMD primary pass):\n%s", pass.cycleTable.c_str());
-  std::fprintf(stderr, "uncertain pixels: %lld overflow, %lld grazing, %lld near tie; %lld recomputed on the host\n",
+  std::fprintf(stdout, "cycle report (SIMD primary pass):\n%s", pass.cycleTable.c_str());
+  std::fprintf(stdout, "uncertain pixels: %lld overflow, %lld grazing, %lld near tie; %lld recomputed on the host\n",
                (long long)pass.overflowPixels, (long long)pass.grazingPixels,
                (long long)pass.tiePixels, (long long)pass.recomputedPixels);
   if (pass.refinedPixels > 0)
-    std::fprintf(stderr, "refine pass: %lld pixel(s) at %d fraction bits in %d layer(s), %.4g cycles; %lld still uncertain\n%s",
+    std::fprintf(stdout, "refine pass: %lld pixel(s) at %d fraction bits in %d layer(s), %.4g cycles; %lld still uncertain\n%s",
                  (long long)pass.refinedPixels, pass.refine["fracBits"].get<int>(), pass.refine["layers"].get<int>(),
                  pass.refine["cycles"]["totalCycles"].get<double>(), (long long)pass.refine["stillUncertain"].get<int64_t>(),
                  pass.refineCycleTable.c_str());
-  const auto tracer = Tracer::Create(scene, options.trace);
   TraceStats stats;
   out.image = Image(c.width, c.height);
   {

@@ -72,7 +72,8 @@ void Flake(Scene& s, int material, const Vec3& centre, double radius, const Vec3
 }  // namespace
 
 Scene GenerateRandomSpheres(const RandomSpheresOptions& o) {
-  if (o.count < 1 || o.count > 1000000) throw UserError("gen spheres: --count must be 1..1000000");
+  if (o.count < 1 || o.count > kMaxRandomSpheres)
+    throw UserError("gen spheres: --count must be 1.." + std::to_string(kMaxRandomSpheres));
   Scene s;
   s.source = "gen spheres --count " + std::to_string(o.count) + " --seed " + std::to_string(o.seed);
   s.camera = Camera{{0, 0, 12}, {0, 0, 0}, {0, 1, 0}, 30, 0.001, o.width, o.height};
@@ -111,7 +112,7 @@ Scene GenerateRandomSpheres(const RandomSpheresOptions& o) {
 }
 
 Scene GenerateSphereflake(int depth, int width, int height) {
-  if (depth < 0 || depth > 6) throw UserError("gen flake: --depth must be 0..6 (depth 6 is 597,871 spheres)");
+  if (depth < 0 || depth > kMaxFlakeDepth) throw UserError("gen flake: --depth must be 0..6 (depth 6 is 597,871 spheres)");
   Scene s;
   s.source = "gen flake --depth " + std::to_string(depth);
   // SPD `balls`: view, lights, floor and materials.

@@ -9,6 +9,11 @@
 
 namespace zephyr {
 
+// The generators' limits (gen spheres --count, gen flake --depth): a million spheres is
+// past what an exhaustive tracer renders; depth 6 is 597,871 spheres.
+inline constexpr int kMaxRandomSpheres = 1000000;
+inline constexpr int kMaxFlakeDepth = 6;
+
 struct RandomSpheresOptions {
   int count = 32;
   uint64_t seed = 1;

@@ -165,13 +165,13 @@ void ChooseWidths(PrimaryPlan& plan, const SceneRange& range, const FormatOverri
                     ShapeKindName(range.farthestObject->Kind()), range.farthest)
       : std::string();
   // A width the user gave is named as the flag it came from (not as the scene's fault).
-  for (const auto& [flag, given, limit] : {std::tuple{"--frac-bits", o.fracBits, 56},
-                                           std::tuple{"--dir-frac-bits", o.dirFracBits, 60},
-                                           std::tuple{"--int-bits", o.intBits, 40}})
+  for (const auto& [flag, given, limit] : {std::tuple{"--frac-bits", o.fracBits, kMaxFracBits},
+                                           std::tuple{"--dir-frac-bits", o.dirFracBits, kMaxDirFracBits},
+                                           std::tuple{"--int-bits", o.intBits, kMaxIntBits}})
     if (given > limit)
       throw UserError(fmt::format("{} {}: more than the {} bits the primary pass supports (docs/simd.md)",
                                   flag, given, limit));
-  if (plan.fracBits > 56 || plan.dirFracBits > 60 || plan.distIntBits > 40)
+  if (plan.fracBits > kMaxFracBits || plan.dirFracBits > kMaxDirFracBits || plan.distIntBits > kMaxIntBits)
     throw UserError(fmt::format("{}formats too wide for the primary pass: {} integer bits, {} fraction "
                                 "bits, {} direction fraction bits (limits 40, 56, 60)",
                                 where, plan.distIntBits, plan.fracBits, plan.dirFracBits));

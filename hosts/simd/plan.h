@@ -43,6 +43,11 @@ const char* UncertainPolicyName(UncertainPolicy p);
 // recomputed unless --uncertain keep.
 constexpr int kMinFracBits = 4;
 constexpr int kMinIntBits = 2;
+// The widest the pass supports (docs/simd.md, "The planner"): t, lengths and the matrix's
+// direction fit the host's 64-bit readout with these (PlanFormats refuses wider plans).
+constexpr int kMaxFracBits = 56;
+constexpr int kMaxDirFracBits = 60;
+constexpr int kMaxIntBits = 40;
 
 // User overrides of the planner (negative = the planner chooses).
 struct FormatOverrides {

@@ -96,6 +96,23 @@ std::vector<std::string> TestbedNames() {
   return names;
 }
 
+void CheckModelledTimeRequest(const std::string& testbedName, const std::string& method,
+                              const std::string& arrayProfile) {
+  if (testbedName.empty()) return;
+  if (method == "dist" || method == "hetero") {
+    if (!Simulated())
+      throw UserError("--testbed with --method " + method +
+                      " runs on a simulated network: build/bin/zephyr-smpi under smpirun "
+                      "(`make smpi`; docs/testbed.md)");
+    return;
+  }
+  if (Simulated()) return;  // the platform file names the hosts
+  const Testbed& bed = TestbedNamed(testbedName);
+  if (method == "simd" && arrayProfile != bed.arrayProfile)
+    throw UserError("--testbed " + bed.name + ": its array is '" + bed.arrayProfile +
+                    "', but --machine chose '" + arrayProfile + "'");
+}
+
 void AddModelledTime(const std::string& testbedName, const std::string& method,
                      const Scene& scene, nlohmann::json& r) {
   if (testbedName.empty()) return;
@@ -226,8 +243,9 @@ nlohmann::json CalibrateThisHost(const nlohmann::json& r, const std::string& fil
 }
 
 std::string PlatformXml(const Testbed& bed, int children, double hostOps) {
-  if (children < 1 || children > 4096)
-    throw UserError("--children: expected 1..4096, got " + std::to_string(children));
+  if (children < 1 || children > kMaxPlatformChildren)
+    throw UserError("--children: expected 1.." + std::to_string(kMaxPlatformChildren) + ", got " +
+                    std::to_string(children));
   const HostProfile& parent = HostProfileNamed(bed.parentProfile);
   const HostProfile& child = HostProfileNamed(bed.childProfile);
   const bitserial::MachineProfile array = bitserial::Profile(bed.arrayProfile);

@@ -48,9 +48,11 @@ std::vector<std::string> TestbedNames();
 // A SimGrid platform (XML v4.1) of the testbed with `children` child hosts: "parent" (the
 // parent's profile), "zephyr" (the array, speed = its clock), "child-1".."child-K", one
 // SHARED Ethernet link on every parent-child route, the SCSI link parent-zephyr. Hosts carry
-// "zephyr:profile" and "zephyr:role" properties. UserError for children outside 1..4096.
+// "zephyr:profile" and "zephyr:role" properties. UserError for children outside
+// 1..kMaxPlatformChildren.
 // With hostOps > 0 the parent and the children have that speed and no profile: each counted
 // operation (work-table flop or instruction) costs 1/hostOps seconds (a calibrated this-host).
+inline constexpr int kMaxPlatformChildren = 4096;
 std::string PlatformXml(const Testbed& bed, int children, double hostOps = 0);
 
 // The this-host profile: from the report of a seq render measured on this host, its counted
@@ -78,6 +80,13 @@ bool Simulated();
 // the rank's host and simd's array cycles to the platform's array host (ChargeArrayCycles),
 // and report SimGrid's seconds for them. UserError for an unknown testbed (naming simrun.sh
 // when it is a file) or a method that counts no work.
+// Everything AddModelledTime will refuse that the command line alone decides, checked before
+// any work: an unknown testbed, dist/hetero outside SimGrid, a --machine other than the
+// testbed's array. `arrayProfile` is the machine profile the SIMD pass would use. No-op
+// when `testbedName` is empty.
+void CheckModelledTimeRequest(const std::string& testbedName, const std::string& method,
+                              const std::string& arrayProfile);
+
 void AddModelledTime(const std::string& testbedName, const std::string& method,
                      const Scene& scene, nlohmann::json& report);
 

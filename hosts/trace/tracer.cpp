@@ -444,8 +444,8 @@ class TracerT final : public Tracer {
 }  // namespace
 
 std::unique_ptr<Tracer> Tracer::Create(const Scene& scene, const TraceOptions& options) {
-  if (options.depth < 1 || options.depth > 64)
-    throw UserError("--depth: expected 1..64, got " + std::to_string(options.depth));
+  if (options.depth < 1 || options.depth > kMaxDepth)
+    throw UserError("--depth: expected 1.." + std::to_string(kMaxDepth) + ", got " + std::to_string(options.depth));
   // The reader has held the scene to double's limit; float's is lower (docs/scene-format.md).
   const bool isFloat = options.precision == Precision::kFloat;
   const double limit = isFloat ? kMagnitudeLimitFloat : kMagnitudeLimitDouble;

@@ -27,8 +27,12 @@ namespace zephyr {
 
 enum class Precision { kFloat, kDouble };
 
+// The deepest ray tree a render may ask for (--depth): past any scene's useful bounces
+// (POV-Ray's max_trace_level default is 5; each level doubles the rays at worst).
+inline constexpr int kMaxDepth = 64;
+
 struct TraceOptions {
-  int depth = 5;  // 1 = primary rays only (local light); each bounce adds one level
+  int depth = 5;  // 1 = primary rays only (local light); each bounce adds one level; 1..kMaxDepth
   Precision precision = Precision::kDouble;
   SphereTest sphereTest = SphereTest::kHearnBaker;
 };

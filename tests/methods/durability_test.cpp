@@ -74,11 +74,12 @@ TEST(RenderWidths, WidthsBelowWhatThePassNeedsAreRefusedWithTheMinimum) {
   TempDir dir;
   const std::string scene = Scene(dir);
   const std::string base = "render --no-progress --method simd " + scene + " --out " + (dir / "o.png");
-  ExpectRefusedUpFront(RunZephyrProcess(base + " --frac-bits 0"), "--frac-bits 0: the SIMD pass needs at least 4 fraction bits");
-  ExpectRefusedUpFront(RunZephyrProcess(base + " --frac-bits 3"), "needs at least 4 fraction bits");
-  ExpectRefusedUpFront(RunZephyrProcess(base + " --dir-frac-bits 0"), "needs at least 4 direction fraction bits");
-  ExpectRefusedUpFront(RunZephyrProcess(base + " --int-bits 0"), "needs at least 2 integer bits");
-  ExpectRefusedUpFront(RunZephyrProcess("accuracy " + scene + " --int-bits 1"), "needs at least 2 integer bits");
+  ExpectRefusedUpFront(RunZephyrProcess(base + " --frac-bits 0"),
+                       "--frac-bits: expected an integer 4..56, got '0' (the SIMD pass's error bounds are tested from 4 bits");
+  ExpectRefusedUpFront(RunZephyrProcess(base + " --frac-bits 3"), "--frac-bits: expected an integer 4..56, got '3'");
+  ExpectRefusedUpFront(RunZephyrProcess(base + " --dir-frac-bits 0"), "--dir-frac-bits: expected an integer 4..60, got '0'");
+  ExpectRefusedUpFront(RunZephyrProcess(base + " --int-bits 0"), "--int-bits: expected an integer 2..40, got '0'");
+  ExpectRefusedUpFront(RunZephyrProcess("accuracy " + scene + " --int-bits 1"), "--int-bits: expected an integer 2..40, got '1'");
   EXPECT_FALSE(std::filesystem::exists(dir / "o.png"));
   auto atMinimum = RunZephyrProcess(base + " --frac-bits 4 --int-bits 2");  // N and N-1
   EXPECT_EQ(atMinimum.status, 0) << atMinimum.output;
@@ -92,7 +93,7 @@ TEST(RenderOutputs, DistAndHeteroCheckEverythingBeforeTheFirstFrame) {
   const std::string out = dir / "o.png";
   const std::string hetero = "render --no-progress --method hetero --frame 16 " + scene + " --out " + out;
   ExpectRefusedUpFront(RunMpi(2, hetero + " --report " + out + ".frames"), "is the checkpoint of --out");
-  ExpectRefusedUpFront(RunMpi(2, hetero + " --frac-bits 0"), "needs at least 4 fraction bits");
+  ExpectRefusedUpFront(RunMpi(2, hetero + " --frac-bits 0"), "--frac-bits: expected an integer 4..56, got '0'");
   ExpectRefusedUpFront(RunMpi(2, hetero + " --resume"), "nothing to resume");
   ExpectRefusedUpFront(RunMpi(2, "render --method dist " + scene + " --out " + out + " --dump-primary " + (dir / "p.csv")),
                        "--method dist has no primary hits");

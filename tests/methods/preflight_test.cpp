@@ -1,0 +1,209 @@
+// Everything a run can refuse is refused before any work, once, in words (issue 23): device
+// nodes named as outputs by any command, a run larger than the process's memory, every flag
+// of every method (checked before the scene is even read), numeric flags' messages, and the
+// cycle report on standard output.
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <sys/sysmacros.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "tests/farm/mpi_launch.h"
+
+namespace zephyr {
+namespace {
+
+using testing::RunCommand;
+using testing::RunMpi;
+using testing::RunZephyrProcess;
+using testing::TempDir;
+
+size_t Count(const std::string& text, const std::string& what) {
+  size_t n = 0;
+  for (size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
+bool IsCharDevice(const std::string& path) {
+  struct stat s;
+  return ::lstat(path.c_str(), &s) == 0 && S_ISCHR(s.st_mode);
+}
+
+// Every command that writes a file, with every output flag it has, on a private device node
+// (/dev/full's numbers, 1:7): refused before any work, and the node is still a device.
+TEST(OutputPreflight, EveryCommandRefusesADeviceNodeAndLeavesIt) {
+  TempDir dir;
+  const std::string node = dir / "dev";
+  if (::mknod(node.c_str(), S_IFCHR | 0666, makedev(1, 7)) != 0)
+    GTEST_SKIP() << "mknod is not permitted here";
+  const std::string scene = testing::SmallSphereScene(dir);
+  const std::vector<std::string> commands = {
+      "gen spheres --count 3 --seed 1 --out " + node,
+      "gen flake --depth 1 --out " + node,
+      "gen showcase --out " + node,
+      "export-pov " + scene + " --out " + node,
+      "mpi-check --local --out " + node,
+      "mpi-check --local --out " + (dir / "m.pfm") + " --report " + node,
+      "testbed platform --out " + node,
+      "testbed platform --out " + (dir / "p.xml") + " --hostfile " + node,
+      "stability distance --rays 2 --max-log2 2 --out " + node,
+      "stability overflow --rays 2 --max-int-bits 3 --out " + node,
+      "render --no-progress --method seq " + scene + " --out " + node,
+      "render --no-progress --method simd " + scene + " --report " + node,
+      "render --no-progress --method simd " + scene + " --dump-primary " + node,
+  };
+  for (const std::string& c : commands) {
+    const auto r = RunZephyrProcess(c);
+    EXPECT_NE(r.status, 0) << c << "\n" << r.output;
+    EXPECT_NE(r.output.find("not a regular file"), std::string::npos) << c << "\n" << r.output;
+    EXPECT_EQ(r.output.find("cycle report"), std::string::npos) << "work started: " << c;
+    EXPECT_TRUE(IsCharDevice(node)) << "replaced by: " << c;
+  }
+  // Nothing was written beside it either (no other output of a refused run).
+  EXPECT_FALSE(std::filesystem::exists(dir / "m.pfm"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "p.xml"));
+  // The two outputs of one command may not be the same file, nor the input.
+  const auto same = RunZephyrProcess("testbed platform --out " + (dir / "q") + " --hostfile " + (dir / "q"));
+  EXPECT_NE(same.status, 0);
+  EXPECT_NE(same.output.find("--out and --hostfile name the same file"), std::string::npos) << same.output;
+  const auto over = RunZephyrProcess("export-pov " + scene + " --out " + scene);
+  EXPECT_NE(over.status, 0);
+  EXPECT_NE(over.output.find("is the scene file this run reads"), std::string::npos) << over.output;
+}
+
+// A scene larger than the process may hold: refused at once with both figures and the
+// largest image that fits, for every method that renders in this process and accuracy; no
+// std::bad_alloc, no abort, no image. Run under `ulimit -v` (RLIMIT_AS) of 2 GiB.
+TEST(MemoryPreflight, AnImageLargerThanMemoryIsRefusedWithTheLargestThatFits) {
+  TempDir dir;
+  const std::string scene = dir / "big.nff";
+  ASSERT_EQ(RunZephyrProcess("gen spheres --count 4 --seed 1 --size 16384x16384 --out " + scene).status, 0);
+  const std::string limited = "ulimit -v 2097152 && " + testing::ZephyrPath() + " ";
+  std::string seqMessage;
+  for (const std::string& args : {"render --no-progress --method seq " + scene + " --out " + (dir / "o.png"),
+                                  "render --no-progress --method simd " + scene + " --out " + (dir / "o.png"),
+                                  "accuracy " + scene}) {
+    const auto r = RunCommand("bash -c '" + limited + args + "'");
+    EXPECT_EQ(r.status, 1) << args << "\n" << r.output;
+    EXPECT_NE(r.output.find("needs about"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("RLIMIT_AS"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("the largest square image that fits is about"), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("bad_alloc"), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("cycle report"), std::string::npos) << r.output;
+    if (seqMessage.empty()) seqMessage = r.output;
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "o.png"));
+  // The largest square named is what 2 GiB holds at seq's 32 bytes a pixel: about 7900.
+  const size_t at = seqMessage.find("fits is about ");
+  ASSERT_NE(at, std::string::npos) << seqMessage;
+  const int side = std::stoi(seqMessage.substr(at + 14));
+  EXPECT_GT(side, 7000);
+  EXPECT_LT(side, 8192);
+}
+
+// Every flag of every method is checked before any work: with a scene path that does not
+// exist, a bad flag is what the message names (the scene would be read first otherwise).
+TEST(FlagPreflight, EveryBadFlagIsRefusedBeforeTheSceneIsRead) {
+  TempDir dir;
+  const std::string missing = dir / "no-such-scene.nff";
+  const std::vector<std::pair<std::string, std::string>> flags = {
+      {"--depth 0", "--depth: expected an integer 1..64, got '0'"},
+      {"--depth 65", "--depth: expected an integer 1..64, got '65'"},
+      {"--frac-bits abc", "--frac-bits: expected an integer 4..56, got 'abc'"},
+      {"--frac-bits -5", "--frac-bits: expected an integer 4..56, got '-5'"},
+      {"--frac-bits 57", "--frac-bits: expected an integer 4..56, got '57'"},
+      {"--dir-frac-bits 3", "--dir-frac-bits: expected an integer 4..60, got '3'"},
+      {"--int-bits 41", "--int-bits: expected an integer 2..40, got '41'"},
+      {"--threads 1025", "--threads: expected an integer 0..1024, got '1025'"},
+      {"--frame 1.5", "--frame: expected an integer 1..16384, got '1.5'"},
+      {"--frame -3", "--frame: expected an integer 1..16384, got '-3'"},
+      {"--in-flight 0", "--in-flight: expected an integer 1..1024, got '0'"},
+      {"--child-timeout 0", "--child-timeout: expected a number >= 0.001, got '0'"},
+      {"--child-timeout nan", "--child-timeout: expected a number >= 0.001, got 'nan'"},
+      {"--machine bogus", "unknown machine profile 'bogus'"},
+      {"--precision half", "half"},
+      {"--uncertain maybe", "maybe"},
+      {"--testbed bogus", "unknown testbed 'bogus'"},
+  };
+  for (const char* method : {"seq", "simd", "dist", "hetero"}) {
+    for (const auto& [flag, message] : flags) {
+      const std::string args = std::string("render --no-progress --method ") + method + " " + missing +
+                               " --out " + (dir / "o.png") + " " + flag;
+      const auto r = RunZephyrProcess(args);
+      EXPECT_NE(r.status, 0) << args;
+      // Outside mpirun, dist and hetero say so before the testbed is looked at.
+      const bool farmed = std::string(method) == "dist" || std::string(method) == "hetero";
+      const std::string expected = farmed && flag.rfind("--testbed", 0) == 0 ? "needs at least 2 MPI ranks" : message;
+      EXPECT_NE(r.output.find(expected), std::string::npos) << args << "\n" << r.output;
+      EXPECT_EQ(r.output.find("no-such-scene"), std::string::npos) << "the scene was read first: " << args;
+      EXPECT_EQ(r.output.find("Could not convert"), std::string::npos) << r.output;
+      EXPECT_EQ(r.output.find("not in range"), std::string::npos) << r.output;
+      EXPECT_EQ(Count(r.output, "zephyr: error"), 1u) << "said more than once: " << r.output;
+    }
+  }
+  // The testbed's checks that need only the command line, before any work too: dist under
+  // mpirun but outside SimGrid, and simd on another machine than the testbed's array.
+  const auto farmed = RunMpi(2, "render --no-progress --method dist " + missing + " --testbed ufmg1992");
+  EXPECT_NE(farmed.status, 0);
+  EXPECT_NE(farmed.output.find("--testbed with --method dist runs on a simulated network"), std::string::npos)
+      << farmed.output;
+  EXPECT_EQ(farmed.output.find("no-such-scene"), std::string::npos) << farmed.output;
+  const std::string scene = testing::SmallSphereScene(dir);
+  const auto mismatch = RunZephyrProcess("render --no-progress --method simd " + scene +
+                                         " --testbed ufmg1992 --machine mpp");
+  EXPECT_NE(mismatch.status, 0);
+  EXPECT_NE(mismatch.output.find("its array is 'wavetracer', but --machine chose 'mpp'"), std::string::npos)
+      << mismatch.output;
+  EXPECT_EQ(mismatch.output.find("cycle report"), std::string::npos) << mismatch.output;
+}
+
+// The other commands' numeric flags speak the same way (no CLI11 conversion message, no
+// range printed with hundreds of digits).
+TEST(FlagPreflight, NumericFlagsOfEveryCommandSayWhatTheyExpect) {
+  TempDir dir;
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"gen spheres --count 0 --seed 1", "--count: expected an integer 1..1000000, got '0'"},
+      {"gen spheres --count 3 --seed -1", "--seed: expected an integer 0..18446744073709551615, got '-1'"},
+      {"gen flake --depth 7", "--depth: expected an integer 0..6, got '7'"},
+      {"cycles --bits abc", "--bits: expected an integer 1..128, got 'abc'"},
+      {"cycles --bits 8 --frac 1e3", "--frac: expected an integer 0..128, got '1e3'"},
+      {"testbed platform --children 0", "--children: expected an integer 1..4096, got '0'"},
+      {"testbed platform --ethernet-bps 1e999", "--ethernet-bps: expected a number >= 1000, got '1e999'"},
+      {"stability distance --rays x", "--rays: expected an integer 1..1048576, got 'x'"},
+      {"mpi-check --width 0 --out " + (dir / "x.pfm"), "--width: expected an integer 1..16384, got '0'"},
+      {"export-pov x.nff --depth 0", "--depth: expected an integer 1..64, got '0'"},
+      {"accuracy x.nff --sample -1", "--sample: expected an integer 0..268435456, got '-1'"},
+  };
+  for (const auto& [args, message] : cases) {
+    const auto r = RunZephyrProcess(args);
+    EXPECT_NE(r.status, 0) << args;
+    EXPECT_NE(r.output.find("zephyr: error: " + message), std::string::npos) << args << "\n" << r.output;
+    EXPECT_LT(r.output.size(), 400u) << r.output;
+  }
+}
+
+// Under mpirun a command line's mistake is printed once, by rank 0, and every rank exits.
+TEST(FlagPreflight, UnderMpirunAFlagErrorIsPrintedOnce) {
+  TempDir dir;
+  const std::string scene = testing::SmallSphereScene(dir);
+  const auto r = RunMpi(3, "render --no-progress --method dist " + scene + " --frame -3 --out " + (dir / "o.png"));
+  EXPECT_NE(r.status, 0) << r.output;
+  EXPECT_EQ(Count(r.output, "--frame: expected an integer 1..16384, got '-3'"), 1u) << r.output;
+}
+
+// The cycle report is the SIMD method's output: on standard output, whatever --no-progress.
+TEST(RenderOutput, TheCycleReportGoesToStandardOutput) {
+  TempDir dir;
+  const std::string scene = testing::SmallSphereScene(dir);
+  const auto r = RunCommand(testing::ZephyrPath() + " render --no-progress --method simd " + scene +
+                            " --out " + (dir / "o.png") + " 2>/dev/null");
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("cycle report (SIMD primary pass)"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("uncertain pixels:"), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace zephyr
