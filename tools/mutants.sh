@@ -12,11 +12,20 @@
 #   equivalent  listed with "equivalent": the argument why no output can change; not run,
 #               not counted, but printed with its argument (never dropped silently).
 #
-# Which tests run: to keep a mutant to minutes on a shared 2-core machine, each mutant names
-# the suites that cover its code ("filter", a GoogleTest filter) and a fast core (CORE below:
-# the bit-exact engine against fixed/, the closed forms, the tracer's unit tests) runs with
-# it. This is narrower than `make test`: a mutant that only a test outside its filter would
-# kill is reported as survived, never the reverse. The unmutated tree must pass all of them.
+# Which tests run: the whole suite, as `make test` runs it (issue 29: a score against a
+# narrower filter overstates nothing it kills but counts survivors the rest of the suite
+# would kill). A mutant's "filter" (a GoogleTest filter, "*" for none in particular) names
+# the suites that cover its code; they run first and every run stops at its first failure,
+# so a killed mutant costs seconds; then the rest of the suite. The unmutated tree must pass
+# the whole suite.
+#
+# What is rebuilt: every target the mutant's file feeds, decided by the file (never by the
+# filter): a file of the engine (fixed/, bitserial/, hosts/) feeds the test binary, the
+# zephyr program (which the MPI, durability, accuracy, charts and float tests run as a
+# child), the example programs (run by their tests) and zephyr-smpi when SimGrid's smpicxx is
+# installed (the SimGrid tests run it); a test file feeds the test binary; an example its
+# program. After a mutant the same targets are rebuilt from the restored file (from ccache),
+# so the next mutant never runs with this one's binaries.
 #
 # Usage: tools/mutants.sh [ID...]      (no ID: every mutant)
 # Env:   MUTANTS_JSON (default tools/mutants.json); LANES (default 1): scratch copies working
@@ -38,7 +47,6 @@ export CCACHE_NOHASHDIR=true  # the scratch copies' objects share the cache with
 cxx="g++"
 command -v ccache >/dev/null && cxx="ccache g++"
 
-CORE='Fixed*:BitserialArith*:BitserialCycles.*:BitserialMemory.*:TraceShade.*:TraceIntersect.*'
 
 command -v jq >/dev/null || { echo "mutants: jq is needed (tools/setup.sh installs it)" >&2; exit 2; }
 jq -e 'type == "array"' "$list" >/dev/null || { echo "mutants: $list is not a JSON array" >&2; exit 2; }
@@ -59,23 +67,32 @@ cleanup() {
 }
 trap cleanup EXIT
 
-build() {  # $1: tree, $2: "tests" to relink only the test binary (else the program too)
-  local targets="build/bin/zephyr_tests build/bin/zephyr"
-  [ "${2:-}" = tests ] && targets=build/bin/zephyr_tests
-  make -C "$1" --no-print-directory -j"$jobs" CXX="$cxx" $targets >"$1.build.log" 2>&1
+examples=$(ls tools/examples/*.cpp 2>/dev/null | sed 's|tools/examples/\(.*\)\.cpp|build/bin/example_\1|' | paste -sd' ' -)
+smpi=""
+command -v smpicxx >/dev/null && smpi=build/bin/zephyr-smpi
+# The targets a file feeds (see above); every one of them when the file is not known.
+targets_of() {  # $1: the mutated file
+  case "$1" in
+    tests/fuzz/*) echo "build/bin/zephyr_tests" ;;
+    tests/*) echo "build/bin/zephyr_tests" ;;
+    tools/examples/*) echo "$examples" ;;
+    tools/bench/*) echo "build/bin/bench_$(basename "$1" .cpp)" ;;
+    *) echo "build/bin/zephyr_tests build/bin/zephyr $examples $smpi" ;;
+  esac
 }
-# Filters whose tests run the zephyr program as a process (MPI, accuracy, stability, charts)
-# need it rebuilt with the mutant; the others only need the test binary.
-needs_program() { grep -Eq 'Mpi|Farm|Accuracy|Stability|Charts' <<<"$1"; }
+build() {  # $1: tree, $2: the mutated file ("" at the start: everything)
+  make -C "$1" --no-print-directory -j"$jobs" CXX="$cxx" $(targets_of "${2:-}") >"$1.build.log" 2>&1
+}
 runtests() {  # $1: tree, $2: gtest filter; the status of the run (stops at the first failure)
   (cd "$1" && timeout -k 10 "$timeout_s" build/bin/zephyr_tests --gtest_brief=1 --gtest_fail_fast \
     --gtest_filter="$2" >"$1.test.log" 2>&1)
 }
 # A mutant's run: its own suites first (where a kill is most likely: a killed mutant costs
-# seconds, not the core's minutes), then the core. Killed means a test in either failed.
+# seconds), then the rest of the whole suite. Killed means a test in either failed.
 runmutant() {  # $1: tree, $2: the mutant's filter
   runtests "$1" "$2" || return
-  runtests "$1" "$CORE-$2"
+  [ "$2" = "*" ] && return 0
+  runtests "$1" "*-$2"
 }
 
 ids=("$@")
@@ -98,12 +115,9 @@ for ((l = 0; l < lanes; ++l)); do
   wait -n || { tail -20 "$scratch"/tree*.build.log; echo "mutants: the unmutated tree does not build" >&2; exit 2; }
 done
 
-# The baseline must pass every filter the mutants use, else a "kill" would mean nothing.
-filters=$(for id in "${ids[@]}"; do
-  jq -r --arg id "$id" '.[] | select(.id == $id and (.equivalent | not)) | .filter' "$list"
-done | sort -u | paste -sd: -)
-echo "mutants: baseline run of the core and every mutant's filter"
-if ! runtests "$scratch/tree0" "$CORE${filters:+:$filters}"; then
+# The baseline must pass the whole suite, else a "kill" would mean nothing.
+echo "mutants: baseline run of the whole suite"
+if ! runtests "$scratch/tree0" "*"; then
   grep -E '^\[  FAILED  \]' "$scratch/tree0.test.log" | head -20
   echo "mutants: the unmutated tree fails its tests; fix that first" >&2
   exit 2
@@ -135,7 +149,7 @@ run_lane() {
     ORIG=$(jq -r .original <<<"$m") REPL=$(jq -r .replacement <<<"$m") \
       perl -0777 -i -pe 'BEGIN { $o = $ENV{ORIG}; $r = $ENV{REPL} } s/\Q$o\E/$r/' "$tree/$file"
     start=$(date +%s)
-    if ! build "$tree" "$(needs_program "$filter" || echo tests)"; then
+    if ! build "$tree" "$file"; then
       printf 'ERROR\t%s\t%s\t%s\t%s\n' "$id" "$file" "$what" "the mutant does not compile" >>"$out"
     else
       runmutant "$tree" "$filter"
@@ -150,7 +164,9 @@ run_lane() {
       fi
     fi
     tail -1 "$out" | awk -F'\t' '{ printf "%-10s %-34s %s (%s)\n", $1, $2, $4, $5 }'
-    cp "$tree.original" "$tree/$file"  # restore (its next build comes from ccache)
+    cp "$tree.original" "$tree/$file"  # restore, and rebuild what it fed (from ccache)
+    build "$tree" "$file" || printf 'ERROR\t%s\t%s\t%s\t%s\n' "$id" "$file" "$what" \
+      "the restored tree does not build" >>"$out"
   done
 }
 
