@@ -205,14 +205,19 @@ template <int G, bool kOnes>
 HWY_NOINLINE void MulRows(const V* const* src, const V* mr, const V* const* inv, int lo, int end,
                           int p, V* acc) {
   const D d;
-  V carry[G];
+  // The multipliers are copied into locals: mr points into the strip buffer acc lives in,
+  // so GCC would reload them after every store to acc (on AVX3 they fit in registers).
+  V carry[G], mv[G];
   HWY_UNROLL(8)
-  for (int r = 0; r < G; ++r) carry[r] = hn::Zero(d);
+  for (int r = 0; r < G; ++r) {
+    carry[r] = hn::Zero(d);
+    mv[r] = kOnes ? hn::Zero(d) : mr[r];
+  }
   for (int i = lo; i < end; ++i) {
     V s = acc[i];
     HWY_UNROLL(8)
     for (int r = 0; r < G; ++r) {
-      const V x = kOnes ? src[r][i] : AndXor(src[r][i], mr[r], inv[r][i]);
+      const V x = kOnes ? src[r][i] : AndXor(src[r][i], mv[r], inv[r][i]);
       FullAdd(s, x, carry[r], s);
     }
     acc[i] = s;
