@@ -262,7 +262,17 @@ void MulRowsAny(int g, const V* const* src, const V* mr, const V* const* inv, in
   }
 }
 
-constexpr int kMulGroup = 8;
+// Rows per MulRows pass. A pass keeps its rows' carries and multipliers in registers and
+// runs full adders over all its columns (zeros outside each row), so more rows per pass
+// mean fewer passes over acc but more idle adders and, past the register file, spills:
+// AVX3 has 32 vector registers, the other targets 16. Picked by interleaved bench_bitserial
+// runs (docs/bitserial.md, "Speed"): 6 on AVX3, 4 elsewhere (8 spilled on AVX2).
+#if HWY_TARGET <= HWY_AVX3
+constexpr int kMulGroup = 6;
+#else
+constexpr int kMulGroup = 4;
+#endif
+static_assert(kMulGroup >= 1 && kMulGroup <= 8, "MulRowsAny instantiates 1 to 8 rows");
 
 // Adds (or subtracts) 2^e to the little-endian limbs k, modulo 2^(64 k.size()).
 void AddPowerOfTwo(std::vector<uint64_t>& k, int e, bool subtract) {
