@@ -199,20 +199,36 @@ HWY_INLINE V AndXor(V a, V m, V inv) {
 // G rows of the product added into acc[lo..end) column by column: the G carries stay in
 // registers, so each full adder costs one L1 load and no store. Row r's bit at column i is
 // x = src[r][i] (or (src[r][i] & m[r]) ^ inv[r][i]), zero outside the row's columns (the
-// buffers are zero there). Past `end` no row has bits: the carries ripple on (half
-// adders) until all are zero, and the rest of acc is then unchanged.
+// buffers are zero there). No row inverts a bit below `mid`, so there x is src & m and
+// inv is not read: a second L1 load per full adder is what the rows' inversions cost
+// (on AVX3 the loop is bound by loads). Past `end` no row has bits: the carries ripple on
+// (half adders) until all are zero, and the rest of acc is then unchanged.
 template <int G, bool kOnes>
-HWY_NOINLINE void MulRows(const V* const* src, const V* mr, const V* const* inv, int lo, int end,
-                          int p, V* acc) {
+HWY_NOINLINE void MulRows(const V* const* src, const V* mr, const V* const* inv, int lo, int mid,
+                          int end, int p, V* acc) {
   const D d;
-  V carry[G];
+  // The multipliers are copied into locals: mr points into the strip buffer acc lives in,
+  // so GCC would reload them after every store to acc (on AVX3 they fit in registers).
+  V carry[G], mv[G];
   HWY_UNROLL(8)
-  for (int r = 0; r < G; ++r) carry[r] = hn::Zero(d);
-  for (int i = lo; i < end; ++i) {
+  for (int r = 0; r < G; ++r) {
+    carry[r] = hn::Zero(d);
+    mv[r] = kOnes ? hn::Zero(d) : mr[r];
+  }
+  for (int i = lo; i < (kOnes ? end : mid); ++i) {
     V s = acc[i];
     HWY_UNROLL(8)
     for (int r = 0; r < G; ++r) {
-      const V x = kOnes ? src[r][i] : AndXor(src[r][i], mr[r], inv[r][i]);
+      const V x = kOnes ? src[r][i] : hn::And(src[r][i], mv[r]);
+      FullAdd(s, x, carry[r], s);
+    }
+    acc[i] = s;
+  }
+  for (int i = mid; !kOnes && i < end; ++i) {
+    V s = acc[i];
+    HWY_UNROLL(8)
+    for (int r = 0; r < G; ++r) {
+      const V x = AndXor(src[r][i], mv[r], inv[r][i]);
       FullAdd(s, x, carry[r], s);
     }
     acc[i] = s;
@@ -232,21 +248,31 @@ HWY_NOINLINE void MulRows(const V* const* src, const V* mr, const V* const* inv,
 }
 
 template <bool kOnes>
-void MulRowsAny(int g, const V* const* src, const V* mr, const V* const* inv, int lo, int end,
-                int p, V* acc) {
+void MulRowsAny(int g, const V* const* src, const V* mr, const V* const* inv, int lo, int mid,
+                int end, int p, V* acc) {
   switch (g) {
-    case 1: return MulRows<1, kOnes>(src, mr, inv, lo, end, p, acc);
-    case 2: return MulRows<2, kOnes>(src, mr, inv, lo, end, p, acc);
-    case 3: return MulRows<3, kOnes>(src, mr, inv, lo, end, p, acc);
-    case 4: return MulRows<4, kOnes>(src, mr, inv, lo, end, p, acc);
-    case 5: return MulRows<5, kOnes>(src, mr, inv, lo, end, p, acc);
-    case 6: return MulRows<6, kOnes>(src, mr, inv, lo, end, p, acc);
-    case 7: return MulRows<7, kOnes>(src, mr, inv, lo, end, p, acc);
-    default: return MulRows<8, kOnes>(src, mr, inv, lo, end, p, acc);
+    case 1: return MulRows<1, kOnes>(src, mr, inv, lo, mid, end, p, acc);
+    case 2: return MulRows<2, kOnes>(src, mr, inv, lo, mid, end, p, acc);
+    case 3: return MulRows<3, kOnes>(src, mr, inv, lo, mid, end, p, acc);
+    case 4: return MulRows<4, kOnes>(src, mr, inv, lo, mid, end, p, acc);
+    case 5: return MulRows<5, kOnes>(src, mr, inv, lo, mid, end, p, acc);
+    case 6: return MulRows<6, kOnes>(src, mr, inv, lo, mid, end, p, acc);
+    case 7: return MulRows<7, kOnes>(src, mr, inv, lo, mid, end, p, acc);
+    default: return MulRows<8, kOnes>(src, mr, inv, lo, mid, end, p, acc);
   }
 }
 
-constexpr int kMulGroup = 8;
+// Rows per MulRows pass. A pass keeps its rows' carries and multipliers in registers and
+// runs full adders over all its columns (zeros outside each row), so more rows per pass
+// mean fewer passes over acc but more idle adders and, past the register file, spills:
+// AVX3 has 32 vector registers, the other targets 16. Picked by interleaved bench_bitserial
+// runs (docs/bitserial.md, "Speed"): 6 on AVX3, 4 elsewhere (8 spilled on AVX2).
+#if HWY_TARGET <= HWY_AVX3
+constexpr int kMulGroup = 6;
+#else
+constexpr int kMulGroup = 4;
+#endif
+static_assert(kMulGroup >= 1 && kMulGroup <= 8, "MulRowsAny instantiates 1 to 8 rows");
 
 // Adds (or subtracts) 2^e to the little-endian limbs k, modulo 2^(64 k.size()).
 void AddPowerOfTwo(std::vector<uint64_t>& k, int e, bool subtract) {
@@ -265,7 +291,14 @@ void AddPowerOfTwo(std::vector<uint64_t>& k, int e, bool subtract) {
 //   +m A 2^s = [sum_{i<n-1} (m a_i) 2^i + ~(m a_top) 2^(n-1)] 2^s - 2^(n-1+s)
 //   -m A 2^s = [sum_{i<n-1} ~(m a_i) 2^i + (m a_top) 2^(n-1)] 2^s - (2^(n-1) - 1) 2^s
 // and for unsigned A: +m A 2^s as is, -m A 2^s = [sum_i ~(m a_i) 2^i] 2^s - (2^n - 1) 2^s.
-// So row bit i is (m & a_i) ^ inv_i with inv_i known per call (invPos / invNeg below).
+// A uni constant's rows (m all ones) take these as they stand: the row bits are a's planes
+// with the inversions applied once per vector of PEs (pos and neg below).
+// Other rows keep every inversion off all but one column of the row, so that MulRows can
+// run the columns below the group's first inverted bit without reading inv[]: a -row
+// adds m times C = -A (computed once per vector of PEs; n + 1 bits, signed, as -A may need
+// the extra bit), so it is a +row of C with C's top inverted:
+//   -m A 2^s = m C 2^s = [sum_{i<n} (m c_i) 2^i + ~(m c_n) 2^n] 2^s - 2^(n+s)
+// and a +row inverts only its top bit (signed A) or nothing (unsigned A).
 // Strip-mined: for each vector of PEs, a's planes are copied once into L1 buffers (so
 // planes a layer-stride apart never fight over cache sets), the product accumulates in an
 // L1 column buffer, kMulGroup rows at a time, and each output plane is stored once (or
@@ -277,26 +310,42 @@ void Mul(const MulArgs& g, size_t words) {
   if (p <= 0) return;
   const int n = g.aBits > 0 ? std::min(g.aBits, p) : p;
   const bool aSigned = g.aBits > 0 && g.aBits <= p && g.aSigned;
-  // The rows that reach below bit p, and the constant K.
+  // The rows that reach below bit p.
   thread_local std::vector<int> rowIndex, st;
   rowIndex.clear(), st.clear();
+  for (int r = 0; r < g.rows; ++r) {
+    if (g.shift[r] >= p) continue;  // a row shifted past the top adds nothing
+    rowIndex.push_back(r);
+    st.push_back(g.shift[r]);
+  }
+  const int rows = static_cast<int>(rowIndex.size());
+  bool ones = rows > 0, anySub = false;
+  for (int r = 0; r < rows; ++r) {
+    ones &= g.row[rowIndex[r]] == g.row[rowIndex[0]];
+    anySub |= g.sub[rowIndex[r]] != 0;
+  }
+  // A row list of one repeated plane that is all ones (a uni constant's rows) needs no AND.
+  if (ones) {
+    for (size_t w = 0; w < words && ones; ++w) ones = g.row[rowIndex[0]][w] == ~uint64_t{0};
+  }
+  // The constant K, and the first column each row inverts (p: none below p).
   thread_local std::vector<uint64_t> k;
   k.assign((static_cast<size_t>(p) + 63) / 64, 0);
-  for (int r = 0; r < g.rows; ++r) {
-    const int s = g.shift[r];
-    if (s >= p) continue;  // a row shifted past the top adds nothing
-    rowIndex.push_back(r);
-    st.push_back(s);
-    const bool sub = g.sub[r] != 0;
-    if (aSigned) {
-      if (n - 1 + s < p) AddPowerOfTwo(k, n - 1 + s, true);
+  thread_local std::vector<int> firstInv;
+  firstInv.assign(rows, p);
+  for (int r = 0; r < rows; ++r) {
+    const int s = st[r];
+    const bool sub = g.sub[rowIndex[r]] != 0;
+    if (!ones && sub) {
+      if (n + s < p) AddPowerOfTwo(k, n + s, true), firstInv[r] = n + s;
+    } else if (aSigned) {
+      if (n - 1 + s < p) AddPowerOfTwo(k, n - 1 + s, true), firstInv[r] = n - 1 + s;
       if (sub) AddPowerOfTwo(k, s, false);
     } else if (sub) {
       if (n + s < p) AddPowerOfTwo(k, n + s, true);
       AddPowerOfTwo(k, s, false);
     }
   }
-  const int rows = static_cast<int>(rowIndex.size());
   // The fit reads product bits fitLo - 1 .. fitLo + k - 1: acc has `below` zero vectors
   // under bit 0 and `above` vectors over bit p - 1 (the product's sign or zero), so it reads
   // them straight from acc.
@@ -304,9 +353,10 @@ void Mul(const MulArgs& g, size_t words) {
   const int below = g.fit ? std::max(0, 1 - fitLo) : 0;
   const int above = g.fit ? std::max(0, fitLo + g.fit->k - p) : 0;
   // Layout (vectors): pos and neg (ones rows: a's bits for +row, the top one inverted if
-  // signed, and their complements for -row; other rows: a's bits in pos and the inversions
-  // of +row and -row in invPos and invNeg), 2p each with column 0 at p and zero outside
-  // [0, n); acc (below + p + above) and its start K (p); the rows' multiplier vectors.
+  // signed, and their complements for -row; other rows: a's bits in pos and C = -A's in
+  // neg, the inversions of their tops in invPos and invNeg), 2p each with column 0 at p
+  // and zero outside [0, n) (C: [0, n]); acc (below + p + above) and its start K (p); the
+  // rows' multiplier vectors.
   V* buf = StripBuffer(10 * static_cast<size_t>(p) + static_cast<size_t>(below + above + rows) + 1);
   V* pos = buf + p;
   V* neg = pos + 2 * p;
@@ -321,51 +371,62 @@ void Mul(const MulArgs& g, size_t words) {
   for (int i = -below; i < 0; ++i) acc[i] = hn::Zero(d);
   for (int i = 0; i < p; ++i)
     start[i] = (k[i / 64] >> (i % 64)) & 1 ? hn::Set(d, ~uint64_t{0}) : hn::Zero(d);
-  bool ones = rows > 0, anySub = false;
-  for (int r = 0; r < rows; ++r) {
-    ones &= g.row[rowIndex[r]] == g.row[rowIndex[0]];
-    anySub |= g.sub[rowIndex[r]] != 0;
-  }
-  // A row list of one repeated plane that is all ones (a uni constant's rows) needs no AND.
-  if (ones) {
-    for (size_t w = 0; w < words && ones; ++w) ones = g.row[rowIndex[0]][w] == ~uint64_t{0};
-  }
-  for (int i = 0; i < n; ++i) {
-    invPos[i] = aSigned && i == n - 1 ? hn::Set(d, ~uint64_t{0}) : hn::Zero(d);
-    invNeg[i] = hn::Not(invPos[i]);
-  }
+  const V allOnes = hn::Set(d, ~uint64_t{0});
+  if (aSigned) invPos[n - 1] = allOnes;
+  if (!ones && n < p) invNeg[n] = allOnes;
   thread_local std::vector<const V*> src, inv;
   src.assign(rows, nullptr), inv.assign(rows, nullptr);
   for (int r = 0; r < rows; ++r) {
     const bool sub = g.sub[rowIndex[r]] != 0;
-    src[r] = (ones && sub ? neg : pos) - st[r];
+    src[r] = (sub ? neg : pos) - st[r];
     inv[r] = (sub ? invNeg : invPos) - st[r];
   }
+  // Each group's columns: from its lowest shift, uninverted below mid, rows to end.
+  thread_local std::vector<int> groupLo, groupMid, groupEnd;
+  groupLo.clear(), groupMid.clear(), groupEnd.clear();
+  for (int r0 = 0; r0 < rows; r0 += kMulGroup) {
+    int lo = p, mid = p, end = 0;
+    for (int r = r0; r < std::min(rows, r0 + kMulGroup); ++r) {
+      const bool wide = !ones && g.sub[rowIndex[r]] != 0;  // C has n + 1 bits
+      lo = std::min(lo, st[r]);
+      mid = std::min(mid, firstInv[r]);
+      end = std::max(end, std::min(st[r] + n + (wide ? 1 : 0), p));
+    }
+    groupLo.push_back(lo);
+    groupMid.push_back(std::clamp(mid, lo, end));
+    groupEnd.push_back(end);
+  }
+  const int cBits = std::min(n + 1, p);  // C's bits below p
   V* sums = g.fit ? FitBuffer(static_cast<size_t>(g.fit->wo)) : nullptr;
   const bool productSigned = g.productSigned;
   for (size_t w = 0; w < words; w += lanes) {
-    for (int i = 0; i < n; ++i) {
-      const V v = hn::Load(d, g.a[i] + w);
-      if (ones) {
-        pos[i] = hn::Xor(v, invPos[i]);
+    if (ones) {
+      for (int i = 0; i < n; ++i) {
+        pos[i] = hn::Xor(hn::Load(d, g.a[i] + w), invPos[i]);
         if (anySub) neg[i] = hn::Not(pos[i]);
-      } else {
-        pos[i] = v;
+      }
+    } else {
+      for (int i = 0; i < n; ++i) pos[i] = hn::Load(d, g.a[i] + w);
+      if (anySub) {  // C = ~A + 1 over n + 1 bits (A sign- or zero-extended)
+        V carry = allOnes;
+        for (int i = 0; i < cBits; ++i) {
+          const V na = hn::Not(i < n ? pos[i] : aSigned ? pos[n - 1] : hn::Zero(d));
+          neg[i] = hn::Xor(na, carry);
+          carry = hn::And(na, carry);
+        }
       }
     }
     std::memcpy(static_cast<void*>(acc), start, static_cast<size_t>(p) * sizeof(V));
-    for (int r0 = 0; r0 < rows; r0 += kMulGroup) {
+    for (int r0 = 0, gi = 0; r0 < rows; r0 += kMulGroup, ++gi) {
       const int cnt = std::min(kMulGroup, rows - r0);
-      int lo = p, end = 0;
-      for (int r = r0; r < r0 + cnt; ++r) {
-        lo = std::min(lo, st[r]);
-        end = std::max(end, std::min(st[r] + n, p));
-        if (!ones) m[r] = hn::Load(d, g.row[rowIndex[r]] + w);
+      if (ones) {
+        MulRowsAny<true>(cnt, src.data() + r0, m + r0, inv.data() + r0, groupLo[gi], groupEnd[gi],
+                         groupEnd[gi], p, acc);
+      } else {
+        for (int r = r0; r < r0 + cnt; ++r) m[r] = hn::Load(d, g.row[rowIndex[r]] + w);
+        MulRowsAny<false>(cnt, src.data() + r0, m + r0, inv.data() + r0, groupLo[gi],
+                          groupMid[gi], groupEnd[gi], p, acc);
       }
-      if (ones)
-        MulRowsAny<true>(cnt, src.data() + r0, m + r0, inv.data() + r0, lo, end, p, acc);
-      else
-        MulRowsAny<false>(cnt, src.data() + r0, m + r0, inv.data() + r0, lo, end, p, acc);
     }
     if (g.fit) {  // round and fit straight from the L1 column buffer
       const V top = productSigned ? acc[p - 1] : hn::Zero(d);

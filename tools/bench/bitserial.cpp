@@ -1,18 +1,23 @@
 // bench_bitserial: host speed of the bit-serial engine (issue 3's targets) against a naive
 // emulator kept only here (one byte per PE bit, plain loops, as PIMeval stores one bool per
 // bit), then host time per modelled cycle against the number of virtual-PE layers, op by op
-// and in layer blocks on 1 thread and on every core (issue 14). Prints medians of repeats;
-// not a test.
+// and in layer blocks on 1 thread and on every core (issue 14). The single ops run on every
+// Highway target the CPU supports, in the same run (issue 23), so one machine shows AVX3
+// beside AVX2. Prints medians of repeats; not a test. `--help` for the options.
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cstdint>
 #include <random>
+#include <string>
+#include <string_view>
+#include <utility>
 #include <vector>
 
 #include "bitserial/blocks.h"
 #include "bitserial/multi.h"
+#include "hwy/targets.h"
 
 using namespace zephyr;
 using namespace zephyr::bitserial;
@@ -131,13 +136,27 @@ void LayerSweep() {
              "blocks 1t {:.2f}, blocks Nt {:.2f}\n", spread(perCycle1), spread(perCycleN));
 }
 
-int main() {
+// One target's single ops (the Machine takes the kernel table of the best target hwy
+// allows when it is built, so each target gets its own machines). The data come from one
+// generator seeded alike for every target: each target multiplies the same numbers.
+struct OpTimes {
+  int64_t pes;
+  double add, mul, mulUni, square, div, sqrt;  // seconds, medians
+};
+
+std::vector<OpTimes> SingleOps(const char* target, bool first, bool naive) {
   std::mt19937_64 rng(1);
   const fixed::Format f32 = fixed::Format::Signed(31, 0), f16 = fixed::Format::Signed(15, 0);
-  fmt::print("bitserial engine, Highway target {}; single ops on one core\n", Kernels().target);
-
+  if (first)
+    fmt::print("bitserial engine, Highway target {}; single ops on one core\n", target);
+  else
+    fmt::print("\nHighway target {} (the better ones disabled: hwy::SetSupportedTargetsForTest); "
+               "single ops on one core\n", target);
+  std::vector<OpTimes> times;
   for (int64_t pes : {int64_t{8192}, int64_t{384 * 384}}) {
     Machine m(Profile("wavetracer"), pes);
+    if (std::string_view(m.Kernels().target) != target)
+      fmt::print("  [the machine took target {}, not {}]\n", m.Kernels().target, target);
     std::vector<int64_t> ra(pes), rb(pes);
     for (auto& x : ra) x = static_cast<int32_t>(rng());
     for (auto& x : rb) x = static_cast<int32_t>(rng());
@@ -194,7 +213,8 @@ int main() {
     line("21-bit square", tSquare, squareCycles);
     line("s15.16 divide", tDiv, divCycles);
     line("s15.16 sqrt", tSqrt, sqrtCycles);
-    if (pes == 8192) {
+    times.push_back({pes, tAdd, tMul, tMulUni, tSquare, tDiv, tSqrt});
+    if (pes == 8192 && naive) {
       NaiveMulti na = NaiveFrom(a, 8192), nb = NaiveFrom(b, 8192), no = na;
       NaiveMulti na16 = NaiveFrom(a16, 8192), nb16 = NaiveFrom(b16, 8192), no32 = na;
       double nAdd = MedianSeconds(21, [&] { NaiveAdd(na, nb, no, 8192); });
@@ -208,6 +228,68 @@ int main() {
                  same ? "" : "  [MISMATCH]");
     }
   }
-  LayerSweep();
+  return times;
+}
+
+int Usage(int status) {
+  fmt::print(status ? stderr : stdout,
+             "usage: bench_bitserial [--ops] [--targets NAME,NAME...]\n"
+             "  Times single ops on every Highway target this CPU supports (best first; the\n"
+             "  others by hwy::SetSupportedTargetsForTest), then a table of them by target, the\n"
+             "  naive emulator and the layer sweep on the best target.\n"
+             "  --ops      single ops and the table only (no naive emulator, no layer sweep)\n"
+             "  --targets  only these targets, e.g. AVX3,AVX2 (names as hwy::TargetName)\n");
+  return status;
+}
+
+int main(int argc, char** argv) {
+  bool opsOnly = false;
+  std::vector<std::string> only;
+  for (int i = 1; i < argc; ++i) {
+    const std::string_view arg = argv[i];
+    if (arg == "--ops") {
+      opsOnly = true;
+    } else if (arg == "--targets" && i + 1 < argc) {
+      std::string_view list = argv[++i];
+      while (!list.empty()) {
+        const size_t comma = std::min(list.find(','), list.size());
+        only.emplace_back(list.substr(0, comma));
+        list.remove_prefix(std::min(comma + 1, list.size()));
+      }
+    } else {
+      return Usage(arg == "--help" || arg == "-h" ? 0 : 2);
+    }
+  }
+  // Every target compiled in and supported here, best first; a Machine built while one is
+  // the only supported target runs its kernels.
+  std::vector<int64_t> targets;
+  for (int64_t t : hwy::SupportedAndGeneratedTargets())
+    if (only.empty() || std::find(only.begin(), only.end(), hwy::TargetName(t)) != only.end())
+      targets.push_back(t);
+  if (targets.empty()) {
+    fmt::print(stderr, "bench_bitserial: none of the targets given is supported here\n");
+    return 2;
+  }
+  std::vector<std::vector<OpTimes>> byTarget;
+  for (size_t i = 0; i < targets.size(); ++i) {
+    hwy::SetSupportedTargetsForTest(targets[i]);
+    byTarget.push_back(SingleOps(hwy::TargetName(targets[i]), i == 0, i == 0 && !opsOnly));
+  }
+  hwy::SetSupportedTargetsForTest(0);
+  fmt::print("\nsingle ops by Highway target, ns (medians; one run, the targets one after another):\n");
+  fmt::print("{:<28}", "");
+  for (int64_t t : targets) fmt::print(" {:>9}", hwy::TargetName(t));
+  fmt::print("\n");
+  const std::pair<const char*, double OpTimes::*> ops[] = {
+      {"32-bit add", &OpTimes::add},         {"16x16 multiply", &OpTimes::mul},
+      {"21b x 22b const", &OpTimes::mulUni}, {"21-bit square", &OpTimes::square},
+      {"s15.16 divide", &OpTimes::div},      {"s15.16 sqrt", &OpTimes::sqrt}};
+  for (size_t k = 0; k < byTarget[0].size(); ++k)
+    for (const auto& [name, field] : ops) {
+      fmt::print("  {:>6} PEs {:<16}", byTarget[0][k].pes, name);
+      for (const auto& times : byTarget) fmt::print(" {:>9.0f}", times[k].*field * 1e9);
+      fmt::print("\n");
+    }
+  if (!opsOnly) LayerSweep();
   return 0;
 }
