@@ -19,13 +19,12 @@
 # so a killed mutant costs seconds; then the rest of the suite. The unmutated tree must pass
 # the whole suite.
 #
-# What is rebuilt: every target the mutant's file feeds, decided by the file (never by the
-# filter): a file of the engine (fixed/, bitserial/, hosts/) feeds the test binary, the
-# zephyr program (which the MPI, durability, accuracy, charts and float tests run as a
-# child), the example programs (run by their tests) and zephyr-smpi when SimGrid's smpicxx is
-# installed (the SimGrid tests run it); a test file feeds the test binary; an example its
-# program. After a mutant the same targets are rebuilt from the restored file (from ccache),
-# so the next mutant never runs with this one's binaries.
+# What is rebuilt: every target the tests run, for every mutant, whatever its filter: the
+# test binary, the zephyr program (which the MPI, durability, accuracy, charts and float
+# tests run as a child), the example programs (run by their tests) and zephyr-smpi when
+# SimGrid's smpicxx is installed (the SimGrid tests run it). make rebuilds what the mutated
+# file feeds, and what the previous mutant's restored file fed (from ccache), so no test
+# runs an unmutated program beside a mutated test binary, or the previous mutant's program.
 #
 # Usage: tools/mutants.sh [ID...]      (no ID: every mutant)
 # Env:   MUTANTS_JSON (default tools/mutants.json); LANES (default 1): scratch copies working
@@ -70,18 +69,9 @@ trap cleanup EXIT
 examples=$(ls tools/examples/*.cpp 2>/dev/null | sed 's|tools/examples/\(.*\)\.cpp|build/bin/example_\1|' | paste -sd' ' -)
 smpi=""
 command -v smpicxx >/dev/null && smpi=build/bin/zephyr-smpi
-# The targets a file feeds (see above); every one of them when the file is not known.
-targets_of() {  # $1: the mutated file
-  case "$1" in
-    tests/fuzz/*) echo "build/bin/zephyr_tests" ;;
-    tests/*) echo "build/bin/zephyr_tests" ;;
-    tools/examples/*) echo "$examples" ;;
-    tools/bench/*) echo "build/bin/bench_$(basename "$1" .cpp)" ;;
-    *) echo "build/bin/zephyr_tests build/bin/zephyr $examples $smpi" ;;
-  esac
-}
-build() {  # $1: tree, $2: the mutated file ("" at the start: everything)
-  make -C "$1" --no-print-directory -j"$jobs" CXX="$cxx" $(targets_of "${2:-}") >"$1.build.log" 2>&1
+targets="build/bin/zephyr_tests build/bin/zephyr $examples $smpi"
+build() {  # $1: tree
+  make -C "$1" --no-print-directory -j"$jobs" CXX="$cxx" $targets >"$1.build.log" 2>&1
 }
 runtests() {  # $1: tree, $2: gtest filter; the status of the run (stops at the first failure)
   (cd "$1" && timeout -k 10 "$timeout_s" build/bin/zephyr_tests --gtest_brief=1 --gtest_fail_fast \
@@ -149,7 +139,7 @@ run_lane() {
     ORIG=$(jq -r .original <<<"$m") REPL=$(jq -r .replacement <<<"$m") \
       perl -0777 -i -pe 'BEGIN { $o = $ENV{ORIG}; $r = $ENV{REPL} } s/\Q$o\E/$r/' "$tree/$file"
     start=$(date +%s)
-    if ! build "$tree" "$file"; then
+    if ! build "$tree"; then
       printf 'ERROR\t%s\t%s\t%s\t%s\n' "$id" "$file" "$what" "the mutant does not compile" >>"$out"
     else
       runmutant "$tree" "$filter"
@@ -164,9 +154,7 @@ run_lane() {
       fi
     fi
     tail -1 "$out" | awk -F'\t' '{ printf "%-10s %-34s %s (%s)\n", $1, $2, $4, $5 }'
-    cp "$tree.original" "$tree/$file"  # restore, and rebuild what it fed (from ccache)
-    build "$tree" "$file" || printf 'ERROR\t%s\t%s\t%s\t%s\n' "$id" "$file" "$what" \
-      "the restored tree does not build" >>"$out"
+    cp "$tree.original" "$tree/$file"  # restore (the next build brings its objects back from ccache)
   done
 }
 
