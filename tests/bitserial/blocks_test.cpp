@@ -1,12 +1,15 @@
 // Layer-blocked execution (bitserial/blocks.h): a program run block by block, on 1, 2 and 4
 // threads, gives the same bits, flags, cycle report and memory map as op by op on the whole
-// machine; a reduction on a block is refused; a program that branches on its data is caught.
+// machine; a reduction on a block is refused; a program that branches on its data is caught;
+// of several failing blocks the first in block order reports its error.
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "bitserial/blocks.h"
@@ -133,6 +136,46 @@ TEST(BitserialBlocks, AProgramThatBranchesOnItsDataIsCaught) {
     Multi b = a + a;
   }));
   EXPECT_THROW(CheckThreads(0), UserError);
+}
+
+// A program that fails in two blocks (those holding layers 1 and 3 of 5): the error
+// rethrown is the first failing block's in block order, for 1, 2 and 4 threads and every
+// block size, and every block has run to its end before it is. The earlier block fails
+// 100 ms late and with another exception type, so an error taken in the order the threads
+// meet them (the later block's, on 2 or 4 threads) or the last in block order is caught.
+TEST(BitserialBlocks, TheErrorOfTwoFailingBlocksIsTheFirstInBlockOrder) {
+  for (int blockLayers : {1, 2, 3}) {
+    const int blocks = (5 + blockLayers - 1) / blockLayers;
+    // The first block holding layer 1 (the first failure in block order).
+    const int firstFailing = 1 / blockLayers;
+    for (int threads : {1, 2, 4}) {
+      const std::string what =
+          fmt::format("{} layer(s) per block, {} thread(s)", blockLayers, threads);
+      std::vector<int> ran(blocks, 0);
+      try {
+        RunLayerBlocks(Profile("wavetracer"), kPes, {blockLayers, threads}, [&](Machine& m) {
+          Multi a(m, Format::Signed(3, 0), "a");
+          Multi b = a + a;
+          const int first = m.FirstLayer(), last = first + m.Layers() - 1;
+          ran[first / blockLayers] = 1;
+          if (first <= 1 && 1 <= last) {
+            std::this_thread::sleep_for(std::chrono::milliseconds(100));
+            throw UserError(fmt::format("failed in the block at layer {}", first));
+          }
+          if (first <= 3 && 3 <= last)
+            throw std::runtime_error(fmt::format("failed in the block at layer {}", first));
+        });
+        ADD_FAILURE() << "no error, " << what;
+      } catch (const UserError& e) {
+        EXPECT_EQ(std::string(e.what()),
+                  fmt::format("failed in the block at layer {}", firstFailing * blockLayers))
+            << what;
+      } catch (const std::exception& e) {
+        ADD_FAILURE() << "the later block's error: " << e.what() << ", " << what;
+      }
+      EXPECT_EQ(ran, std::vector<int>(blocks, 1)) << "every block ran, " << what;
+    }
+  }
 }
 
 }  // namespace
