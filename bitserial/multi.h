@@ -63,8 +63,10 @@ class Multi {
   const Word* Plane(int i) const { return planes_ + i * machine_->PlaneStride(); }
   Word* Plane(int i) { return planes_ + i * machine_->PlaneStride(); }
 
-  // Host transfers (charged to the host class): one value per virtual PE, in PE order;
-  // PEs past the vector's end get 0. Values must have this multi's format.
+  // Host transfers (charged to the host class): one value per virtual PE, in PE order.
+  // Every PE past the vector's end gets 0, whatever the planes held before (Load and
+  // LoadRaw clear them first; BitserialPatterns.LoadRawOfAShortListLeavesZeroPastIt).
+  // Values must have this multi's format.
   void Load(const std::vector<fixed::Fixed>& values);
   void LoadRaw(const std::vector<int64_t>& raw);  // two's-complement raw integers
   std::vector<fixed::Fixed> Read() const;
