@@ -223,6 +223,28 @@ TEST(BitserialCycles, ProfilesAreDataAndCheckedByName) {
   } catch (const UserError& e) {
     EXPECT_NE(std::string(e.what()).find("'readInternal'"), std::string::npos) << e.what();
   }
+  // A layer must be a whole number of the widest kernel vector (512 PEs): 576, a multiple of
+  // 64, once crashed the AVX2 and AVX-512 kernels; 1024 is fine.
+  {
+    const MachineProfile base = Profile("wavetracer");
+    auto tableOf = [&](double pes) {
+      std::map<std::string, std::pair<double, std::string>> t = {
+          {"clockHz", {base.clockHz, ""}}, {"physicalPes", {pes, ""}},
+          {"internalBitsPerPe", {double(base.internalBitsPerPe), ""}},
+          {"externalBitsPerPe", {double(base.externalBitsPerPe), ""}}, {"floatSubnormals", {1, ""}}};
+      for (int i = 0; i < kMicroOpCount; ++i) t[MicroOpName(static_cast<MicroOp>(i))] = {base.cost[i], ""};
+      return t;
+    };
+    for (double pes : {576.0, 64.0, 0.0, -512.0}) {
+      try {
+        ProfileFromTable("odd", tableOf(pes));
+        ADD_FAILURE() << pes << " PEs accepted";
+      } catch (const UserError& e) {
+        EXPECT_NE(std::string(e.what()).find("multiple of 512"), std::string::npos) << e.what();
+      }
+    }
+    EXPECT_EQ(ProfileFromTable("ok", tableOf(1024)).physicalPes, 1024);
+  }
   // Every assumed WaveTracer cost says so.
   MachineProfile wt = Profile("wavetracer");
   for (int i = 0; i < kMicroOpCount; ++i)
