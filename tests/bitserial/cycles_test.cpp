@@ -309,3 +309,74 @@ TEST(BitserialCycles, CyclesCommandFollowsPolicyAndPlacement) {
 
 }  // namespace
 }  // namespace zephyr::bitserial
+
+namespace zephyr::bitserial {
+namespace {
+
+// A uni operand of a division costs nothing to read and brings its magnitude from the host
+// (docs/bitserial.md): Div(uni a, b) charges what Div(a, b) with a in internal memory
+// charges, less a's magnitude pass (one sign read and flag op, then n reads, ALU steps and
+// writes) and less the n reads of |a|'s bits — for signed and unsigned dividends, every policy.
+TEST(BitserialCycles, AUniDividendCostsItsMultiTwinLessItsReadsAndMagnitude) {
+  int checked = 0;
+  for (int n : {4, 8, 13, 16})
+    for (bool isSigned : {true, false})
+      for (const Policy& p : kPolicies) {
+        const Format f = isSigned ? Format::Signed(n - 1, 0) : Format::Unsigned(n, 0);
+        const int64_t raw = isSigned ? -(int64_t(1) << (n - 2)) + 3 : (int64_t(1) << (n - 1)) + 3;
+        const fixed::Fixed value{f, raw};
+        Machine mm(Profile("wavetracer")), mu(Profile("wavetracer"));
+        Multi am(mm, f, "a", Space::Internal), bm(mm, f, "b", Space::Internal), bu(mu, f, "b", Space::Internal);
+        std::vector<int64_t> ra(mm.VirtualPes(), raw), rb(mm.VirtualPes());
+        for (size_t i = 0; i < rb.size(); ++i) rb[i] = int64_t(i % 7) + 1;
+        am.LoadRaw(ra), bm.LoadRaw(rb), bu.LoadRaw(rb);
+        Multi qm = Div(am, bm, f, p);
+        Multi qu = Div(Uni{value}, bu, f, p);
+        std::map<std::string, int64_t> want = ChargedMicroOps(mm, "div");
+        const int w = f.Width();
+        if (isSigned) {  // a's magnitude pass
+          want["readInternal"] -= 1 + w;
+          want["flagOp"] -= 1;
+          want["aluStep"] -= w;
+          want["writeInternal"] -= w;
+        }
+        std::map<std::string, int64_t> got = ChargedMicroOps(mu, "div");
+        // a's bit reads (each from internal memory): what remains of readInternal above the
+        // uni run are the dividend's reads — one per quotient step's bit brought down, and for
+        // a signed dividend its sign twice more (the floor correction's test).
+        const int64_t aReads = want["readInternal"] - got["readInternal"];
+        EXPECT_GE(aReads, w - 1) << f.Name();
+        EXPECT_LE(aReads, w + (isSigned ? 2 : 1)) << f.Name();
+        want["readInternal"] = got["readInternal"];
+        for (auto it = want.begin(); it != want.end();)
+          it = it->second == 0 ? want.erase(it) : std::next(it);
+        for (auto it = got.begin(); it != got.end();)
+          it = it->second == 0 ? got.erase(it) : std::next(it);
+        EXPECT_EQ(got, want) << f.Name() << " rounding " << int(p.rounding) << " overflow " << int(p.overflow);
+        ++checked;
+      }
+  EXPECT_EQ(checked, 4 * 2 * 4);
+}
+
+// Reductions over no active PE (multi.h): Max gives the format's smallest value, Min its
+// largest, Or 0, Sum 0, in signed and unsigned formats.
+TEST(BitserialReduce, NoActivePeGivesTheDocumentedIdentity) {
+  for (const Format f : {Format::Signed(7, 4), Format::Unsigned(9, 0), Format::Signed(0, 15)}) {
+    Machine m(Profile("wavetracer"));
+    Multi a(m, f, "a", Space::Internal), none(m, BoolFormat(), "none", Space::Internal);
+    std::vector<int64_t> raw(m.VirtualPes(), 1), zero(m.VirtualPes(), 0);
+    a.LoadRaw(raw), none.LoadRaw(zero);
+    Where(none, [&] {
+      EXPECT_TRUE(ReduceMax(a).raw == f.MinRaw()) << f.Name();
+      EXPECT_TRUE(ReduceMin(a).raw == f.MaxRaw()) << f.Name();
+      EXPECT_TRUE(ReduceOr(a).raw == 0) << f.Name();
+      EXPECT_TRUE(ReduceSum(a).raw == 0) << f.Name();
+    });
+    // And with every PE active, the values themselves.
+    EXPECT_TRUE(ReduceMax(a).raw == 1) << f.Name();
+    EXPECT_TRUE(ReduceMin(a).raw == 1) << f.Name();
+  }
+}
+
+}  // namespace
+}  // namespace zephyr::bitserial
