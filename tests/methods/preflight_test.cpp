@@ -11,6 +11,9 @@
 #include <string>
 #include <vector>
 
+#include <CLI/CLI.hpp>
+
+#include "hosts/cmd/flags.h"
 #include "tests/farm/mpi_launch.h"
 
 namespace zephyr {
@@ -183,6 +186,39 @@ TEST(FlagPreflight, NumericFlagsOfEveryCommandSayWhatTheyExpect) {
     EXPECT_NE(r.output.find("zephyr: error: " + message), std::string::npos) << args << "\n" << r.output;
     EXPECT_LT(r.output.size(), 400u) << r.output;
   }
+}
+
+// A flag's range is closed: both ends are accepted, the nearest values past them refused,
+// for integers (signed and unsigned) and numbers; the text must be the whole number.
+TEST(FlagPreflight, RangesIncludeBothEndsAndNothingPast) {
+  auto refused = [](auto parse) {
+    try {
+      parse();
+    } catch (const CLI::ValidationError&) {
+      return true;
+    }
+    return false;
+  };
+  EXPECT_EQ(ParseIntegerFlag("--n", "4", 4, 56), 4);
+  EXPECT_EQ(ParseIntegerFlag("--n", "56", 4, 56), 56);
+  EXPECT_EQ(ParseIntegerFlag("--n", "+7", 4, 56), 7);
+  EXPECT_EQ(ParseIntegerFlag("--n", "010", 4, 56), 10);  // decimal, not octal
+  for (const char* bad : {"3", "57", "", "4.0", "1e1", "0x10", "7abc", " 7", "-"})
+    EXPECT_TRUE(refused([&] { ParseIntegerFlag("--n", bad, 4, 56); })) << bad;
+  EXPECT_EQ(ParseUnsignedFlag("--u", "0", 0, UINT64_MAX), 0u);
+  EXPECT_EQ(ParseUnsignedFlag("--u", "18446744073709551615", 0, UINT64_MAX), UINT64_MAX);
+  for (const char* bad : {"-1", "18446744073709551616", "-0"})
+    EXPECT_TRUE(refused([&] { ParseUnsignedFlag("--u", bad, 0, UINT64_MAX); })) << bad;
+  EXPECT_EQ(ParseNumberFlag("--x", "0.001", 0.001, kNoUpperEnd), 0.001);
+  EXPECT_EQ(ParseNumberFlag("--x", "1000", 1000, 2000), 1000);
+  EXPECT_EQ(ParseNumberFlag("--x", "2000", 1000, 2000), 2000);
+  EXPECT_EQ(ParseNumberFlag("--x", "1e300", 0, kNoUpperEnd), 1e300);
+  for (const char* bad : {"999.9999", "2000.0001", "nan", "inf", "1e999", "", "1,5", "12s"})
+    EXPECT_TRUE(refused([&] { ParseNumberFlag("--x", bad, 1000, 2000); })) << bad;
+  // The end itself through the command line: --child-timeout 0.001 is a valid timeout.
+  TempDir dir;
+  const auto r = RunZephyrProcess("mpi-check --local --child-timeout 0.001 --in-flight 1024 --out " + (dir / "x.pfm"));
+  EXPECT_EQ(r.status, 0) << r.output;
 }
 
 // Under mpirun a command line's mistake is printed once, by rank 0, and every rank exits.
