@@ -104,7 +104,7 @@ struct Trackers {
 // One object's candidate folded into the best hit so far and the trackers.
 void FoldCandidate(Machine& m, const ObjectPlan& object, const PrimaryPlan& plan, ArrayMatrix& a, Trackers& k) {
   const Format T = plan.t;
-  const Candidate c = object.program->Run(m, a.d);
+  const Candidate c = object.program->Run(m, a.d, nullptr);
   // t − e_i with e_i rounded up (an always-uncertain object's every hit is flagged, so its
   // e is never relied on); saturating down only widens the test.
   const double e = object.bounds.alwaysUncertain ? 0.0 : object.bounds.tError + plan.pass.Ulp();
