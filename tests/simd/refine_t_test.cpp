@@ -3,14 +3,13 @@
 // certifies has a t within the refine plan's bound of its object, and within the first plan's,
 // against the exact (128-bit) reference along the eye ray — and along the direction the matrix
 // holds for it (the pair a dump or a heterogeneous child reads), which is the refine pass's own.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <random>
 #include <string>
-
-#include <fmt/format.h>
 
 #include "hosts/scene/nff.h"
 #include "hosts/simd/direction.h"
@@ -42,7 +41,8 @@ Scene TouchingSpheres() {
   std::vector<Sphere> s;
   const double radii[][2] = {{1, 1}, {0.3, 0.01}, {50, 2}, {0.05, 0.05}, {4, 0.5}};
   const double gaps[] = {0, 1e-9, 1e-6, 0, 1e-9};
-  const Vec3 centres[] = {{-1, 0, -10}, {1.5, 1.5, -9}, {-60, -20, -150}, {-1.2, -1.8, -8}, {1.2, -1.2, -14}};
+  const Vec3 centres[] = {
+      {-1, 0, -10}, {1.5, 1.5, -9}, {-60, -20, -150}, {-1.2, -1.8, -8}, {1.2, -1.2, -14}};
   for (int k = 0; k < 5; ++k) {
     const Vec3 n = Normalize(Vec3{1, 0.2 * k - 0.4, 0.1});
     s.push_back({centres[k], radii[k][0]});
@@ -57,9 +57,11 @@ Scene GrazingFan() {
   const Vec3 c{0, 0, -150};
   const double r = 50;
   const double tangent = std::sqrt(150.0 * 150.0 - r * r);
-  const Vec3 edge = Normalize(Vec3{r / 150 * tangent, 0, -tangent / 150 * tangent});  // direction to the silhouette
-  return Spheres({0, 0, 0}, edge * 100.0, 3,
-                 {{c, r}, {edge * 120.0 + Vec3{0.01, 0.2, 0}, 0.01}, {edge * 160.0 + Vec3{1, 0.5, 0}, 2}});
+  const Vec3 edge = Normalize(
+      Vec3{r / 150 * tangent, 0, -tangent / 150 * tangent});  // direction to the silhouette
+  return Spheres(
+      {0, 0, 0}, edge * 100.0, 3,
+      {{c, r}, {edge * 120.0 + Vec3{0.01, 0.2, 0}, 0.01}, {edge * 160.0 + Vec3{1, 0.5, 0}, 2}});
 }
 
 // Nearly touching pairs (gaps 0 to 1e-4 of the radii's sum, or cutting by 1e-3) with radii
@@ -100,7 +102,8 @@ RefinedT Measure(const Scene& scene, int fracBits) {
   const PrimaryPass first = RunPrimaryPass(scene, o);
   o.uncertain = UncertainPolicy::kRefine;
   const PrimaryPass refined = RunPrimaryPass(scene, o);
-  const PrimaryPlan plan = PlanRefinePass(scene, o, refined.plan, refined.refinedPixels, kRefineExtraBits);
+  const PrimaryPlan plan =
+      PlanRefinePass(scene, o, refined.plan, refined.refinedPixels, kRefineExtraBits);
   const PrimaryRays rays(scene.camera);
   const double tMin = std::max(scene.camera.hither, 0.0);
   const std::vector<int> planes = exact::CoplanarPolygons(scene);
@@ -110,7 +113,8 @@ RefinedT Measure(const Scene& scene, int fracBits) {
     const PrimaryHit& h = refined.matrix.hits[i];
     PrimaryRay ray = rays.At(int(i % kSize), int(i / kSize));
     const exact::Hit eye = exact::FirstHit(scene, ray, tMin, planes);
-    if (h.object < 0 || eye.object != h.object) continue;  // the objects: SimdRefine's soundness tests
+    if (h.object < 0 || eye.object != h.object)
+      continue;  // the objects: SimdRefine's soundness tests
     ray.direction = h.direction;
     const exact::Hit along = exact::FirstHit(scene, ray, tMin, planes);
     ray.direction = first.matrix.hits[i].direction;
@@ -118,14 +122,17 @@ RefinedT Measure(const Scene& scene, int fracBits) {
     const double bound = plan.objects[h.object].bounds.tError;
     const double firstBound = first.plan.objects[h.object].bounds.tError;
     const double eEye = std::abs(double(exact::Real(h.t) - eye.t));
-    const double eMatrix = along.object == h.object ? std::abs(double(exact::Real(h.t) - along.t)) : kInf;
+    const double eMatrix =
+        along.object == h.object ? std::abs(double(exact::Real(h.t) - along.t)) : kInf;
     ++r.pixels;
     r.eyeShare = std::max(r.eyeShare, eEye / bound);
     r.matrixShare = std::max(r.matrixShare, eMatrix / bound);
     r.firstShare = std::max(r.firstShare, std::max(eEye, eMatrix) / firstBound);
     if (first.matrix.hits[i].object == h.object && alongFirst.object == h.object) {
       const double eFirst = std::abs(double(exact::Real(first.matrix.hits[i].t) - alongFirst.t));
-      if (eMatrix > eFirst) ++r.worseThanFirst, r.worstRatio = std::max(r.worstRatio, eMatrix / std::max(eFirst, 1e-300));
+      if (eMatrix > eFirst)
+        ++r.worseThanFirst,
+            r.worstRatio = std::max(r.worstRatio, eMatrix / std::max(eFirst, 1e-300));
     }
   }
   return r;
@@ -138,12 +145,15 @@ TEST(SimdRefine, RefinedTIsWithinTheRefineBound) {
     for (int bits : {10, -1}) {
       const RefinedT r = Measure(scene, bits);
       const std::string what = fmt::format("{} at {} fraction bits", name, bits);
-      std::printf("%s: %d refined certain, %d worse than the first pass (max %.3gx); max error / refine bound: "
-                  "eye ray %.3g, matrix direction %.3g; / first bound %.3g\n",
-                  what.c_str(), r.pixels, r.worseThanFirst, r.worstRatio, r.eyeShare, r.matrixShare, r.firstShare);
+      std::printf(
+          "%s: %d refined certain, %d worse than the first pass (max %.3gx); max error / refine "
+          "bound: "
+          "eye ray %.3g, matrix direction %.3g; / first bound %.3g\n",
+          what.c_str(), r.pixels, r.worseThanFirst, r.worstRatio, r.eyeShare, r.matrixShare,
+          r.firstShare);
       RecordProperty(fmt::format("{} {} bits", name, bits),
-                     fmt::format("refined {} worse {} eye/bound {:.3g} matrix/bound {:.3g}", r.pixels,
-                                 r.worseThanFirst, r.eyeShare, r.matrixShare));
+                     fmt::format("refined {} worse {} eye/bound {:.3g} matrix/bound {:.3g}",
+                                 r.pixels, r.worseThanFirst, r.eyeShare, r.matrixShare));
       EXPECT_GT(r.pixels, 150) << what;
       EXPECT_LE(r.eyeShare, 1) << what;
       EXPECT_LE(r.matrixShare, 1) << what;  // 11-26x with the first pass's direction beside the t
