@@ -64,7 +64,8 @@ Vec3 MatrixDirection(const PrimaryRays& rays, int x, int y, int dirFracBits, int
   if (flags & simd::kRecomputed) return exact;
   if (flags & simd::kRefined) {
     if (refineDirFracBits < 0)
-      throw UserError("malformed work message: a refined pixel, but the set-up named no refine pass");
+      throw UserError(
+          "malformed work message: a refined pixel, but the set-up named no refine pass");
     return simd::MatrixDirection(exact, refineDirFracBits);
   }
   return simd::MatrixDirection(exact, dirFracBits);
@@ -91,7 +92,8 @@ class HeteroWork : public FrameWork {
     if (dirFracBits_ < 0 || dirFracBits_ > 60)
       throw UserError("malformed set-up message: dirFracBits " + std::to_string(dirFracBits_));
     if (refineDirFracBits_ < -1 || refineDirFracBits_ > 60)
-      throw UserError("malformed set-up message: refineDirFracBits " + std::to_string(refineDirFracBits_));
+      throw UserError("malformed set-up message: refineDirFracBits " +
+                      std::to_string(refineDirFracBits_));
     scene_ = std::move(setup.scene);
     tracer_ = Tracer::Create(scene_, setup.trace);
   }
@@ -112,8 +114,8 @@ class HeteroWork : public FrameWork {
     for (int y = f.y0; y < f.y0 + f.height; ++y)
       for (int x = f.x0; x < f.x0 + f.width; ++x, ++i) {
         m.hits[i] = hetero::GetEntry(&slice[i * kEntryBytes], int(scene_.objects.size()), m.flags[i]);
-        m.hits[i].direction =
-            hetero::MatrixDirection(tracer_->Rays(), x, y, dirFracBits_, refineDirFracBits_, m.flags[i]);
+        m.hits[i].direction = hetero::MatrixDirection(tracer_->Rays(), x, y, dirFracBits_,
+                                                      refineDirFracBits_, m.flags[i]);
       }
     TraceStats frameStats;
     simd::ShadeRegion(*tracer_, m, 0, 0, f.width, f.height, block_, frameStats);
@@ -170,10 +172,10 @@ void RenderHetero(const Scene& scene, const RenderOptions& options, RenderOutput
   job.parentPassSeconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (testbed::Simulated()) job.parentPassSeconds = testbed::ChargeArrayPass(pass, scene);
-  job.setup = farmed::SetupText("hetero", scene, options.trace,
-                                {{"dirFracBits", pass.plan.dirFracBits},
-                                 {"refineDirFracBits",
-                                  pass.refinedPixels > 0 ? pass.refine["dirFracBits"].get<int>() : -1}});
+  job.setup = farmed::SetupText(
+      "hetero", scene, options.trace,
+      {{"dirFracBits", pass.plan.dirFracBits},
+       {"refineDirFracBits", pass.refinedPixels > 0 ? pass.refine["dirFracBits"].get<int>() : -1}});
   std::fprintf(stdout, "cycle report (SIMD primary pass):\n%s", pass.cycleTable.c_str());
   // The parent's own work, charged under the simulated testbed: packing each frame's slice,
   // shading the degenerate frames, pasting the children's frames.

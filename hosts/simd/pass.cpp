@@ -407,7 +407,8 @@ void Refine(PrimaryPass& pass, const Scene& scene, const SimdOptions& options, c
     PrimaryHit& h = out.hits[pixels[k]];
     h.object = int(run.raw.object[k]) - 1;
     h.t = h.object >= 0 ? std::ldexp(double(run.raw.t[k]), -plan.fracBits) : 0.0;
-    h.direction = DecodeDirection(run.raw.d[0][k], run.raw.d[1][k], run.raw.d[2][k], plan.dirFracBits);
+    h.direction =
+        DecodeDirection(run.raw.d[0][k], run.raw.d[1][k], run.raw.d[2][k], plan.dirFracBits);
     out.flags[pixels[k]] = fl != 0 ? fl : kRefined;
     still += fl != 0;
   }
@@ -437,7 +438,7 @@ PrimaryPass RunPrimaryPass(const Scene& scene, const SimdOptions& options) {
   DecodeMatrix(pass, run.raw);
   run.raw = MatrixRaw(0);  // the decoded matrix holds it all now; free it before the recompute
   const int64_t flagged = std::count_if(pass.matrix.flags.begin(), pass.matrix.flags.end(),
-                                       [](uint32_t f) { return (f & kUncertainFlags) != 0; });
+                                        [](uint32_t f) { return (f & kUncertainFlags) != 0; });
   const int64_t budget = int64_t(kAutoRefineShare * double(pass.matrix.flags.size()));
   if (options.uncertain == UncertainPolicy::kRefine || (options.uncertain == UncertainPolicy::kAuto && flagged > budget))
     Refine(pass, scene, options, rays);

@@ -79,8 +79,8 @@ TEST(HeteroEntry, RecomputedDirectionIsTheMatrixDirectionBitForBit) {
       for (int y = 0; y < scene.camera.height; ++y)
         for (int x = 0; x < scene.camera.width; ++x) {
           const std::size_t i = std::size_t(y) * scene.camera.width + x;
-          const Vec3 d =
-              hetero::MatrixDirection(rays, x, y, pass.plan.dirFracBits, refineBits, pass.matrix.flags[i]);
+          const Vec3 d = hetero::MatrixDirection(rays, x, y, pass.plan.dirFracBits, refineBits,
+                                                 pass.matrix.flags[i]);
           mismatches += std::memcmp(&d, &pass.matrix.hits[i].direction, sizeof(Vec3)) != 0;
           recomputed += (pass.matrix.flags[i] & simd::kRecomputed) != 0;
           refined += (pass.matrix.flags[i] & simd::kRefined) != 0;
@@ -96,7 +96,8 @@ TEST(HeteroEntry, RecomputedDirectionIsTheMatrixDirectionBitForBit) {
         // A refined pixel's direction is the refine pass's: without its bits it cannot be had.
         for (std::size_t i = 0; i < pass.matrix.flags.size(); ++i)
           if (pass.matrix.flags[i] & simd::kRefined) {
-            EXPECT_THROW(hetero::MatrixDirection(rays, 0, 0, pass.plan.dirFracBits, -1, pass.matrix.flags[i]),
+            EXPECT_THROW(hetero::MatrixDirection(rays, 0, 0, pass.plan.dirFracBits, -1,
+                                                 pass.matrix.flags[i]),
                          UserError);
             break;
           }
