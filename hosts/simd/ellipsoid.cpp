@@ -169,8 +169,9 @@ class EllipsoidProgram final : public ObjectProgram {
   Vec3 f_;  // object-space eye to centre
   Format dp_[3], n_, clamped_, square_, disc_, root_, dd_, num_;
   struct {
-    double dp[3] = {}, tcaN = 0, cross = 0, dd = 0, disc = 0,
-           num = 0;  // error bounds of Run's values
+    // Error bounds (Bound()) of d' = T⁻¹d, f·d', each cross component, |d'|², disc and the
+    // numerators f·d' ∓ root (object-space units and their squares, as each quantity has).
+    double dp[3] = {}, tcaN = 0, cross = 0, dd = 0, disc = 0, num = 0;
   } e_;
   ObjectBounds b_;
 };

@@ -169,7 +169,6 @@ class PolygonProgram final : public ObjectProgram {
       if (hit[pe] && !unsure[pe]) eT[pe] = b_.tError;
       if (unsure[pe]) slack[pe] = b_.slack;
     }
-    audit.constants = {{"sigma", w_.eyeDistance >= 0 ? 1.0 : -1.0}};
     audit.Record("den", den, Audit::Where({}, b_.grazeBand, n));
     audit.Record("t", out.t, eT);
     audit.Record("t - slack", out.t, slack, Audit::Side::kAbove);

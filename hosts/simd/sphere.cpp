@@ -119,7 +119,8 @@ class SphereProgram final : public ObjectProgram {
   double radius_;
   Format clamped_, square_, disc_, root_;
   struct {
-    double tca = 0, cross = 0, disc = 0;  // |tca|, each cross component's and disc's error bounds
+    // Error bounds (Bound()) of tca and of each cross component (scene units), of disc (units²).
+    double tca = 0, cross = 0, disc = 0;
   } e_;
   ObjectBounds b_;
 };
