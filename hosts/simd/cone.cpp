@@ -542,7 +542,7 @@ void ConeProgram::Record(Audit& audit, const Multi (&d)[3], const Multi& da, con
     for (int j = 0; j < kDiscRungs; ++j)
       if (dv[pe] >=
           (j == 0 ? tight(cs.grazeBand) : tight(RoundUp(std::ldexp(cs.grazeBand, 2 * j), F)))) {
-        eRoot[pe] = cs.eDisc / std::ldexp(std::sqrt(cs.grazeBand), j) + u, eQ[pe] = cs.eQAt[j];
+        eQ[pe] = cs.eQAt[j], eRoot[pe] = cs.eQAt[j] - cs.beta.err;  // the ladder's, less β's
       }
   }
   audit.Record("disc", disc, eDisc);

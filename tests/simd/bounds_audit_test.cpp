@@ -490,6 +490,21 @@ std::vector<Case> Cases() {
   c.push_back({"polygon", "quad, the eye 0.05 above its plane",
                OneObject({0, 0.05, 0}, {0, 0, -20},
                          Make(Polygon{{{-5, 0, -2}, {5, 0, -2}, {5, 0, -40}, {-5, 0, -40}}, {}}))});
+  // These two: the eye distance over the farthest vertex (n/D ≈ 1.5e-4) is under twice e_E at
+  // F = 16, so the least denominators are barely above their own error (den_min = n/D − e_E);
+  // next to a far edge the edge band flags them, next to a far tip some are certain.
+  c.push_back({"polygon", "quad, the eye 0.006 above its plane",
+               OneObject({0, 0.006, 0}, {0, 0, -20},
+                         Make(Polygon{{{-5, 0, -2}, {5, 0, -2}, {5, 0, -40}, {-5, 0, -40}}, {}}))});
+  {
+    // A plane whose normal has three inexact components (so n̂·d rounds in every product), the
+    // eye 0.006 above it, a triangle in it pointing away from the eye.
+    const Vec3 n = Normalize(Vec3{0.5, 0.8, 0.33});
+    const Vec3 e1 = Normalize(Cross(n, Vec3{0, 0, 1})), e2 = Cross(e1, n);
+    const auto at = [&](double x, double z) { return e1 * x + e2 * z - n * 0.006; };
+    c.push_back({"polygon", "triangle pointing away, the eye 0.006 above its plane",
+                 OneObject(o, e2 * 20.0, Make(Polygon{{at(-3, 2), at(3, 2), at(0.2, 40)}, {}}))});
+  }
   c.push_back({"polygon", "pentagon, transformed",
                OneObject(o, {0, 0, -8},
                          Make(Polygon{{{1, 0, 0},
@@ -611,13 +626,18 @@ std::vector<Vec3> AuditDirections(const Case& c, const PrimaryPlan& plan, double
     const size_t n = w.v.size();
     Vec3 d;
     const double pick = u(rng);
-    if (pick < 0.4) {
+    if (pick < 0.3) {
       std::vector<double> wts(n);
       double sum = 0;
       for (double& x : wts) sum += x = -std::log(u(rng) + 1e-300);
       Vec3 pt;
       for (size_t k = 0; k < n; ++k) pt += w.v[k] * (wts[k] / sum);
       d = Normalize(pt - eye);
+    } else if (pick < 0.45) {  // toward a vertex from inside (the farthest: the least n̂·d)
+      Vec3 centroid;
+      for (const Vec3& x : w.v) centroid += x / double(n);
+      const Vec3 a = w.v[size_t(u(rng) * n) % n];
+      d = Normalize(a + (centroid - a) * std::pow(10.0, -4 + 3.5 * u(rng)) - eye);
     } else {
       const size_t k = size_t(u(rng) * n) % n;
       const Vec3 a = w.v[k], b = w.v[(k + 1) % n];
