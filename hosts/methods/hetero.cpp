@@ -37,7 +37,7 @@ void PutEntry(const PrimaryHit& hit, std::uint32_t flags, std::byte* at) {
 
 PrimaryHit GetEntry(const std::byte* at, int objectCount, std::uint32_t& flags) {
   constexpr std::uint32_t kKnown =
-      simd::kOverflow | simd::kGrazing | simd::kNearTie | simd::kRecomputed;
+      simd::kOverflow | simd::kGrazing | simd::kNearTie | simd::kRecomputed | simd::kRefined;
   std::int32_t object;
   std::uint8_t flagByte;
   PrimaryHit hit;
@@ -58,9 +58,16 @@ PrimaryHit GetEntry(const std::byte* at, int objectCount, std::uint32_t& flags) 
   return hit;
 }
 
-Vec3 MatrixDirection(const PrimaryRays& rays, int x, int y, int dirFracBits, std::uint32_t flags) {
+Vec3 MatrixDirection(const PrimaryRays& rays, int x, int y, int dirFracBits, int refineDirFracBits,
+                     std::uint32_t flags) {
   const Vec3 exact = rays.At(x, y).direction;
   if (flags & simd::kRecomputed) return exact;
+  if (flags & simd::kRefined) {
+    if (refineDirFracBits < 0)
+      throw UserError(
+          "malformed work message: a refined pixel, but the set-up named no refine pass");
+    return simd::MatrixDirection(exact, refineDirFracBits);
+  }
   return simd::MatrixDirection(exact, dirFracBits);
 }
 
@@ -78,11 +85,15 @@ class HeteroWork : public FrameWork {
     farmed::ChildSetup setup = farmed::ReadSetup(setupText, "hetero");
     try {
       dirFracBits_ = setup.json.at("dirFracBits").get<int>();
+      refineDirFracBits_ = setup.json.at("refineDirFracBits").get<int>();
     } catch (const nlohmann::json::exception& e) {
       throw UserError(std::string("malformed set-up message: ") + e.what());
     }
     if (dirFracBits_ < 0 || dirFracBits_ > 60)
       throw UserError("malformed set-up message: dirFracBits " + std::to_string(dirFracBits_));
+    if (refineDirFracBits_ < -1 || refineDirFracBits_ > 60)
+      throw UserError("malformed set-up message: refineDirFracBits " +
+                      std::to_string(refineDirFracBits_));
     scene_ = std::move(setup.scene);
     tracer_ = Tracer::Create(scene_, setup.trace);
   }
@@ -103,7 +114,8 @@ class HeteroWork : public FrameWork {
     for (int y = f.y0; y < f.y0 + f.height; ++y)
       for (int x = f.x0; x < f.x0 + f.width; ++x, ++i) {
         m.hits[i] = hetero::GetEntry(&slice[i * kEntryBytes], int(scene_.objects.size()), m.flags[i]);
-        m.hits[i].direction = hetero::MatrixDirection(tracer_->Rays(), x, y, dirFracBits_, m.flags[i]);
+        m.hits[i].direction = hetero::MatrixDirection(tracer_->Rays(), x, y, dirFracBits_,
+                                                      refineDirFracBits_, m.flags[i]);
       }
     TraceStats frameStats;
     simd::ShadeRegion(*tracer_, m, 0, 0, f.width, f.height, block_, frameStats);
@@ -115,6 +127,7 @@ class HeteroWork : public FrameWork {
 
  private:
   int dirFracBits_ = -1;
+  int refineDirFracBits_ = -1;  // the refine pass's direction fraction bits; -1: none ran
   Scene scene_;
   std::unique_ptr<Tracer> tracer_;
   std::vector<Vec3> block_;
@@ -159,8 +172,10 @@ void RenderHetero(const Scene& scene, const RenderOptions& options, RenderOutput
   job.parentPassSeconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (testbed::Simulated()) job.parentPassSeconds = testbed::ChargeArrayPass(pass, scene);
-  job.setup = farmed::SetupText("hetero", scene, options.trace,
-                                {{"dirFracBits", pass.plan.dirFracBits}});
+  job.setup = farmed::SetupText(
+      "hetero", scene, options.trace,
+      {{"dirFracBits", pass.plan.dirFracBits},
+       {"refineDirFracBits", pass.refinedPixels > 0 ? pass.refine["dirFracBits"].get<int>() : -1}});
   std::fprintf(stdout, "cycle report (SIMD primary pass):\n%s", pass.cycleTable.c_str());
   // The parent's own work, charged under the simulated testbed: packing each frame's slice,
   // shading the degenerate frames, pasting the children's frames.

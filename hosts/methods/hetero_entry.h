@@ -28,9 +28,11 @@ void PutEntry(const PrimaryHit& hit, std::uint32_t flags, std::byte* at);
 PrimaryHit GetEntry(const std::byte* at, int objectCount, std::uint32_t& flags);
 
 // The direction the SIMD pass's matrix holds for pixel (x, y): the eye ray quantised to
-// dirFracBits fraction bits on the array and renormalised on the host, or, for a pixel the
-// host recomputed in double (simd::kRecomputed), the eye ray itself.
-Vec3 MatrixDirection(const PrimaryRays& rays, int x, int y, int dirFracBits,
+// dirFracBits fraction bits on the array and renormalised on the host; for a pixel the refine
+// pass certified (simd::kRefined), quantised to the refine pass's refineDirFracBits instead
+// (UserError "malformed work message" if that is negative: no refine pass ran); for a pixel
+// the host recomputed in double (simd::kRecomputed), the eye ray itself.
+Vec3 MatrixDirection(const PrimaryRays& rays, int x, int y, int dirFracBits, int refineDirFracBits,
                      std::uint32_t flags);
 
 }  // namespace zephyr::hetero

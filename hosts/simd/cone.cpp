@@ -75,6 +75,9 @@ struct ConeSetup {
   bool empty = false;      // no height has a non-negative radius: never hit
   Format aFormat, discFormat, sum3A, sum3Disc, rootFormat, qFormat;
   double eA = 0, eDisc = 0, grazeBand = 0, eRoot = 0, eQ = 0;
+  // The error of Q where the computed disc >= 4^j·G (rung j of the ladders; [0] = eQ):
+  // eβ + e_disc/(2^j·√G) + u, as |√x − √y| <= |x − y|/√x.
+  double eQAt[kDiscRungs] = {};
   ConeDivision divA, divC;  // t = Q/A and t = C/Q
   ConeLadder ladder[2];     // per-PE margins of each division's root (rung (0, 0): the bounds')
   Format sFormat[2];
@@ -229,7 +232,7 @@ void SetUpLadders(ConeSetup& cs, const PassFormats& pf) {
     ConeLadder& l = cs.ladder[i];
     double widest = 0;
     for (int j = 0; j < kDiscRungs; ++j) {
-      const double eQ = cs.beta.err + cs.eDisc / std::ldexp(std::sqrt(cs.grazeBand), j) + u;
+      const double eQ = cs.eQAt[j];
       const double eN = i == 0 ? eQ : v.eN, eD = i == 0 ? v.eD : eQ;
       for (int k = 0; k < kDivRungs; ++k) {
         const double dk = std::ldexp(v.dStar, 2 * k);
@@ -257,6 +260,8 @@ ConeSetup MakeConeSetup(const Primitive& p, const Vec3& eye, const PassFormats& 
   cs.grazeBand = std::max(2 * cs.eDisc, std::pow(rho / 8, 2) * pf.BandScale());
   cs.eRoot = cs.eDisc / std::sqrt(cs.grazeBand) + u;
   cs.eQ = cs.beta.err + cs.eRoot;
+  for (int j = 0; j < kDiscRungs; ++j)
+    cs.eQAt[j] = cs.beta.err + cs.eDisc / std::ldexp(std::sqrt(cs.grazeBand), j) + u;
   cs.rootsOrdered = cs.grazeBand - cs.eDisc > cs.beta.err * cs.beta.err;
   const ConeReach reach = Reach(p, eye, spectral);
   cs.tFar = reach.far + u;
@@ -337,7 +342,7 @@ class ConeProgram final : public ObjectProgram {
             {"t", pf_.t, "the nearer valid root"}};
   }
 
-  Candidate Run(Machine& m, const Directions& dirs) const override;
+  Candidate Run(Machine& m, const Directions& dirs, Audit* audit) const override;
 
  private:
   // The bounds: t's error from the divisions (ConeDivision); an object whose quotient could
@@ -363,9 +368,17 @@ class ConeProgram final : public ObjectProgram {
   // Root i's tests: a valid hit (in range, beyond hither, height inside), uncertain (the
   // division undecided, or near hither or a rim, within the PE's margins), and where
   // uncertain the least t a true hit could have.
-  void TestRoot(Machine& m, int i, const ConeRoot& r, const Multi& roots, const Multi& da, const Multi& hither,
-                const Multi& sLo, const Multi& sHi, const Multi& margin, const Multi& height, Multi& valid,
-                Multi& unsure, Multi& low) const;
+  void TestRoot(Machine& m, int i, const ConeRoot& r, const Multi& roots, const Multi& da,
+                const Multi& hither, const Multi& sLo, const Multi& sHi, const Multi& margin,
+                const Multi& height, Multi& valid, Multi& unsure, Multi& low,
+                Multi* height_out) const;
+
+  // The audit's record (hosts/simd/audit.h) of the quantities Run computed, with the bounds
+  // MakeConeSetup and the ladders claim for them.
+  void Record(Audit& audit, const Multi (&d)[3], const Multi& da, const Multi& beta,
+              const Multi (&uv)[3], const Multi (&ev)[3], const Multi& aq, const Multi& disc,
+              const Multi& root, const Multi& q, const ConeRoot (&rs)[2], const Multi (&margin)[2],
+              const Multi (&height)[2], const Multi (&s)[2], const Candidate& out) const;
 
   // Root i's t and height margins at each PE: the tightest rung of its ladder whose
   // conditions hold (discAt[j − 1]: disc >= 4^j·G).
@@ -398,9 +411,10 @@ void ConeProgram::Climb(Machine& m, int i, const Multi (&discAt)[kDiscRungs - 1]
     }
 }
 
-void ConeProgram::TestRoot(Machine& m, int i, const ConeRoot& r, const Multi& roots, const Multi& da,
-                           const Multi& hither, const Multi& sLo, const Multi& sHi, const Multi& margin,
-                           const Multi& height, Multi& valid, Multi& unsure, Multi& low) const {
+void ConeProgram::TestRoot(Machine& m, int i, const ConeRoot& r, const Multi& roots,
+                           const Multi& da, const Multi& hither, const Multi& sLo, const Multi& sHi,
+                           const Multi& margin, const Multi& height, Multi& valid, Multi& unsure,
+                           Multi& low, Multi* height_out) const {
   const int F = pf_.fracBits;
   const double u = pf_.Ulp();
   const ConeDivision& v = i == 0 ? cs_.divA : cs_.divC;
@@ -418,9 +432,10 @@ void ConeProgram::TestRoot(Machine& m, int i, const ConeRoot& r, const Multi& ro
     const Multi lowSure = Sub(r.t, margin, pf_.t, kSaturate);
     low = Select(r.sure, lowSure, Select(r.beyond, Broadcast(m, tMax), UniOf(m, cs_.tNear), pf_.t), pf_.t, kSaturate);
   });
+  if (height_out) *height_out = std::move(s);  // the audit's (Run's `audit`): not in the pass
 }
 
-Candidate ConeProgram::Run(Machine& m, const Directions& dirs) const {
+Candidate ConeProgram::Run(Machine& m, const Directions& dirs, Audit* audit) const {
   const Multi(&d)[3] = dirs.fixed;
   const int F = pf_.fracBits;
   const double u = pf_.Ulp();
@@ -463,10 +478,11 @@ Candidate ConeProgram::Run(Machine& m, const Directions& dirs) const {
   Multi discAt[kDiscRungs - 1];
   for (int j = 1; j < kDiscRungs; ++j)
     discAt[j - 1] = disc >= bitserial::Uni{Tight(RoundUp(std::ldexp(cs.grazeBand, 2 * j), F), F)};
-  Multi valid[2], unsure[2], low[2], margin[2], height[2];
+  Multi valid[2], unsure[2], low[2], margin[2], height[2], s[2];
   for (int i = 0; i < 2; ++i) {
     Climb(m, i, discAt, rs[i].absD, margin[i], height[i]);
-    TestRoot(m, i, rs[i], roots, da, hither, sLo, sHi, margin[i], height[i], valid[i], unsure[i], low[i]);
+    TestRoot(m, i, rs[i], roots, da, hither, sLo, sHi, margin[i], height[i], valid[i], unsure[i],
+             low[i], audit ? &s[i] : nullptr);
   }
   out.hit = valid[0] || valid[1];
   const Multi first = valid[0] && (!valid[1] || rs[0].t < rs[1].t);
@@ -486,7 +502,84 @@ Candidate ConeProgram::Run(Machine& m, const Directions& dirs) const {
     out.uncertain = uni(-cs.grazeBand) < disc;
     out.tLow = Convert(uni(cs.tNear), pf_.t);
   }
+  if (audit) Record(*audit, d, da, beta, uv, ev, aq, disc, root, q, rs, margin, height, s, out);
   return out;
+}
+
+// Where each bound is claimed: a linear form, A and its own error everywhere; the
+// discriminant where its computed value is >= −G; √disc and Q = |β| + √disc at rung j of the
+// discriminant's ladder (computed disc >= 4^j·G, as the ladder's conditions round it); a root's
+// quotient and its height within the PE's ladder margins where the root is certainly a root
+// (disc >= G), its divisor is at least D* and it lies between hither − tError and tCut (where
+// TestRoot relies on them: a quotient far behind the eye may saturate); a certain hit's t
+// within its lowMargin and within the object's tError. Nothing where the bounds do not close.
+void ConeProgram::Record(Audit& audit, const Multi (&d)[3], const Multi& da, const Multi& beta,
+                         const Multi (&uv)[3], const Multi (&ev)[3], const Multi& aq,
+                         const Multi& disc, const Multi& root, const Multi& q,
+                         const ConeRoot (&rs)[2], const Multi (&margin)[2],
+                         const Multi (&height)[2], const Multi (&s)[2],
+                         const Candidate& out) const {
+  const ConeSetup& cs = cs_;
+  if (b_.alwaysUncertain || cs.empty) return;
+  const int F = pf_.fracBits;
+  const double u = pf_.Ulp();
+  const int64_t n = disc.GetMachine().VirtualPes();
+  const auto everywhere = [&](double b) { return Audit::Where({}, b, n); };
+  const auto tight = [&](double x) { return fixed::ToDouble(Tight(x, F)); };
+  audit.Record("d'·a", da, everywhere(cs.da.err));
+  audit.Record("σd'·a", Linear(d, cs.g, F), everywhere(cs.g.err));
+  audit.Record("β", beta, everywhere(cs.beta.err));
+  for (int k = 0; k < 3; ++k) {
+    audit.Record(std::string("d'⊥") + "xyz"[k], uv[k], everywhere(cs.u[k].err));
+    audit.Record(std::string("e") + "xyz"[k], ev[k], everywhere(cs.e[k].err));
+  }
+  audit.Record("d'·(w×a)", Linear(d, cs.q, F), everywhere(cs.q.err));
+  audit.Record("A", aq, everywhere(cs.eA));
+  const std::vector<double> dv = Audit::Values(disc);
+  std::vector<double> eDisc(n, Audit::kNoClaim), eRoot(n, Audit::kNoClaim), eQ(n, Audit::kNoClaim);
+  for (int64_t pe = 0; pe < n; ++pe) {
+    if (dv[pe] >= -tight(cs.grazeBand)) eDisc[pe] = cs.eDisc;
+    for (int j = 0; j < kDiscRungs; ++j)
+      if (dv[pe] >=
+          (j == 0 ? tight(cs.grazeBand) : tight(RoundUp(std::ldexp(cs.grazeBand, 2 * j), F)))) {
+        eQ[pe] = cs.eQAt[j], eRoot[pe] = cs.eQAt[j] - cs.beta.err;  // the ladder's, less β's
+      }
+  }
+  audit.Record("disc", disc, eDisc);
+  audit.Record("root", root, eRoot);
+  audit.Record("Q", q, eQ);
+  const ConeDivision* divs[2] = {&cs.divA, &cs.divC};
+  const char* names[2] = {"Q/A", "C/Q"};
+  for (int i = 0; i < 2; ++i) {
+    const std::vector<double> t = Audit::Values(rs[i].t), absD = Audit::Values(rs[i].absD),
+                              mt = Audit::Values(margin[i]), ms = Audit::Values(height[i]);
+    std::vector<double> eT(n, Audit::kNoClaim), eS(n, Audit::kNoClaim);
+    for (int64_t pe = 0; pe < n; ++pe)
+      if (dv[pe] >= tight(cs.grazeBand) && absD[pe] >= tight(divs[i]->dStar) &&
+          t[pe] < tight(divs[i]->tCut) &&
+          t[pe] > tight(pf_.hither - divs[i]->tError - u))  // TestRoot's inRange && notBehind
+        eT[pe] = mt[pe], eS[pe] = ms[pe];
+    audit.Record(std::string("t ") + names[i], rs[i].t, eT);
+    audit.Record(std::string("s ") + names[i], s[i], eS);
+    audit.Record(std::string("|D| ") + names[i], rs[i].absD,
+                 std::vector<double>(n, Audit::kNoClaim));
+  }
+  const std::vector<double> hit = Audit::Values(out.hit), unsure = Audit::Values(out.uncertain),
+                            lm = Audit::Values(out.lowMargin);
+  std::vector<double> eT(n, Audit::kNoClaim), eObject(n, Audit::kNoClaim);
+  for (int64_t pe = 0; pe < n; ++pe)
+    if (hit[pe] && !unsure[pe]) eT[pe] = lm[pe], eObject[pe] = b_.tError;
+  audit.Record("t (lowMargin)", out.t, eT);
+  audit.Record("t", out.t, eObject);
+  audit.constants = {{"grazeBand", cs.grazeBand},
+                     {"dStar Q/A", cs.divA.dStar},
+                     {"dStar C/Q", cs.divC.dStar},
+                     {"tCut Q/A", cs.divA.tCut},
+                     {"tCut C/Q", cs.divC.tCut},
+                     {"tNear", cs.tNear},
+                     {"tFar", cs.tFar},
+                     {"C", cs.C},
+                     {"tError", b_.tError}};
 }
 
 }  // namespace

@@ -52,7 +52,7 @@ class EllipsoidProgram final : public ObjectProgram {
             {"t = (f·d' ∓ root)/|d'|²", pf_.t, "by division"}};
   }
 
-  Candidate Run(Machine& m, const Directions& dirs) const override {
+  Candidate Run(Machine& m, const Directions& dirs, Audit* audit) const override {
     const Multi(&d)[3] = dirs.fixed;
     const int F = pf_.fracBits;
     const Fixed f[3] = {Tight(f_.x, F), Tight(f_.y, F), Tight(f_.z, F)};
@@ -78,10 +78,48 @@ class EllipsoidProgram final : public ObjectProgram {
     const Multi numPos = Max(num, Zero(m), num_);
     Where(out.hit || out.uncertain, [&] { out.t = Div(numPos, dd, pf_.t, kSaturate); });
     out.tLow = SubBound(m, out.t, b_.slack, pf_.t);
+    if (audit) Record(*audit, dp, tcaN, dd, disc, root, num0, num1, out);
     return out;
   }
 
  private:
+  // The audit's record (hosts/simd/audit.h): d', tcaN and |d'|² everywhere; the discriminant
+  // where its computed value is >= −G; the root and both numerators tcaN ∓ root where disc >= G; a
+  // certain hit's t; an uncertain candidate's t >= the true hit − slack. Nothing where the bounds
+  // do not close (always uncertain).
+  void Record(Audit& audit, const Multi (&dp)[3], const Multi& tcaN, const Multi& dd,
+              const Multi& disc, const Multi& root, const Multi& num0, const Multi& num1,
+              const Candidate& out) const {
+    if (b_.alwaysUncertain) return;
+    const int64_t n = dd.GetMachine().VirtualPes();
+    // G, and G as the program compares with it (rounded to nearest: Near).
+    const double u = pf_.Ulp(), g = b_.grazeBand, gt = fixed::ToDouble(Tight(g, pf_.fracBits));
+    const std::vector<double> dv = Audit::Values(disc), hit = Audit::Values(out.hit),
+                              unsure = Audit::Values(out.uncertain);
+    std::vector<double> eDisc(n, Audit::kNoClaim), eRoot(n, Audit::kNoClaim),
+        eNum(n, Audit::kNoClaim), eT(n, Audit::kNoClaim), slack(n, Audit::kNoClaim);
+    for (int64_t pe = 0; pe < n; ++pe) {
+      if (dv[pe] >= -gt) eDisc[pe] = e_.disc;
+      if (dv[pe] >= gt) eRoot[pe] = e_.disc / std::sqrt(g) + u, eNum[pe] = e_.num;
+      if (hit[pe] && !unsure[pe]) eT[pe] = b_.tError;
+      if (unsure[pe]) slack[pe] = b_.slack;
+    }
+    audit.constants = {{"grazeBand", g},
+                       {"crossError", e_.cross},
+                       {"clampRange", std::ldexp(1.0, clamped_.intBits)},
+                       {"hither", pf_.hither}};
+    for (int k = 0; k < 3; ++k)
+      audit.Record(std::string("d'") + "xyz"[k], dp[k], Audit::Where({}, e_.dp[k], n));
+    audit.Record("tcaN", tcaN, Audit::Where({}, e_.tcaN, n));
+    audit.Record("|d'|²", dd, Audit::Where({}, e_.dd, n));
+    audit.Record("disc", disc, eDisc);
+    audit.Record("root", root, eRoot);
+    audit.Record("num0", num0, eNum);
+    audit.Record("num1", num1, eNum);
+    audit.Record("t", out.t, eT);
+    audit.Record("t - slack", out.t, slack, Audit::Side::kAbove);
+  }
+
   // The bounds: d' from nine products, then tcaN, the cross and |d'|² from products of
   // d' (bounded by the row sums) by f; the band from GrazingBand at r²|d'|²; t's error
   // through the division by |d'|² >= ddMin (σ_min(T⁻¹) >= 1/‖T‖_F).
@@ -120,6 +158,7 @@ class EllipsoidProgram final : public ObjectProgram {
     }
     b_.grazeBand = band;
     const double eNum = eTcaN + eDisc / std::sqrt(b_.grazeBand) + u;
+    e_ = {{eDp[0], eDp[1], eDp[2]}, eTcaN, eCross, eDd, eDisc, eNum};
     b_.tError = eNum / ddMin + b_.farthest * eDd / ddMin + u;
     b_.slack = b_.tError + 2 * std::sqrt(b_.grazeBand + eDisc) / ddMin + u;
   }
@@ -129,6 +168,11 @@ class EllipsoidProgram final : public ObjectProgram {
   ObjectFrame fr_;
   Vec3 f_;  // object-space eye to centre
   Format dp_[3], n_, clamped_, square_, disc_, root_, dd_, num_;
+  struct {
+    // Error bounds (Bound()) of d' = T⁻¹d, f·d', each cross component, |d'|², disc and the
+    // numerators f·d' ∓ root (object-space units and their squares, as each quantity has).
+    double dp[3] = {}, tcaN = 0, cross = 0, dd = 0, disc = 0, num = 0;
+  } e_;
   ObjectBounds b_;
 };
 

@@ -15,6 +15,7 @@
 
 #include "bitserial/float.h"
 #include "bitserial/multi.h"
+#include "hosts/simd/audit.h"
 #include "hosts/simd/plan.h"
 
 namespace zephyr::simd {
@@ -26,8 +27,9 @@ struct Candidate {
   bitserial::Multi uncertain;  // 1 bit: the hit/miss or hither decision is within the bounds
   bitserial::Multi tLow;       // in the t format: where uncertain, the true hit (if any) is >= tLow
   // Optional, per PE where hit and not uncertain: a margin with |t − t_exact| <= lowMargin,
-  // at most the object's bounds.tError + 2^-F (an unsigned format with F fraction bits). Empty:
-  // that uni everywhere. A cone's error depends on its divisor and discriminant per PE
+  // at most the object's bounds.tError + 2^-F rounded up to the F-bit grid (so below
+  // tError + 2·2^-F; an unsigned format with F fraction bits). Empty: tError + 2^-F rounded
+  // to nearest, everywhere. A cone's error depends on its divisor and discriminant per PE
   // (hosts/simd/cone.cpp, docs/simd.md "Error bounds", cones).
   bitserial::Multi lowMargin;
 };
@@ -44,8 +46,10 @@ struct Directions {
 class ObjectProgram {
  public:
   virtual ~ObjectProgram() = default;
-  // Runs the program against the directions d (every PE).
-  virtual Candidate Run(bitserial::Machine& m, const Directions& d) const = 0;
+  // Runs the program against the directions d (every PE). With an `audit` (tests only,
+  // hosts/simd/audit.h) it also records each quantity it computes with the bound it claims;
+  // the pass gives none (nullptr), and the program's operations do not depend on it.
+  virtual Candidate Run(bitserial::Machine& m, const Directions& d, Audit* audit) const = 0;
 };
 
 // The plan of one object from its program (a kind's class with Bounds() and Formats()).

@@ -104,7 +104,7 @@ struct Trackers {
 // One object's candidate folded into the best hit so far and the trackers.
 void FoldCandidate(Machine& m, const ObjectPlan& object, const PrimaryPlan& plan, ArrayMatrix& a, Trackers& k) {
   const Format T = plan.t;
-  const Candidate c = object.program->Run(m, a.d);
+  const Candidate c = object.program->Run(m, a.d, nullptr);
   // t − e_i with e_i rounded up (an always-uncertain object's every hit is flagged, so its
   // e is never relied on); saturating down only widens the test.
   const double e = object.bounds.alwaysUncertain ? 0.0 : object.bounds.tError + plan.pass.Ulp();
@@ -286,7 +286,8 @@ void DecodeMatrix(PrimaryPass& pass, const MatrixRaw& raw) {
 void HandleUncertain(PrimaryPass& pass, const Scene& scene, const PrimaryRays& rays, UncertainPolicy policy,
                      int threads) {
   PrimaryMatrix& out = pass.matrix;
-  const int64_t uncertain = std::count_if(out.flags.begin(), out.flags.end(), [](uint32_t f) { return f != 0; });
+  const auto isUncertain = [](uint32_t f) { return (f & kUncertainFlags) != 0; };
+  const int64_t uncertain = std::count_if(out.flags.begin(), out.flags.end(), isUncertain);
   if (policy == UncertainPolicy::kFail && uncertain > 0)
     throw UserError(fmt::format("--uncertain fail: {} uncertain pixel(s): {} overflow, {} grazing, {} near tie",
                                 uncertain, pass.overflowPixels, pass.grazingPixels, pass.tiePixels));
@@ -297,7 +298,7 @@ void HandleUncertain(PrimaryPass& pass, const Scene& scene, const PrimaryRays& r
   std::vector<int64_t> flagged;
   flagged.reserve(uncertain);
   for (int64_t pe = 0; pe < int64_t(out.flags.size()); ++pe)
-    if (out.flags[pe]) flagged.push_back(pe);
+    if (isUncertain(out.flags[pe])) flagged.push_back(pe);
   // Each pixel on its own (the tracer is read-only): the same hits whatever the thread count.
   const int64_t n = int64_t(flagged.size());
 #pragma omp parallel for schedule(dynamic, 64) num_threads(threads)
@@ -383,13 +384,16 @@ ArrayRun RunArray(const Scene& scene, const PrimaryPlan& plan, const SimdOptions
 }
 
 // The refine pass (docs/simd.md, "Refine pass"): the uncertain pixels, compacted, once more
-// on the array at wider formats; a pixel it certifies takes its object and t (the direction
-// stays the first pass's, as the matrix and the heterogeneous entries decode it).
+// on the array at wider formats. Every refined pixel takes the refine pass's object, t and
+// direction (its t is along that direction, quantised at the refine pass's dirFracBits: with
+// the first pass's coarser direction beside it, the pair named no point of the surface and a
+// t read along the matrix's direction erred up to 26x the refine bound); a pixel it certifies
+// is flagged kRefined, which the heterogeneous entries decode.
 void Refine(PrimaryPass& pass, const Scene& scene, const SimdOptions& options, const PrimaryRays& rays) {
   PrimaryMatrix& out = pass.matrix;
   std::vector<int64_t> pixels;
   for (int64_t pe = 0; pe < int64_t(out.flags.size()); ++pe)
-    if (out.flags[pe]) pixels.push_back(pe);
+    if (out.flags[pe] & kUncertainFlags) pixels.push_back(pe);
   if (pixels.empty()) return;
   PrimaryPlan plan = PlanRefinePass(scene, options, pass.plan, int64_t(pixels.size()), kRefineExtraBits);
   FitPasses(plan, MachineProfileOf(options), rays, pixels, 1);
@@ -403,7 +407,9 @@ void Refine(PrimaryPass& pass, const Scene& scene, const SimdOptions& options, c
     PrimaryHit& h = out.hits[pixels[k]];
     h.object = int(run.raw.object[k]) - 1;
     h.t = h.object >= 0 ? std::ldexp(double(run.raw.t[k]), -plan.fracBits) : 0.0;
-    out.flags[pixels[k]] = fl;
+    h.direction =
+        DecodeDirection(run.raw.d[0][k], run.raw.d[1][k], run.raw.d[2][k], plan.dirFracBits);
+    out.flags[pixels[k]] = fl != 0 ? fl : kRefined;
     still += fl != 0;
   }
   pass.refinedPixels = int64_t(pixels.size());
@@ -431,8 +437,8 @@ PrimaryPass RunPrimaryPass(const Scene& scene, const SimdOptions& options) {
   const auto hostStart = std::chrono::steady_clock::now();
   DecodeMatrix(pass, run.raw);
   run.raw = MatrixRaw(0);  // the decoded matrix holds it all now; free it before the recompute
-  const int64_t flagged =
-      std::count_if(pass.matrix.flags.begin(), pass.matrix.flags.end(), [](uint32_t f) { return f != 0; });
+  const int64_t flagged = std::count_if(pass.matrix.flags.begin(), pass.matrix.flags.end(),
+                                        [](uint32_t f) { return (f & kUncertainFlags) != 0; });
   const int64_t budget = int64_t(kAutoRefineShare * double(pass.matrix.flags.size()));
   if (options.uncertain == UncertainPolicy::kRefine || (options.uncertain == UncertainPolicy::kAuto && flagged > budget))
     Refine(pass, scene, options, rays);

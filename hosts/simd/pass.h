@@ -28,9 +28,17 @@ enum PixelFlag : uint32_t {
   kGrazing = 1u << 1,     // a discriminant within its error bound of zero
   kNearTie = 1u << 2,     // two objects' t within the error bound of each other
   kRecomputed = 1u << 3,  // the host recomputed the pixel in double
+  // The refine pass certified the pixel (--uncertain refine): its t and direction are the
+  // refine pass's, the direction quantised at that pass's dirFracBits (docs/simd.md, "Refine
+  // pass"). Not an uncertainty: kUncertainFlags leaves it out.
+  kRefined = 1u << 4,
 };
+// The flags that make a pixel uncertain (recomputed, refined, kept or failed by the policy).
+inline constexpr uint32_t kUncertainFlags = kOverflow | kGrazing | kNearTie;
 
-// The per-pixel matrix, row-major: first object (-1: none), t, unit direction, flags.
+// The per-pixel matrix, row-major: first object (-1: none), t, unit direction, flags. A pixel's
+// t is along its own direction: the first pass's quantised one, the refine pass's for a pixel
+// it certified (kRefined), the eye ray for one the host recomputed (kRecomputed).
 struct PrimaryMatrix {
   int width = 0, height = 0;
   std::vector<PrimaryHit> hits;

@@ -101,7 +101,7 @@ class PolygonProgram final : public ObjectProgram {
             {"t = dist/(n̂·d)", pf_.t, "by division"}};
   }
 
-  Candidate Run(Machine& m, const Directions& dirs) const override {
+  Candidate Run(Machine& m, const Directions& dirs, Audit* audit) const override {
     const Multi(&d)[3] = dirs.fixed;
     const int F = pf_.fracBits;
     const Format unit = Format::Signed(1, F);
@@ -112,11 +112,18 @@ class PolygonProgram final : public ObjectProgram {
     const Multi band = Broadcast(m, Tight(b_.grazeBand, F)), zero = Zero(m);
     const Multi negBand = Broadcast(m, fixed::Neg(Tight(b_.grazeBand, F), Format::Signed(1, F)));
     Multi inside, edgeUncertain;
-    for (const std::vector<EdgeFunction>& group : w_.groups) {
+    const int64_t pes = m.VirtualPes();
+    for (size_t gi = 0; gi < w_.groups.size(); ++gi) {
+      const std::vector<EdgeFunction>& group = w_.groups[gi];
       Multi in, clearIn, clearOut;
-      for (const EdgeFunction& g : group) {
+      for (size_t k = 0; k < group.size(); ++k) {
+        const EdgeFunction& g = group[k];
         const Fixed cc[3] = {Tight(g.g.x, F), Tight(g.g.y, F), Tight(g.g.z, F)};
         const Multi e = Dot3(d, cc, unit);
+        // The audit (hosts/simd/audit.h): each edge function within e_E of the exact ĝ·d̂.
+        if (audit)
+          audit->Record("edge " + std::to_string(gi) + "." + std::to_string(k), e,
+                        Audit::Where({}, b_.grazeBand, pes));
         Multi pos = g.owned ? (zero <= e) : (e < zero);
         Multi posClear = g.owned ? (band < e) : (e < negBand);
         Multi negClear = g.owned ? (e < negBand) : (band < e);
@@ -145,10 +152,28 @@ class PolygonProgram final : public ObjectProgram {
                                                 : Near(m, out.t - hither, b_.tError + pf_.Ulp(), F);
     out.uncertain = cand && (edgeUncertain || nearHither);
     out.tLow = SubBound(m, out.t, b_.slack, pf_.t);
+    if (audit) Record(*audit, den, out);
     return out;
   }
 
  private:
+  // The audit's record (hosts/simd/audit.h): the denominator σn̂·d within e_E everywhere, a
+  // certain hit's t within tError, an uncertain candidate's t >= the true hit − slack (edge
+  // functions are recorded as Run computes them). Nothing where the bounds do not close.
+  void Record(Audit& audit, const Multi& den, const Candidate& out) const {
+    if (b_.alwaysUncertain) return;
+    const int64_t n = den.GetMachine().VirtualPes();
+    const std::vector<double> hit = Audit::Values(out.hit), unsure = Audit::Values(out.uncertain);
+    std::vector<double> eT(n, Audit::kNoClaim), slack(n, Audit::kNoClaim);
+    for (int64_t pe = 0; pe < n; ++pe) {
+      if (hit[pe] && !unsure[pe]) eT[pe] = b_.tError;
+      if (unsure[pe]) slack[pe] = b_.slack;
+    }
+    audit.Record("den", den, Audit::Where({}, b_.grazeBand, n));
+    audit.Record("t", out.t, eT);
+    audit.Record("t - slack", out.t, slack, Audit::Side::kAbove);
+  }
+
   // The bounds: every ĝ·d and n̂·d is a unit constant (rounded to nearest) times d; the
   // division's error from n̂·d >= |dist|/farthest − eE for any ray that reaches the polygon.
   void Bound(const Vec3& eye) {

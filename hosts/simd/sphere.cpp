@@ -39,7 +39,7 @@ class SphereProgram final : public ObjectProgram {
             {"t = tca ∓ root", pf_.t, "t <= farthest"}};
   }
 
-  Candidate Run(Machine& m, const Directions& dirs) const override {
+  Candidate Run(Machine& m, const Directions& dirs, Audit* audit) const override {
     const Multi(&d)[3] = dirs.fixed;
     const int F = pf_.fracBits;
     const Format T = pf_.t, L = pf_.t;
@@ -58,10 +58,41 @@ class SphereProgram final : public ObjectProgram {
     const Multi front = Broadcast(m, Tight(pf_.hither - b_.slack, F)) < t1;
     out.uncertain = (Near(m, disc, b_.grazeBand, F) || Near(m, t0 - hither, b_.tError + pf_.Ulp(), F)) && front;
     out.tLow = SubBound(m, t0, b_.slack, T);
+    if (audit) Record(*audit, tca, disc, root, t0, out);
     return out;
   }
 
  private:
+  // The audit's record (hosts/simd/audit.h): each quantity with the bound Bound() claims and
+  // where it claims it — tca everywhere, the discriminant where its computed value is >= −G
+  // (the cross components within their clamp: the audit's exact side checks that), the root
+  // and, through it, a certain hit's t where disc >= G; t0 >= the true hit − slack where the
+  // candidate is uncertain.
+  void Record(Audit& audit, const Multi& tca, const Multi& disc, const Multi& root, const Multi& t0,
+              const Candidate& out) const {
+    const int64_t n = tca.GetMachine().VirtualPes();
+    // G, and G as the program compares with it (rounded to nearest: Near).
+    const double u = pf_.Ulp(), g = b_.grazeBand, gt = fixed::ToDouble(Tight(g, pf_.fracBits));
+    const std::vector<double> dv = Audit::Values(disc), hit = Audit::Values(out.hit),
+                              unsure = Audit::Values(out.uncertain);
+    std::vector<double> eDisc(n, Audit::kNoClaim), eRoot(n, Audit::kNoClaim),
+        eT(n, Audit::kNoClaim), slack(n, Audit::kNoClaim);
+    for (int64_t pe = 0; pe < n; ++pe) {
+      if (dv[pe] >= -gt) eDisc[pe] = e_.disc;
+      if (dv[pe] >= gt) eRoot[pe] = e_.disc / std::sqrt(g) + u;
+      if (hit[pe] && !unsure[pe]) eT[pe] = b_.tError;
+      if (unsure[pe]) slack[pe] = b_.slack;
+    }
+    audit.constants = {{"grazeBand", g},
+                       {"crossError", e_.cross},
+                       {"clampRange", std::ldexp(1.0, clamped_.intBits)}};
+    audit.Record("tca", tca, Audit::Where({}, e_.tca, n));
+    audit.Record("disc", disc, eDisc);
+    audit.Record("root", root, eRoot);
+    audit.Record("t", out.t, eT);
+    audit.Record("t0 - slack", t0, slack, Audit::Side::kAbove);
+  }
+
   // The bounds of Run's quantities: tca and each cross component from the products of the
   // rounded direction by the rounded f; the discriminant's band from GrazingBand.
   void Bound() {
@@ -75,6 +106,7 @@ class SphereProgram final : public ObjectProgram {
     }
     const auto [band, eDisc] = GrazingBand(radius_ * radius_, std::pow(radius_ / 8, 2) * pf_.BandScale(), eCross,
                                            u / 2, std::ldexp(1.0, IntBitsFor(radius_)), u);
+    e_ = {eTca, eCross, eDisc};
     b_.grazeBand = band;
     b_.tError = eTca + eDisc / std::sqrt(b_.grazeBand) + u;
     b_.slack = std::max(b_.tError, eTca + std::sqrt(b_.grazeBand + eDisc)) + u;
@@ -86,6 +118,10 @@ class SphereProgram final : public ObjectProgram {
   Vec3 f_;          // eye to centre
   double radius_;
   Format clamped_, square_, disc_, root_;
+  struct {
+    // Error bounds (Bound()) of tca and of each cross component (scene units), of disc (units²).
+    double tca = 0, cross = 0, disc = 0;
+  } e_;
   ObjectBounds b_;
 };
 

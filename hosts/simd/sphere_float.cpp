@@ -50,7 +50,7 @@ class FloatSphereProgram final : public ObjectProgram {
             {"t (fixed, nearest)", pf_.t, "t <= farthest"}};
   }
 
-  Candidate Run(Machine& m, const Directions& dirs) const override {
+  Candidate Run(Machine& m, const Directions& dirs, Audit* /*audit: not audited*/) const override {
     const MultiFloat(&d)[3] = dirs.floats;
     const int F = pf_.fracBits;
     const Format T = pf_.t;

@@ -66,25 +66,43 @@ TEST(HeteroEntry, RejectsMalformedEntries) {
 TEST(HeteroEntry, RecomputedDirectionIsTheMatrixDirectionBitForBit) {
   const Scene scene = SmallScene();
   const PrimaryRays rays(scene.camera);
-  for (const auto policy : {simd::UncertainPolicy::kKeep, simd::UncertainPolicy::kRecompute}) {
+  for (const auto policy : {simd::UncertainPolicy::kKeep, simd::UncertainPolicy::kRecompute,
+                            simd::UncertainPolicy::kRefine}) {
     for (int dirBits : {6, 20}) {  // coarse directions make grazing pixels, recomputed or not
       simd::SimdOptions options;
       options.uncertain = policy;
       options.formats.dirFracBits = dirBits;
       const simd::PrimaryPass pass = simd::RunPrimaryPass(scene, options);
-      int mismatches = 0, recomputed = 0;
+      // As the parent's set-up message names them (hosts/methods/hetero.cpp).
+      const int refineBits = pass.refinedPixels > 0 ? pass.refine["dirFracBits"].get<int>() : -1;
+      int mismatches = 0, recomputed = 0, refined = 0;
       for (int y = 0; y < scene.camera.height; ++y)
         for (int x = 0; x < scene.camera.width; ++x) {
           const std::size_t i = std::size_t(y) * scene.camera.width + x;
-          const Vec3 d = hetero::MatrixDirection(rays, x, y, pass.plan.dirFracBits, pass.matrix.flags[i]);
+          const Vec3 d = hetero::MatrixDirection(rays, x, y, pass.plan.dirFracBits, refineBits,
+                                                 pass.matrix.flags[i]);
           mismatches += std::memcmp(&d, &pass.matrix.hits[i].direction, sizeof(Vec3)) != 0;
           recomputed += (pass.matrix.flags[i] & simd::kRecomputed) != 0;
+          refined += (pass.matrix.flags[i] & simd::kRefined) != 0;
         }
       EXPECT_EQ(mismatches, 0) << "dirFracBits " << dirBits;
       if (policy == simd::UncertainPolicy::kKeep) {
         EXPECT_EQ(recomputed, 0);
       } else if (dirBits == 6) {
-        EXPECT_GT(recomputed, 0) << "6-bit directions should leave uncertain pixels";
+        EXPECT_GT(recomputed + refined, 0) << "6-bit directions should leave uncertain pixels";
+      }
+      if (policy == simd::UncertainPolicy::kRefine) {
+        EXPECT_GT(refined, 0) << "the refine pass should certify some pixels";
+        // A refined pixel's direction is the refine pass's: without its bits it cannot be had.
+        for (std::size_t i = 0; i < pass.matrix.flags.size(); ++i)
+          if (pass.matrix.flags[i] & simd::kRefined) {
+            EXPECT_THROW(hetero::MatrixDirection(rays, 0, 0, pass.plan.dirFracBits, -1,
+                                                 pass.matrix.flags[i]),
+                         UserError);
+            break;
+          }
+      } else {
+        EXPECT_EQ(refined, 0);
       }
     }
   }
