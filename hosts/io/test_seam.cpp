@@ -25,18 +25,36 @@ CommitCalls KillingCalls(CommitStep step, int file) {
   auto before = [=](CommitStep s) {
     if (s == step && *files == file) ::raise(SIGKILL);
   };
-  c.fflush = [=](std::FILE* f) { ++*files, before(CommitStep::kFlush); return plain.fflush(f); };
-  c.fchmod = [=](int fd, mode_t m) { before(CommitStep::kChmod); return plain.fchmod(fd, m); };
+  c.fflush = [=](std::FILE* f) {
+    ++*files, before(CommitStep::kFlush);
+    return plain.fflush(f);
+  };
+  c.fchmod = [=](int fd, mode_t m) {
+    before(CommitStep::kChmod);
+    return plain.fchmod(fd, m);
+  };
   c.fsync = [=](int fd) {
     struct stat s;
     const bool directory = ::fstat(fd, &s) == 0 && S_ISDIR(s.st_mode);
     before(directory ? CommitStep::kSyncDirectory : CommitStep::kSync);
     return plain.fsync(fd);
   };
-  c.fclose = [=](std::FILE* f) { before(CommitStep::kClose); return plain.fclose(f); };
-  c.rename = [=](const char* a, const char* b) { before(CommitStep::kRename); return plain.rename(a, b); };
-  c.openDirectory = [=](const char* d) { before(CommitStep::kOpenDirectory); return plain.openDirectory(d); };
-  c.close = [=](int fd) { before(CommitStep::kCloseDirectory); return plain.close(fd); };
+  c.fclose = [=](std::FILE* f) {
+    before(CommitStep::kClose);
+    return plain.fclose(f);
+  };
+  c.rename = [=](const char* a, const char* b) {
+    before(CommitStep::kRename);
+    return plain.rename(a, b);
+  };
+  c.openDirectory = [=](const char* d) {
+    before(CommitStep::kOpenDirectory);
+    return plain.openDirectory(d);
+  };
+  c.close = [=](int fd) {
+    before(CommitStep::kCloseDirectory);
+    return plain.close(fd);
+  };
   return c;
 }
 
@@ -48,10 +66,11 @@ CommitCalls& Installed() {
     const std::optional<CommitStep> step = CommitStepNamed(name);
     int file = 1;
     char rest = 0;
-    if (!step || (name.size() < text.size() &&
-                  (std::sscanf(text.c_str() + name.size(), ":%d%c", &file, &rest) != 1 || file < 1)))
-      throw UserError("ZEPHYR_TEST_IO_KILL: expected step[:n] (fflush, fchmod, fsync, fclose, rename, open-dir, "
-                      "fsync-dir or close-dir; n >= 1), got '" + text + "'");
+    if (!step ||
+        (name.size() < text.size() &&
+         (std::sscanf(text.c_str() + name.size(), ":%d%c", &file, &rest) != 1 || file < 1)))
+      throw UserError("ZEPHYR_TEST_IO_KILL: expected step[:n] (fflush, fchmod, fsync, fclose, "
+                      "rename, open-dir, fsync-dir or close-dir; n >= 1), got '" + text + "'");
     return KillingCalls(*step, file);
   }();
   return calls;

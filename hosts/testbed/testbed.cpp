@@ -181,8 +181,9 @@ void AddModelledTime(const std::string& testbedName, const std::string& method,
     if (method == "simd") {
       const nlohmann::json& pass = r.at("simd");
       const double arrayStart = SimulatedNow();
-      ChargeArrayCycles(pass.at("cycles"), RefineCycles(pass), pass.at("uncertain").at("recomputed").get<uint64_t>(),
-                        scene, "SIMD/sequential");
+      ChargeArrayCycles(pass.at("cycles"), RefineCycles(pass),
+                        pass.at("uncertain").at("recomputed").get<uint64_t>(), scene,
+                        "SIMD/sequential");
       t["array"] = {{"seconds", SimulatedNow() - arrayStart},
                     {"what", "array cycles at the array host's speed, the matrix over the link to "
                              "it, the uncertain pixels recomputed on this host"}};
@@ -209,7 +210,7 @@ void AddModelledTime(const std::string& testbedName, const std::string& method,
                   {"cycles", a.arrayCycles},      {"seconds", a.arraySeconds},
                   {"scsiBytes", a.scsiBytes},     {"scsiSeconds", a.scsiSeconds},
                   {"refineCycles", a.refineCycles},
-                  {"cyclesSource", "the first pass's cycle report, and the refine pass's when one ran"},
+                  {"cyclesSource", "the first pass's cycle report, and the refine pass's if one ran"},
                   {"scsiSource", "the cycle reports' host class (hostPlane cycles of the matrix)"}};
     t["host"] = h.Json();
     t["modelledSeconds"] = a.arraySeconds + a.scsiSeconds + h.seconds;
@@ -381,12 +382,13 @@ nlohmann::json LinkBytes(double now) {
 }  // namespace
 
 double ChargeArrayPass(const simd::PrimaryPass& pass, const Scene& scene) {
-  return ChargeArrayCycles(pass.cycles, pass.refine.is_null() ? nlohmann::json() : pass.refine.at("cycles"),
+  return ChargeArrayCycles(pass.cycles,
+                           pass.refine.is_null() ? nlohmann::json() : pass.refine.at("cycles"),
                            uint64_t(pass.recomputedPixels), scene, "heterogeneous");
 }
 
-double ChargeArrayCycles(const nlohmann::json& cycles, const nlohmann::json& refineCycles, uint64_t recomputedPixels,
-                         const Scene& scene, const std::string& method) {
+double ChargeArrayCycles(const nlohmann::json& cycles, const nlohmann::json& refineCycles,
+                         uint64_t recomputedPixels, const Scene& scene, const std::string& method) {
   const double start = SimulatedNow();
   simgrid::s4u::Host* self = simgrid::s4u::this_actor::get_host();
   const auto arrays = simgrid::s4u::Engine::get_instance()->get_filtered_hosts([](simgrid::s4u::Host* h) {
@@ -412,7 +414,8 @@ double SimulatedNow() { return 0; }
 nlohmann::json SimulatedHost() { return nlohmann::json::object(); }
 double ChargeHostWork(const TraceStats&) { return 0; }
 double ChargeArrayPass(const simd::PrimaryPass&, const Scene&) { return 0; }
-double ChargeArrayCycles(const nlohmann::json&, const nlohmann::json&, uint64_t, const Scene&, const std::string&) {
+double ChargeArrayCycles(const nlohmann::json&, const nlohmann::json&, uint64_t, const Scene&,
+                         const std::string&) {
   return 0;
 }
 void StartLinkAccounting() {}

@@ -105,8 +105,8 @@ double ChargeArrayPass(const simd::PrimaryPass& pass, const Scene& scene);
 // "simd": "cycles", and "refine"."cycles" or null when no refine pass ran) and the count of
 // uncertain pixels recomputed on the host; `method` names the caller in the UserError for a
 // platform without exactly one array host.
-double ChargeArrayCycles(const nlohmann::json& cycles, const nlohmann::json& refineCycles, uint64_t recomputedPixels,
-                         const Scene& scene, const std::string& method);
+double ChargeArrayCycles(const nlohmann::json& cycles, const nlohmann::json& refineCycles,
+                         uint64_t recomputedPixels, const Scene& scene, const std::string& method);
 
 // Under simulation, at the parent before its first message: starts counting the bytes every
 // platform link carries (SimGrid's link_load plugin, `--cfg=plugin:link_load`, which

@@ -111,8 +111,8 @@ struct Prepared {
   ShapeKind kind;
   int material;
   bool transformed = false;  // a sphere or cone with a transform (polygons go to world space)
-  T inverse[3][3];  // world -> object, linear part A⁻¹
-  V anchor;         // the world point that is the object-space origin (transformed only)
+  T inverse[3][3];           // world -> object, linear part A⁻¹
+  V anchor;                  // the world point that is the object-space origin (transformed only)
   // Sphere (transformed: centred on its anchor, so centre = 0)
   V centre;
   T radius = 0, radius2 = 0;
@@ -126,7 +126,7 @@ struct Prepared {
   T planeOffset = 0;
   int front = 1;
   std::vector<PolygonEdgeGroup> groups;  // the inside, with the shared-edge rule
-  std::vector<V> vertices, normals;  // world space; normals only for `pp`
+  std::vector<V> vertices, normals;      // world space; normals only for `pp`
   // The magnitude of the object's own numbers as its test uses them, in world units: part of
   // the bound on the hit point's rounding that sets how far secondary rays leaving it skip
   // (SecondaryOffset). Sphere |c|∞ + r; cone max(|base|∞, |apex|∞) + the larger radius;

@@ -176,7 +176,8 @@ TEST(FrameCheckpoint, ATornRecordOfEveryLengthBeforeAGoodOneCostsOnlyItsBytes) {
   CheckpointKey key{16, 16, 4, 3, JobHash("scene")};
   const std::size_t record = kHead + 48 + kTail;
   for (std::size_t torn = 1; torn <= record; ++torn) {
-    const std::string what = "torn after " + std::to_string(torn) + " of " + std::to_string(record) + " bytes";
+    const std::string what =
+        "torn after " + std::to_string(torn) + " of " + std::to_string(record) + " bytes";
     {
       FrameCheckpoint c = FrameCheckpoint::Create(path, key);
       c.Append(0, FramePixels(0));
@@ -193,11 +194,13 @@ TEST(FrameCheckpoint, ATornRecordOfEveryLengthBeforeAGoodOneCostsOnlyItsBytes) {
       c.Append(5, FramePixels(5));
       c.Append(3, FramePixels(3));
     }
-    EXPECT_EQ(std::filesystem::file_size(path), kHeader + record + torn + 2 * record) << what << ": cut";
+    EXPECT_EQ(std::filesystem::file_size(path), kHeader + record + torn + 2 * record)
+        << what << ": cut";
     FrameCheckpoint c = FrameCheckpoint::Resume(path, key);
     EXPECT_EQ(c.Frames().size(), 3u) << what;
     for (const int id : {0, 3, 5}) {
-      EXPECT_TRUE(c.Frames().count(id) && c.Frames().at(id) == FramePixels(id)) << what << ", frame " << id;
+      EXPECT_TRUE(c.Frames().count(id) && c.Frames().at(id) == FramePixels(id))
+          << what << ", frame " << id;
     }
     EXPECT_TRUE(c.Damage().badFrames.empty()) << what << ": frame 3 has an intact copy";
     EXPECT_EQ(c.Damage().unreadableBytes, whole ? 0 : torn) << what;

@@ -4,9 +4,8 @@
 // Durability as an ordering: Commit's system calls traced as they are made (hosts/io/test_seam.h)
 // — write (the flush), mode, fsync, close, rename, the directory's fsync — with what each
 // finds on disk; each failed in turn; the process killed before each.
-#include <gtest/gtest.h>
-
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -125,7 +124,8 @@ using io::CommitStep;
 std::vector<std::string> Temporaries(const std::string& path) {
   std::vector<std::string> found;
   const std::string prefix = "." + std::filesystem::path(path).filename().string() + ".tmp-";
-  for (const auto& e : std::filesystem::directory_iterator(std::filesystem::path(path).parent_path()))
+  for (const auto& e :
+       std::filesystem::directory_iterator(std::filesystem::path(path).parent_path()))
     if (e.path().filename().string().rfind(prefix, 0) == 0) found.push_back(e.path().string());
   return found;
 }
@@ -142,21 +142,30 @@ using Around = std::function<int(CommitStep step, int fd, const std::function<in
 io::CommitCalls Wrapped(Around around) {
   const io::CommitCalls plain = io::SystemCalls();
   io::CommitCalls c;
-  c.fflush = [=](std::FILE* f) { return around(CommitStep::kFlush, ::fileno(f), [&] { return plain.fflush(f); }); };
-  c.fchmod = [=](int fd, mode_t m) { return around(CommitStep::kChmod, fd, [&] { return plain.fchmod(fd, m); }); };
+  c.fflush = [=](std::FILE* f) {
+    return around(CommitStep::kFlush, ::fileno(f), [&] { return plain.fflush(f); });
+  };
+  c.fchmod = [=](int fd, mode_t m) {
+    return around(CommitStep::kChmod, fd, [&] { return plain.fchmod(fd, m); });
+  };
   c.fsync = [=](int fd) {
     struct stat s;
     const bool directory = ::fstat(fd, &s) == 0 && S_ISDIR(s.st_mode);
-    return around(directory ? CommitStep::kSyncDirectory : CommitStep::kSync, fd, [&] { return plain.fsync(fd); });
+    return around(directory ? CommitStep::kSyncDirectory : CommitStep::kSync, fd,
+                  [&] { return plain.fsync(fd); });
   };
-  c.fclose = [=](std::FILE* f) { return around(CommitStep::kClose, ::fileno(f), [&] { return plain.fclose(f); }); };
+  c.fclose = [=](std::FILE* f) {
+    return around(CommitStep::kClose, ::fileno(f), [&] { return plain.fclose(f); });
+  };
   c.rename = [=](const char* a, const char* b) {
     return around(CommitStep::kRename, -1, [&] { return plain.rename(a, b); });
   };
   c.openDirectory = [=](const char* d) {
     return around(CommitStep::kOpenDirectory, -1, [&] { return plain.openDirectory(d); });
   };
-  c.close = [=](int fd) { return around(CommitStep::kCloseDirectory, fd, [&] { return plain.close(fd); }); };
+  c.close = [=](int fd) {
+    return around(CommitStep::kCloseDirectory, fd, [&] { return plain.close(fd); });
+  };
   return c;
 }
 
@@ -206,7 +215,8 @@ TEST(OutputFile, CommitWritesFlushesSyncsClosesRenamesThenSyncsTheDirectory) {
             const mode_t mask = ::umask(0);
             ::umask(mask);
             EXPECT_EQ(std::filesystem::status(temporaries[0]).permissions(),
-                      std::filesystem::perms(0666 & ~mask)) << what;
+                      std::filesystem::perms(0666 & ~mask))
+                << what;
           }
           break;
         }
@@ -234,8 +244,8 @@ TEST(OutputFile, CommitWritesFlushesSyncsClosesRenamesThenSyncsTheDirectory) {
     std::fwrite(contents.data(), 1, contents.size(), f.Stream());
     EXPECT_EQ(testing::ReadFile(path), "old");
     f.Commit();
-    EXPECT_EQ(calls, (std::vector<std::string>{"fflush", "fchmod", "fsync", "fclose", "rename", "open-dir",
-                                                "fsync-dir", "close-dir"}));
+    EXPECT_EQ(calls, (std::vector<std::string>{"fflush", "fchmod", "fsync", "fclose", "rename",
+                                               "open-dir", "fsync-dir", "close-dir"}));
     EXPECT_EQ(testing::ReadFile(path), contents);
   }
 }
@@ -265,7 +275,8 @@ TEST(OutputFile, AFailureAtEveryStepLeavesTheOldFileOrTheWholeNewOne) {
     } catch (const UserError& e) {
       threw = true;
       EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << what << ": " << e.what();
-      EXPECT_NE(std::string(e.what()).find(std::strerror(EIO)), std::string::npos) << what << ": " << e.what();
+      EXPECT_NE(std::string(e.what()).find(std::strerror(EIO)), std::string::npos)
+          << what << ": " << e.what();
     }
     const bool beforeRename = fail <= CommitStep::kRename;
     EXPECT_EQ(threw, beforeRename) << what;
@@ -296,15 +307,18 @@ TEST(OutputFile, AProcessKilledBeforeEveryStepLeavesTheOldFileOrTheWholeNewOne) 
     const CommitStep step = CommitStep(s);
     for (const std::string& t : Temporaries(path)) std::filesystem::remove(t);
     std::ofstream(path) << "old";
-    const testing::Launch r = testing::RunCommand(std::string("ZEPHYR_TEST_IO_KILL=") + io::CommitStepName(step) +
-                                                  " " + testing::ZephyrPath() + " " + gen + path);
+    const testing::Launch r =
+        testing::RunCommand(std::string("ZEPHYR_TEST_IO_KILL=") + io::CommitStepName(step) + " " +
+                            testing::ZephyrPath() + " " + gen + path);
     EXPECT_EQ(r.status, 128 + SIGKILL) << io::CommitStepName(step) << ": " << r.output;
     const bool renamed = step > CommitStep::kRename;
-    EXPECT_EQ(testing::ReadFile(path), renamed ? wanted : "old") << "killed before " << io::CommitStepName(step);
-    EXPECT_EQ(Temporaries(path).size(), renamed ? 0u : 1u) << "killed before " << io::CommitStepName(step);
+    EXPECT_EQ(testing::ReadFile(path), renamed ? wanted : "old")
+        << "killed before " << io::CommitStepName(step);
+    EXPECT_EQ(Temporaries(path).size(), renamed ? 0u : 1u)
+        << "killed before " << io::CommitStepName(step);
   }
-  const testing::Launch bad = testing::RunCommand("ZEPHYR_TEST_IO_KILL=fsink " + testing::ZephyrPath() + " " + gen +
-                                                  path);
+  const testing::Launch bad =
+      testing::RunCommand("ZEPHYR_TEST_IO_KILL=fsink " + testing::ZephyrPath() + " " + gen + path);
   EXPECT_NE(bad.status, 0);
   EXPECT_NE(bad.output.find("ZEPHYR_TEST_IO_KILL"), std::string::npos) << bad.output;
 }

@@ -122,9 +122,9 @@ struct PublishedCost {
   const char* event;
   double flops, instructions;
 };
-constexpr PublishedCost kWorkTable[] = {{"sphereTest", 21, 12}, {"coneTest", 70, 25}, {"polygonTest", 44, 30},
-                                        {"ray", 25, 20},        {"hit", 2, 10},       {"shade", 37, 40},
-                                        {"lightSample", 66, 40}, {"pixel", 0, 20}};
+constexpr PublishedCost kWorkTable[] = {
+    {"sphereTest", 21, 12}, {"coneTest", 70, 25}, {"polygonTest", 44, 30}, {"ray", 25, 20},
+    {"hit", 2, 10},         {"shade", 37, 40},    {"lightSample", 66, 40}, {"pixel", 0, 20}};
 constexpr double kMflops = 4.2, kMips = 28.5;  // sparcstation2, the ufmg1992 host
 // The wavetracer array: a 10 MHz clock; one hostPlane (a bit of each of 8192 PEs, 1 KB over
 // SCSI) takes 2048 cycles.
@@ -132,7 +132,8 @@ constexpr double kArrayClock = 10e6, kPlaneCycles = 2048, kPlaneBytes = 8192 / 8
 
 double SecondsOf(const char* event, double count) {
   for (const PublishedCost& c : kWorkTable)
-    if (std::string(c.event) == event) return count * (c.flops / (kMflops * 1e6) + c.instructions / (kMips * 1e6));
+    if (std::string(c.event) == event)
+      return count * (c.flops / (kMflops * 1e6) + c.instructions / (kMips * 1e6));
   ADD_FAILURE() << "no event " << event;
   return 0;
 }
@@ -153,12 +154,14 @@ std::string WriteTinyScene(const TempDir& dir) {
   return path;
 }
 
-void ExpectEvents(const nlohmann::json& host, const std::map<std::string, double>& counts, const std::string& what) {
+void ExpectEvents(const nlohmann::json& host, const std::map<std::string, double>& counts,
+                  const std::string& what) {
   double seconds = 0;
   for (const auto& [event, count] : counts) {
     const nlohmann::json& e = host.at("events").at(event);
     EXPECT_EQ(e.at("count").get<double>(), count) << what << ": " << event;
-    EXPECT_NEAR(e.at("seconds").get<double>(), SecondsOf(event.c_str(), count), 1e-15) << what << ": " << event;
+    EXPECT_NEAR(e.at("seconds").get<double>(), SecondsOf(event.c_str(), count), 1e-15)
+        << what << ": " << event;
     seconds += SecondsOf(event.c_str(), count);
   }
   EXPECT_NEAR(host.at("seconds").get<double>(), seconds, 1e-15) << what;
@@ -169,9 +172,9 @@ TEST(TestbedClosedForm, SeqChargesEachCountedEventItsPublishedCost) {
   const RenderOutput out = Render(WriteTinyScene(dir), "seq", "ufmg1992");
   // 6 pixels: 6 primary rays, 12 shadow rays (2 lights), 6 reflected: 24 rays, each testing
   // the polygon, the sphere and the cone; 6 hits, 6 shaded points, 12 light samples.
-  const std::map<std::string, double> counts = {{"sphereTest", 24}, {"coneTest", 24}, {"polygonTest", 24},
-                                                {"ray", 24},        {"hit", 6},        {"shade", 6},
-                                                {"lightSample", 12}, {"pixel", 6}};
+  const std::map<std::string, double> counts = {
+      {"sphereTest", 24}, {"coneTest", 24}, {"polygonTest", 24}, {"ray", 24},
+      {"hit", 6},         {"shade", 6},     {"lightSample", 12}, {"pixel", 6}};
   const nlohmann::json& t = out.report.at("testbed");
   ExpectEvents(t.at("host"), counts, "seq");
   double seconds = 0;
@@ -198,7 +201,8 @@ TEST(TestbedClosedForm, SimdChargesEveryArrayPassTheScsiLinkAndTheHostRecompute)
     o.progress = false;
     o.testbed = "ufmg1992";
     o.simd.formats.fracBits = 6;
-    o.simd.uncertain = uncertain == "recompute" ? simd::UncertainPolicy::kRecompute : simd::UncertainPolicy::kAuto;
+    o.simd.uncertain =
+        uncertain == "recompute" ? simd::UncertainPolicy::kRecompute : simd::UncertainPolicy::kAuto;
     const RenderOutput out = RunRender(o);
     const nlohmann::json& pass = out.report.at("simd");
     const double n = pass.at("uncertain").at("recomputed").get<double>();
@@ -211,23 +215,29 @@ TEST(TestbedClosedForm, SimdChargesEveryArrayPassTheScsiLinkAndTheHostRecompute)
     // then shaded as seq does (18 secondary rays testing all three objects), and n pixels
     // recomputed: n rays, n tests of each object.
     const std::map<std::string, double> counts = {
-        {"sphereTest", 18 + n}, {"coneTest", 18 + n}, {"polygonTest", 6 + 18 + n}, {"ray", 24 + n},
-        {"hit", 6},             {"shade", 6},         {"lightSample", 12},         {"pixel", 6}};
+        {"sphereTest", 18 + n}, {"coneTest", 18 + n}, {"polygonTest", 6 + 18 + n},
+        {"ray", 24 + n},        {"hit", 6},           {"shade", 6},
+        {"lightSample", 12},    {"pixel", 6}};
     const nlohmann::json& t = out.report.at("testbed");
     ExpectEvents(t.at("host"), counts, uncertain);
     double cycles = 0, hostCycles = 0;
-    for (const nlohmann::json* c : {&pass.at("cycles"), refined ? &pass.at("refine").at("cycles") : nullptr}) {
+    for (const nlohmann::json* c :
+         {&pass.at("cycles"), refined ? &pass.at("refine").at("cycles") : nullptr}) {
       if (!c) continue;
       cycles += c->at("totalCycles").get<double>();
       hostCycles += c->at("byClass").at("host").get<double>();
     }
     const nlohmann::json& array = t.at("array");
-    EXPECT_NEAR(array.at("seconds").get<double>(), (cycles - hostCycles) / kArrayClock, 1e-12) << uncertain;
-    EXPECT_NEAR(array.at("scsiSeconds").get<double>(), hostCycles / kArrayClock, 1e-12) << uncertain;
-    EXPECT_NEAR(array.at("scsiBytes").get<double>(), hostCycles / kPlaneCycles * kPlaneBytes, 1e-6) << uncertain;
+    EXPECT_NEAR(array.at("seconds").get<double>(), (cycles - hostCycles) / kArrayClock, 1e-12)
+        << uncertain;
+    EXPECT_NEAR(array.at("scsiSeconds").get<double>(), hostCycles / kArrayClock, 1e-12)
+        << uncertain;
+    EXPECT_NEAR(array.at("scsiBytes").get<double>(), hostCycles / kPlaneCycles * kPlaneBytes, 1e-6)
+        << uncertain;
     double host = 0;
     for (const auto& [event, count] : counts) host += SecondsOf(event.c_str(), count);
-    EXPECT_NEAR(t.at("modelledSeconds").get<double>(), cycles / kArrayClock + host, 1e-12) << uncertain;
+    EXPECT_NEAR(t.at("modelledSeconds").get<double>(), cycles / kArrayClock + host, 1e-12)
+        << uncertain;
   }
 }
 
@@ -249,23 +259,39 @@ TEST(TestbedClosedForm, TheHostRecomputeCostsOneRayAndOneTestPerObjectPerPixel) 
         add(polygons, Polygon{});
         for (const int pixels : {0, 1, 7}) {
           nlohmann::json report = TraceStats{}.ToJson();
-          report["simd"] = {{"cycles", {{"profile", "wavetracer"}, {"clockHz", kArrayClock}, {"totalCycles", c},
-                                        {"byClass", {{"host", h}}}}},
+          report["simd"] = {{"cycles",
+                             {{"profile", "wavetracer"},
+                              {"clockHz", kArrayClock},
+                              {"totalCycles", c},
+                              {"byClass", {{"host", h}}}}},
                             {"uncertain", {{"recomputed", pixels}}}};
           testbed::AddModelledTime("ufmg1992", "simd", scene, report);
-          const std::string what = std::to_string(pixels) + " pixels, " + std::to_string(spheres) + " spheres, " +
-                                   std::to_string(cones) + " cones, " + std::to_string(polygons) + " polygons";
+          const std::string what = std::to_string(pixels) + " pixels, " + std::to_string(spheres) +
+                                   " spheres, " + std::to_string(cones) + " cones, " +
+                                   std::to_string(polygons) + " polygons";
           const double perPixel = SecondsOf("ray", 1) + spheres * SecondsOf("sphereTest", 1) +
-                                  cones * SecondsOf("coneTest", 1) + polygons * SecondsOf("polygonTest", 1);
+                                  cones * SecondsOf("coneTest", 1) +
+                                  polygons * SecondsOf("polygonTest", 1);
           const nlohmann::json& t = report.at("testbed");
-          EXPECT_NEAR(t.at("modelledSeconds").get<double>(), c / kArrayClock + pixels * perPixel, 1e-15) << what;
+          EXPECT_NEAR(t.at("modelledSeconds").get<double>(), c / kArrayClock + pixels * perPixel,
+                      1e-15)
+              << what;
           EXPECT_NEAR(t.at("host").at("seconds").get<double>(), pixels * perPixel, 1e-15) << what;
           EXPECT_EQ(t.at("host").at("events").at("ray").at("count").get<double>(), pixels) << what;
-          EXPECT_EQ(t.at("host").at("events").at("sphereTest").at("count").get<double>(), pixels * spheres) << what;
-          EXPECT_EQ(t.at("host").at("events").at("coneTest").at("count").get<double>(), pixels * cones) << what;
-          EXPECT_EQ(t.at("host").at("events").at("polygonTest").at("count").get<double>(), pixels * polygons) << what;
-          EXPECT_EQ(t.at("host").at("events").at("hit").at("count").get<double>(), 0) << what << ": no hit charged";
-          EXPECT_NEAR(t.at("array").at("scsiBytes").get<double>(), h / kPlaneCycles * kPlaneBytes, 1e-9) << what;
+          EXPECT_EQ(t.at("host").at("events").at("sphereTest").at("count").get<double>(),
+                    pixels * spheres)
+              << what;
+          EXPECT_EQ(t.at("host").at("events").at("coneTest").at("count").get<double>(),
+                    pixels * cones)
+              << what;
+          EXPECT_EQ(t.at("host").at("events").at("polygonTest").at("count").get<double>(),
+                    pixels * polygons)
+              << what;
+          EXPECT_EQ(t.at("host").at("events").at("hit").at("count").get<double>(), 0)
+              << what << ": no hit charged";
+          EXPECT_NEAR(t.at("array").at("scsiBytes").get<double>(), h / kPlaneCycles * kPlaneBytes,
+                      1e-9)
+              << what;
         }
       }
 }
@@ -490,15 +516,18 @@ TEST(TestbedSimulated, SimdChargesItsRefinePassOnThePlatform) {
   const nlohmann::json named = RunRender(o).report;
   ASSERT_TRUE(named.at("simd").contains("refine"));
   const nlohmann::json& t = named.at("testbed");
-  const double expected = t.at("modelledSeconds").get<double>() + 0.05 * t.at("array").at("scsiSeconds").get<double>();
+  const double expected =
+      t.at("modelledSeconds").get<double>() + 0.05 * t.at("array").at("scsiSeconds").get<double>();
   const std::string report = dir / "r.json";
-  auto r = RunCommand("timeout -k 5 300 bash " + Repo() + "/tools/testbed/simrun.sh --children 0 --zephyr " +
-                      SmpiPath() + " -- render --no-progress --method simd " + scene +
-                      " --frac-bits 6 --testbed ufmg1992 --out " + (dir / "s.png") + " --report " + report);
+  auto r = RunCommand(
+      "timeout -k 5 300 bash " + Repo() + "/tools/testbed/simrun.sh --children 0 --zephyr " +
+      SmpiPath() + " -- render --no-progress --method simd " + scene +
+      " --frac-bits 6 --testbed ufmg1992 --out " + (dir / "s.png") + " --report " + report);
   ASSERT_EQ(r.status, 0) << r.output;
   const nlohmann::json j = ReadJson(report);
   ASSERT_TRUE(j.at("simd").contains("refine"));
-  EXPECT_NEAR(j.at("testbed").at("modelledSeconds").get<double>(), expected, 1e-9 * expected) << j.at("testbed").dump(2);
+  EXPECT_NEAR(j.at("testbed").at("modelledSeconds").get<double>(), expected, 1e-9 * expected)
+      << j.at("testbed").dump(2);
 }
 
 // this-host: `zephyr testbed calibrate` turns a measured seq render into operations per

@@ -5,7 +5,6 @@
 // concave face's fan triangles share inside it meet that face once.
 #include <gtest/gtest.h>
 
-
 #include "hosts/trace/tracer.h"
 #include "tests/trace/shared_edges.h"
 
@@ -37,7 +36,9 @@ TEST(TraceSharedEdges, ARayThroughAnEdgeOnEveryAxisMeetsExactlyOneFace) {
       }
       EXPECT_EQ(both, 0) << what << ": pixels meeting both faces";
       ASSERT_GE(c.line.size(), 20u) << what;
-      for (const int i : c.line) EXPECT_TRUE(hits[i] == 1 || hits[i] == 2) << what << ": pixel on the edge " << i;
+      for (const int i : c.line) {
+        EXPECT_TRUE(hits[i] == 1 || hits[i] == 2) << what << ": pixel on the edge " << i;
+      }
       int seenA = 0, seenB = 0;
       for (const int i : c.band) {
         EXPECT_TRUE(hits[i] == 1 || hits[i] == 2) << what << ": pixel beside the edge " << i;
@@ -49,7 +50,8 @@ TEST(TraceSharedEdges, ARayThroughAnEdgeOnEveryAxisMeetsExactlyOneFace) {
       int wrong = 0;
       for (int k = 3; k <= 61; ++k)
         for (const double nudge : {0.0, 1e-12, -1e-12}) {
-          const Vec3 target = c.edgeFrom + (c.edgeTo - c.edgeFrom) * (k / 64.0) + Vec3{nudge, nudge, -nudge};
+          const Vec3 target =
+              c.edgeFrom + (c.edgeTo - c.edgeFrom) * (k / 64.0) + Vec3{nudge, nudge, -nudge};
           const PrimaryRay ray{{0, 0, 0}, Normalize(target)};
           wrong += Hits(*a, ray) + Hits(*b, ray) != 1;
         }
@@ -57,7 +59,8 @@ TEST(TraceSharedEdges, ARayThroughAnEdgeOnEveryAxisMeetsExactlyOneFace) {
       // Inside a concave face: the fan's own shared edges.
       for (const Vec3& p : c.diagonalPoints) {
         const PrimaryRay ray{{0, 0, 0}, Normalize(p)};
-        EXPECT_TRUE(Hits(*a, ray) && !Hits(*b, ray)) << what << ": a fan diagonal at " << p.x << " " << p.y << " " << p.z;
+        EXPECT_TRUE(Hits(*a, ray) && !Hits(*b, ray))
+            << what << ": a fan diagonal at " << p.x << " " << p.y << " " << p.z;
       }
     }
   }

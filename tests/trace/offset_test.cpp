@@ -127,16 +127,19 @@ std::vector<Probe> Probes() {
   std::vector<Vec3> points;
   for (double x = -3.5; x <= 3.5; x += 0.125)
     for (double z = -3.5; z <= 3.5; z += 0.125) points.push_back({x, 0, z});
-  for (const auto& [c, r] : {std::pair{kRedCentre, kRedRadius}, std::pair{kMirrorCentre, kMirrorRadius}})
+  for (const auto& [c, r] :
+       {std::pair{kRedCentre, kRedRadius}, std::pair{kMirrorCentre, kMirrorRadius}})
     for (double theta = 0.05; theta < M_PI; theta += 0.1)
       for (double phi = 0; phi < 2 * M_PI; phi += 0.1)
-        points.push_back(c + Vec3{std::sin(theta) * std::cos(phi), std::cos(theta), std::sin(theta) * std::sin(phi)} * r);
+        points.push_back(c + Vec3{std::sin(theta) * std::cos(phi), std::cos(theta),
+                                  std::sin(theta) * std::sin(phi)} * r);
   std::vector<Probe> probes;
   for (const Vec3& p : points) {
     const Vec3 d = Normalize(p - kEye);
     double margin = INFINITY;
     const LocalHit h = TraceLocal(kEye, d, 0, -1, margin);
-    if (h.object < 0 || margin < 0.02 || std::abs(h.t - Length(p - kEye)) > 1e-9) continue;  // hidden
+    if (h.object < 0 || margin < 0.02 || std::abs(h.t - Length(p - kEye)) > 1e-9)
+      continue;  // hidden
     const std::optional<Vec3> colour = ShadeLocal(h, d, 2);
     if (!colour) continue;
     const Vec3 n = Dot(h.normal, d) < 0 ? h.normal : -h.normal;
@@ -159,7 +162,8 @@ Affine Rotation() {
   const double kv[3] = {k.x, k.y, k.z};
   Affine a;
   for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) a.m[i][j] = (i == j ? c : 0) + s * K[i][j] + (1 - c) * kv[i] * kv[j];
+    for (int j = 0; j < 3; ++j)
+      a.m[i][j] = (i == j ? c : 0) + s * K[i][j] + (1 - c) * kv[i] * kv[j];
   return a;
 }
 
@@ -198,7 +202,8 @@ Scene WorldScene(const Placement& at) {
     s.objects.push_back(p);
   };
   const double h = at.floorHalf;
-  add(Polygon{{place({-h, 0, h}), place({h, 0, h}), place({h, 0, -h}), place({-h, 0, -h})}, {}}, kFloor);
+  add(Polygon{{place({-h, 0, h}), place({h, 0, h}), place({h, 0, -h}), place({-h, 0, -h})}, {}},
+      kFloor);
   add(Sphere{place(kRedCentre), kRedRadius}, kRed);
   add(Sphere{place(kMirrorCentre), kMirrorRadius}, kMirror);
   return s;
@@ -210,11 +215,12 @@ Scene WorldScene(const Placement& at) {
 // would be swamped by their rounding (0.06 and 1e-6 against an offset near 1e-3 and 1e-8).
 std::vector<Placement> Placements(Precision p) {
   const double far = p == Precision::kFloat ? 1e3 : 1e8, own = p == Precision::kFloat ? 1e6 : 1e10;
-  return {{"near", 0, {}},
-          {"t dominates: the eye far away", far, {}},
-          {"the origin dominates: the scene far from the world origin", 0, Vec3{1, -0.7, 0.4} * far},
-          {"the object dominates: a huge floor", 0, {}, own},
-          {"the object dominates: object spaces far from the world", 0, {}, kFloorHalf, own}};
+  return {
+      {"near", 0, {}},
+      {"t dominates: the eye far away", far, {}},
+      {"the origin dominates: the scene far from the world origin", 0, Vec3{1, -0.7, 0.4} * far},
+      {"the object dominates: a huge floor", 0, {}, own},
+      {"the object dominates: object spaces far from the world", 0, {}, kFloorHalf, own}};
 }
 
 TEST(TraceOffset, ContactShadowAndReflectionsAreTheSameWhicheverMagnitudeDominates) {
@@ -248,22 +254,26 @@ TEST(TraceOffset, ContactShadowAndReflectionsAreTheSameWhicheverMagnitudeDominat
         TraceStats stats;
         const PrimaryHit hit = tracer->FirstHit({scene.camera.from, d}, stats);
         if (hit.object != q.object) {
-          ADD_FAILURE() << at.name << ": the ray to " << q.point.x << " " << q.point.y << " " << q.point.z
-                        << " meets object " << hit.object << ", not " << q.object;
+          ADD_FAILURE() << at.name << ": the ray to " << q.point.x << " " << q.point.y << " "
+                        << q.point.z << " meets object " << hit.object << ", not " << q.object;
           continue;
         }
         const Vec3 c = tracer->ShadeFromPrimaryHit(hit, stats);
-        const bool ok = std::abs(c.x - q.colour.x) <= tolerance && std::abs(c.y - q.colour.y) <= tolerance &&
+        const bool ok = std::abs(c.x - q.colour.x) <= tolerance &&
+                        std::abs(c.y - q.colour.y) <= tolerance &&
                         std::abs(c.z - q.colour.z) <= tolerance;
         if (!ok && wrong++ < 5)
-          ADD_FAILURE() << PrecisionName(precision) << ", " << at.name << ": object " << q.object << " at "
-                        << q.point.x << " " << q.point.y << " " << q.point.z << (q.shadowed ? " (in shadow)" : "")
-                        << ": " << c.x << " " << c.y << " " << c.z << ", by hand " << q.colour.x << " "
-                        << q.colour.y << " " << q.colour.z;
-        lost += !ok && !q.shadowed && c.x + c.y + c.z < 0.5 * (q.colour.x + q.colour.y + q.colour.z);
+          ADD_FAILURE() << PrecisionName(precision) << ", " << at.name << ": object " << q.object
+                        << " at " << q.point.x << " " << q.point.y << " " << q.point.z
+                        << (q.shadowed ? " (in shadow)" : "") << ": " << c.x << " " << c.y << " "
+                        << c.z << ", by hand " << q.colour.x << " " << q.colour.y << " "
+                        << q.colour.z;
+        lost +=
+            !ok && !q.shadowed && c.x + c.y + c.z < 0.5 * (q.colour.x + q.colour.y + q.colour.z);
       }
       EXPECT_EQ(wrong, 0) << PrecisionName(precision) << ", " << at.name << ": " << lost
-                          << " of them darker than by hand (a surface shadowing itself) of " << probes.size();
+                          << " of them darker than by hand (a surface shadowing itself) of "
+                          << probes.size();
     }
   }
 }
@@ -320,9 +330,11 @@ TEST(TraceOffset, NoKindShadowsItselfWhereverItsOwnNumbersAre) {
   const Vec3 plane = Normalize(Vec3{0, 1, -0.15});  // y = 0.15 z
   auto polygon = [](double k, double dz) {
     auto v = [&](double x, double y, double z) {
-      return std::to_string(x * k) + " " + std::to_string(y * k) + " " + std::to_string(z * k + dz) + "\n";
+      return std::to_string(x * k) + " " + std::to_string(y * k) + " " +
+             std::to_string(z * k + dz) + "\n";
     };
-    return "p 4\n" + v(-30000, -3000, -20000) + v(30000, -3000, -20000) + v(30000, 300, 2000) + v(-30000, 300, 2000);
+    return "p 4\n" + v(-30000, -3000, -20000) + v(30000, -3000, -20000) + v(30000, 300, 2000) +
+           v(-30000, 300, 2000);
   };
   for (const Precision precision : {Precision::kFloat, Precision::kDouble}) {
     const bool isFloat = precision == Precision::kFloat;
@@ -351,20 +363,24 @@ TEST(TraceOffset, NoKindShadowsItselfWhereverItsOwnNumbersAre) {
       std::function<Vec3(const Vec3&)> normal;
       int minimumLit;
     } cases[] = {
-        {"the tilted plane", tilted + polygon(isFloat ? 1 : 1e6, 0), [&](const Vec3&) { return plane; }, 1536},
+        {"the tilted plane", tilted + polygon(isFloat ? 1 : 1e6, 0),
+         [&](const Vec3&) { return plane; }, 1536},
         {"the tilted plane, 1e-4 its size, in a far object space",
          tilted + zShift + polygon(1e-4, away), [&](const Vec3&) { return plane; }, 1000},
-        {"a sphere in a far object space", sideLight + shift + "s 0 " + std::to_string(away) + " 0 1\n",
+        {"a sphere in a far object space",
+         sideLight + shift + "s 0 " + std::to_string(away) + " 0 1\n",
          [](const Vec3& p) { return p; }, 300},
         {"a cylinder in a far object space",
-         sideLight + xShift + "c " + std::to_string(away) + " -1 0 1 " + std::to_string(away) + " 1 0 1\n",
+         sideLight + xShift + "c " + std::to_string(away) + " -1 0 1 " + std::to_string(away) +
+             " 1 0 1\n",
          [](const Vec3& p) { return Vec3{p.x, 0, p.z}; }, 300},
         {"a sphere of radius 1e5 (float) or 1e9 (double) as the floor, seen from near its top",
          View("0 2 5", "0 0 0", "40", "5 8 3") + "s 0 -" + giant + " 0 " + giant + "\n",
          [&](const Vec3& p) { return p + Vec3{0, radius, 0}; }, 4000},
         // A boundary: the needle's ‖A‖∞‖A⁻¹‖∞ is 3e4, but what it multiplies moves the hit
         // point along the surface, not across it; the offset needs no term for it.
-        {"a needle ellipsoid 3e4:1", View("30 0 6", "30 0 0", "30", "3 5 4") + needleNff + "\ns 0 0 0 1\n",
+        {"a needle ellipsoid 3e4:1",
+         View("30 0 6", "30 0 0", "30", "3 5 4") + needleNff + "\ns 0 0 0 1\n",
          [&](const Vec3& p) { return fromNeedle.ApplyTransposed(fromNeedle.ApplyPoint(p)); }, 1000},
     };
     for (const Case& c : cases) {

@@ -258,8 +258,10 @@ TEST(TraceShade, AMirroringTransformKeepsAPolygonsFront) {
       const PrimaryHit hit = tracer->FirstHit({o, d}, stats);
       ASSERT_EQ(hit.object, 0);
       tracer->ShadeFromPrimaryHit(hit, stats);
-      EXPECT_EQ(stats.rays[int(RayKind::kRefracted)], 1u) << "x scaled by " << mirror << ", " << PrecisionName(p);
-      EXPECT_EQ(stats.rays[int(RayKind::kReflected)], 0u) << "x scaled by " << mirror << ", " << PrecisionName(p);
+      EXPECT_EQ(stats.rays[int(RayKind::kRefracted)], 1u)
+          << "x scaled by " << mirror << ", " << PrecisionName(p);
+      EXPECT_EQ(stats.rays[int(RayKind::kReflected)], 0u)
+          << "x scaled by " << mirror << ", " << PrecisionName(p);
     }
   }
 }

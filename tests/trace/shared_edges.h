@@ -46,7 +46,8 @@ inline std::vector<SharedEdgeCase> SharedEdgeCases() {
       {"z edge", {-5, 0, -1.2}, {-5, 0, 1.5}, {-1, 0, 0}, 0},
       {"diagonal edge", {-1, 1, -4}, {1.5, -1.5, -6}, {0, 0, -1}, 2},
   };
-  const char* shapes[] = {"convex quad", "concave (fan from the notch)", "concave (fan from an end)"};
+  const char* shapes[] = {"convex quad", "concave (fan from the notch)",
+                          "concave (fan from an end)"};
   const char* folds[] = {"ridge", "valley", "flat"};
   constexpr int kSize = 65;
   std::vector<SharedEdgeCase> cases;
@@ -73,7 +74,8 @@ inline std::vector<SharedEdgeCase> SharedEdgeCases() {
             if (reversed) std::reverse(v.begin() + 1, v.end());  // vertex 0 (the fan's centre) kept
             if (shape == 1 && sign > 0)
               for (const Vec3& end : {a, b})
-                for (int k = 1; k < 20; ++k) c.diagonalPoints.push_back(notch + (end - notch) * (k / 20.0));
+                for (int k = 1; k < 20; ++k)
+                  c.diagonalPoints.push_back(notch + (end - notch) * (k / 20.0));
             return v;
           };
           for (const bool isA : {true, false}) {
@@ -97,7 +99,9 @@ inline std::vector<SharedEdgeCase> SharedEdgeCases() {
               const Vec3 q = a + w * s;
               const double miss = Length(q - d * Dot(q, d)) / Length(q);  // radians
               if (s < 0.05 || s > 0.95) continue;
-              const bool onLine = edge.lineKind == 0 ? y == kSize / 2 : edge.lineKind == 1 ? x == kSize / 2 : x == y;
+              const bool onLine = edge.lineKind == 0   ? y == kSize / 2
+                                  : edge.lineKind == 1 ? x == kSize / 2
+                                                       : x == y;
               if (onLine) c.line.push_back(y * kSize + x);
               if (miss < 2.5 * pitch) c.band.push_back(y * kSize + x);
             }
