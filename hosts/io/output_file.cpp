@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "fixed/check.h"
+#include "hosts/io/test_seam.h"
 
 namespace zephyr {
 
@@ -84,14 +85,20 @@ OutputFile::~OutputFile() {
 
 void OutputFile::Commit() {
   ZEPHYR_CHECK(file_ != nullptr && !committed_);
+  // The order is the durability (docs/distributed.md, "Durability"): the bytes written (the
+  // flush), the mode set and fsync'd, the file closed, then renamed over the name, then the
+  // directory fsync'd. Each system call goes through hosts/io/test_seam.h (the plain calls
+  // unless a test installed others), so the tests see them made.
+  const io::CommitCalls& sys = io::Calls();
+  const int fd = ::fileno(file_);
   int error = 0;
   errno = 0;
-  if (std::fflush(file_) != 0 || std::ferror(file_)) error = errno ? errno : EIO;
-  if (!error && ::fchmod(::fileno(file_), CreateMode()) != 0) error = errno;
-  if (!error && ::fsync(::fileno(file_)) != 0) error = errno;
-  if (std::fclose(file_) != 0 && !error) error = errno;
+  if (sys.fflush(file_) != 0 || std::ferror(file_)) error = errno ? errno : EIO;
+  if (!error && sys.fchmod(fd, CreateMode()) != 0) error = errno;
+  if (!error && sys.fsync(fd) != 0) error = errno;
+  if (sys.fclose(file_) != 0 && !error) error = errno;
   file_ = nullptr;
-  if (!error && ::rename(temporary_.c_str(), path_.c_str()) != 0) error = errno;
+  if (!error && sys.rename(temporary_.c_str(), path_.c_str()) != 0) error = errno;
   if (error) {
     ::unlink(temporary_.c_str());
     throw UserError(path_ + ": cannot write the " + what_ + ": " + std::strerror(error) +
@@ -100,10 +107,10 @@ void OutputFile::Commit() {
   committed_ = true;
   // The rename itself is made durable by syncing the directory; a failure here loses
   // nothing that a crash right now would not.
-  const int dir = ::open(DirectoryOf(path_).c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  const int dir = sys.openDirectory(DirectoryOf(path_).c_str());
   if (dir >= 0) {
-    ::fsync(dir);
-    ::close(dir);
+    sys.fsync(dir);
+    sys.close(dir);
   }
 }
 

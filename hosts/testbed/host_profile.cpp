@@ -131,11 +131,14 @@ HostTime ModelHostTime(const TraceStats& stats, const HostProfile& profile) {
   HostTime t;
   t.profile = profile.name;
   t.counts = EventCounts(stats);
+  const double flopRate = profile.mflops.value * 1e6, instructionRate = profile.mips.value * 1e6;
   for (int e = 0; e < kWorkEvents; ++e) {
     t.flops += t.counts[e] * kCosts[e].flops;
     t.instructions += t.counts[e] * kCosts[e].instructions;
+    t.eventSeconds.push_back(t.counts[e] * kCosts[e].flops / flopRate +
+                             t.counts[e] * kCosts[e].instructions / instructionRate);
   }
-  t.seconds = t.flops / (profile.mflops.value * 1e6) + t.instructions / (profile.mips.value * 1e6);
+  t.seconds = t.flops / flopRate + t.instructions / instructionRate;
   return t;
 }
 
@@ -144,7 +147,8 @@ nlohmann::json HostTime::Json() const {
   for (int e = 0; e < kWorkEvents; ++e)
     events[kEventNames[e]] = {{"count", counts[e]},
                               {"flops", counts[e] * kCosts[e].flops},
-                              {"instructions", counts[e] * kCosts[e].instructions}};
+                              {"instructions", counts[e] * kCosts[e].instructions},
+                              {"seconds", eventSeconds[e]}};
   return {{"profile", profile},
           {"flops", flops},
           {"instructions", instructions},

@@ -78,8 +78,11 @@ struct HostTime {
   std::string profile;
   double flops = 0, instructions = 0;  // totals over all events
   double seconds = 0;                  // flops/MFLOPS + instructions/MIPS
-  std::vector<double> counts;          // per event
-  nlohmann::json Json() const;         // totals and per-event counts and seconds
+  std::vector<double> counts;          // per event, in WorkEvent order
+  std::vector<double> eventSeconds;    // per event: count × (flops/MFLOPS + instructions/MIPS), s
+  // {"profile", "flops", "instructions", "seconds", "events": {name: {"count", "flops",
+  // "instructions", "seconds"}}}
+  nlohmann::json Json() const;
 };
 HostTime ModelHostTime(const TraceStats& stats, const HostProfile& profile);
 

@@ -37,23 +37,36 @@ const std::map<std::string, Testbed>& Testbeds() {
 }
 
 // The SIMD pass's modelled seconds split into the array's own cycles and the host link
-// (the cycle report's "host" class: the matrix moving over SCSI).
+// (the cycle report's "host" class: the matrix moving over SCSI), summed over the array
+// passes that ran: the first, and the refine pass when one ran (`refine` is null otherwise).
 struct ArraySplit {
   double arraySeconds = 0, scsiSeconds = 0, scsiBytes = 0, clockHz = 0, arrayCycles = 0;
+  double refineCycles = 0;  // the refine pass's share of arrayCycles + its host class
 };
-ArraySplit SplitPass(const nlohmann::json& cycles) {
+ArraySplit SplitPass(const nlohmann::json& cycles, const nlohmann::json& refine) {
   ArraySplit a;
   const bitserial::MachineProfile profile = bitserial::Profile(cycles.at("profile").get<std::string>());
   a.clockHz = cycles.at("clockHz").get<double>();
-  const double total = cycles.at("totalCycles").get<double>();
-  const double host = cycles.at("byClass").at("host").get<double>();
-  a.arrayCycles = total - host;
+  double host = 0;
+  for (const nlohmann::json* pass : {&cycles, refine.is_null() ? nullptr : &refine}) {
+    if (!pass) continue;
+    ZEPHYR_CHECK(pass->at("clockHz").get<double>() == a.clockHz);
+    const double passHost = pass->at("byClass").at("host").get<double>();
+    a.arrayCycles += pass->at("totalCycles").get<double>() - passHost;
+    host += passHost;
+    if (pass == &refine) a.refineCycles = pass->at("totalCycles").get<double>();
+  }
   a.arraySeconds = a.arrayCycles / a.clockHz;
   a.scsiSeconds = host / a.clockHz;
   // One hostPlane moves one bit of every physical PE.
   const double planeCycles = profile.Cost(bitserial::MicroOp::HostPlane);
   a.scsiBytes = planeCycles > 0 ? host / planeCycles * profile.physicalPes / 8 : 0;
   return a;
+}
+
+// The refine pass's cycle report in a SIMD report's "simd" object (null when none ran).
+nlohmann::json RefineCycles(const nlohmann::json& pass) {
+  return pass.contains("refine") ? pass.at("refine").at("cycles") : nlohmann::json();
 }
 
 // This rank's charged host seconds (ChargeHostWork), and the part ChargeArrayPass charged
@@ -168,7 +181,8 @@ void AddModelledTime(const std::string& testbedName, const std::string& method,
     if (method == "simd") {
       const nlohmann::json& pass = r.at("simd");
       const double arrayStart = SimulatedNow();
-      ChargeArrayCycles(pass.at("cycles"), pass.at("uncertain").at("recomputed").get<uint64_t>(), scene,
+      ChargeArrayCycles(pass.at("cycles"), RefineCycles(pass),
+                        pass.at("uncertain").at("recomputed").get<uint64_t>(), scene,
                         "SIMD/sequential");
       t["array"] = {{"seconds", SimulatedNow() - arrayStart},
                     {"what", "array cycles at the array host's speed, the matrix over the link to "
@@ -190,12 +204,14 @@ void AddModelledTime(const std::string& testbedName, const std::string& method,
                       "', but --machine chose '" + pass.at("cycles").at("profile").get<std::string>() + "'");
     // The host recomputes each uncertain pixel against every object, in double.
     stats.Add(RecomputeWork(pass.at("uncertain").at("recomputed").get<uint64_t>(), scene));
-    const ArraySplit a = SplitPass(pass.at("cycles"));
+    const ArraySplit a = SplitPass(pass.at("cycles"), RefineCycles(pass));
     const HostTime h = ModelHostTime(stats, host);
     t["array"] = {{"profile", bed.arrayProfile},  {"clockHz", a.clockHz},
                   {"cycles", a.arrayCycles},      {"seconds", a.arraySeconds},
                   {"scsiBytes", a.scsiBytes},     {"scsiSeconds", a.scsiSeconds},
-                  {"scsiSource", "the cycle report's host class (hostPlane cycles of the matrix)"}};
+                  {"refineCycles", a.refineCycles},
+                  {"cyclesSource", "the first pass's cycle report, and the refine pass's if one ran"},
+                  {"scsiSource", "the cycle reports' host class (hostPlane cycles of the matrix)"}};
     t["host"] = h.Json();
     t["modelledSeconds"] = a.arraySeconds + a.scsiSeconds + h.seconds;
   } else {
@@ -366,11 +382,13 @@ nlohmann::json LinkBytes(double now) {
 }  // namespace
 
 double ChargeArrayPass(const simd::PrimaryPass& pass, const Scene& scene) {
-  return ChargeArrayCycles(pass.cycles, uint64_t(pass.recomputedPixels), scene, "heterogeneous");
+  return ChargeArrayCycles(pass.cycles,
+                           pass.refine.is_null() ? nlohmann::json() : pass.refine.at("cycles"),
+                           uint64_t(pass.recomputedPixels), scene, "heterogeneous");
 }
 
-double ChargeArrayCycles(const nlohmann::json& cycles, uint64_t recomputedPixels, const Scene& scene,
-                         const std::string& method) {
+double ChargeArrayCycles(const nlohmann::json& cycles, const nlohmann::json& refineCycles,
+                         uint64_t recomputedPixels, const Scene& scene, const std::string& method) {
   const double start = SimulatedNow();
   simgrid::s4u::Host* self = simgrid::s4u::this_actor::get_host();
   const auto arrays = simgrid::s4u::Engine::get_instance()->get_filtered_hosts([](simgrid::s4u::Host* h) {
@@ -381,7 +399,7 @@ double ChargeArrayCycles(const nlohmann::json& cycles, uint64_t recomputedPixels
     throw UserError("the platform has " + std::to_string(arrays.size()) +
                     " hosts with zephyr:role=array; the " + method + " method needs exactly one "
                     "(docs/testbed.md)");
-  const ArraySplit a = SplitPass(cycles);
+  const ArraySplit a = SplitPass(cycles, refineCycles);
   // The array computes at its clock (the platform gives its speed in cycles per second).
   simgrid::s4u::this_actor::exec_init(a.arrayCycles)->set_host(arrays[0])->wait();
   if (a.scsiBytes > 0) simgrid::s4u::Comm::sendto(arrays[0], self, uint64_t(a.scsiBytes));
@@ -396,7 +414,10 @@ double SimulatedNow() { return 0; }
 nlohmann::json SimulatedHost() { return nlohmann::json::object(); }
 double ChargeHostWork(const TraceStats&) { return 0; }
 double ChargeArrayPass(const simd::PrimaryPass&, const Scene&) { return 0; }
-double ChargeArrayCycles(const nlohmann::json&, uint64_t, const Scene&, const std::string&) { return 0; }
+double ChargeArrayCycles(const nlohmann::json&, const nlohmann::json&, uint64_t, const Scene&,
+                         const std::string&) {
+  return 0;
+}
 void StartLinkAccounting() {}
 namespace {
 nlohmann::json LinkBytes(double) { return nlohmann::json::array(); }

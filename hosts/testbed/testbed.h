@@ -95,16 +95,18 @@ void AddModelledTime(const std::string& testbedName, const std::string& method,
 // instructions at the host's speed). Returns the simulated seconds charged (0 otherwise).
 double ChargeHostWork(const TraceStats& work);
 
-// Under simulation, at the parent: the SIMD pass's array cycles on the platform's array
-// host ("zephyr:role" = "array"), the matrix over the SCSI link between them, and the
-// host's share of the pass (uncertain pixels recomputed) on the parent. Returns the
-// simulated seconds it took (0 when not simulated).
+// Under simulation, at the parent: the SIMD pass's array cycles (its first pass and, when
+// one ran, its refine pass) on the platform's array host ("zephyr:role" = "array"), the
+// matrix over the SCSI link between them, and the host's share of the pass (uncertain
+// pixels recomputed) on the parent. Returns the simulated seconds it took (0 when not
+// simulated).
 double ChargeArrayPass(const simd::PrimaryPass& pass, const Scene& scene);
-// The same from a pass's cycle report (JSON, as `render --report` writes it under "simd") and
-// its count of uncertain pixels recomputed on the host; `method` names the caller in the
-// UserError for a platform without exactly one array host.
-double ChargeArrayCycles(const nlohmann::json& cycles, uint64_t recomputedPixels, const Scene& scene,
-                         const std::string& method);
+// The same from the passes' cycle reports (JSON, as `render --report` writes them under
+// "simd": "cycles", and "refine"."cycles" or null when no refine pass ran) and the count of
+// uncertain pixels recomputed on the host; `method` names the caller in the UserError for a
+// platform without exactly one array host.
+double ChargeArrayCycles(const nlohmann::json& cycles, const nlohmann::json& refineCycles,
+                         uint64_t recomputedPixels, const Scene& scene, const std::string& method);
 
 // Under simulation, at the parent before its first message: starts counting the bytes every
 // platform link carries (SimGrid's link_load plugin, `--cfg=plugin:link_load`, which

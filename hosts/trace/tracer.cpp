@@ -97,33 +97,44 @@ Vec3 Tracer::TracePixel(int x, int y, TraceStats& stats, PrimaryHit* primary) co
 namespace {
 
 // A primitive converted to the tracer's scalar, with what the tests need precomputed.
+//
+// Each is stored so that the rounding of what its test computes grows with magnitudes the
+// secondary-ray offset names (SecondaryOffset, docs/shading.md): a polygon by its plane's
+// offset from the world origin, t = (offset − n·o)/(n·d), so a far first vertex costs
+// nothing (n·(v0 − o) rounds with |v0 − o|); a transformed polygon is taken to world space
+// once (an affine map keeps it planar); a transformed sphere or cone keeps its object space
+// with the origin moved to its world anchor (centre, base), o' = A⁻¹(o − anchor), so a
+// translation that cancels a far object-space centre rounds nothing away.
 template <typename T>
 struct Prepared {
   using V = Vec3T<T>;
   ShapeKind kind;
   int material;
-  bool transformed = false;
-  T inverse[3][4];  // world -> object
-  // Sphere
+  bool transformed = false;  // a sphere or cone with a transform (polygons go to world space)
+  T inverse[3][3];           // world -> object, linear part A⁻¹
+  V anchor;                  // the world point that is the object-space origin (transformed only)
+  // Sphere (transformed: centred on its anchor, so centre = 0)
   V centre;
   T radius = 0, radius2 = 0;
-  // Cone
+  // Cone (transformed: base = 0)
   V base, axis;
   T height = 0, r0 = 0, slope = 0;
-  // Polygon
-  V normal, v0;
+  // Polygon, in world space: the unit Newell normal, the plane n·x = planeOffset, and the
+  // sign (±1) that turns the normal into the shading normal (−1 under a mirroring transform,
+  // whose world winding is reversed, so that the object's front stays its front).
+  V normal;
+  T planeOffset = 0;
+  int front = 1;
   std::vector<PolygonEdgeGroup> groups;  // the inside, with the shared-edge rule
-  std::vector<V> vertices, normals;  // normals only for `pp`
-  // The magnitude of the object's own numbers in world units (sphere |c| + r, cone ends and
-  // radii, polygon plane offset |n·v0|; with a transform its world-space bound): part of the
-  // error bound that sets how far secondary rays leaving it skip (SecondaryOffset).
+  std::vector<V> vertices, normals;      // world space; normals only for `pp`
+  // The magnitude of the object's own numbers as its test uses them, in world units: part of
+  // the bound on the hit point's rounding that sets how far secondary rays leaving it skip
+  // (SecondaryOffset). Sphere |c|∞ + r; cone max(|base|∞, |apex|∞) + the larger radius;
+  // polygon |plane offset|; a transformed sphere or cone |anchor|∞ + ‖A‖∞ · its size about
+  // the anchor (r; |apex − base|∞ + the larger radius).
   T scale = 0;
 
-  V ToObjectPoint(const V& p) const {
-    return {inverse[0][0] * p.x + inverse[0][1] * p.y + inverse[0][2] * p.z + inverse[0][3],
-            inverse[1][0] * p.x + inverse[1][1] * p.y + inverse[1][2] * p.z + inverse[1][3],
-            inverse[2][0] * p.x + inverse[2][1] * p.y + inverse[2][2] * p.z + inverse[2][3]};
-  }
+  V ToObjectPoint(const V& p) const { return ToObjectVector(p - anchor); }
   V ToObjectVector(const V& d) const {
     return {inverse[0][0] * d.x + inverse[0][1] * d.y + inverse[0][2] * d.z,
             inverse[1][0] * d.x + inverse[1][1] * d.y + inverse[1][2] * d.z,
@@ -137,64 +148,84 @@ struct Prepared {
   }
 };
 
+// ‖A‖∞ of an affine map's linear part: the largest row sum of |entries|.
+double LinearNormInf(const Affine& a) {
+  double norm = 0;
+  for (int i = 0; i < 3; ++i)
+    norm = std::max(norm, std::abs(a.m[i][0]) + std::abs(a.m[i][1]) + std::abs(a.m[i][2]));
+  return norm;
+}
+
 template <typename T>
 Prepared<T> Prepare(const Primitive& p) {
   using V = Vec3T<T>;
   Prepared<T> r;
   r.kind = p.Kind();
   r.material = p.material;
-  if (p.transform) {
-    r.transformed = true;
-    const Affine inv = p.transform->Inverse();
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 4; ++j) r.inverse[i][j] = T(inv.m[i][j]);
-  }
-  if (auto* s = std::get_if<Sphere>(&p.shape)) {
-    r.centre = V(s->center);
-    r.radius = T(s->radius);
-    r.radius2 = T(s->radius * s->radius);
-  } else if (auto* c = std::get_if<Cone>(&p.shape)) {
-    const Vec3 axis = c->apex - c->base;
-    const double h = Length(axis);
-    r.base = V(c->base);
-    r.axis = V(axis / h);
-    r.height = T(h);
-    r.r0 = T(c->baseRadius);
-    r.slope = T((c->apexRadius - c->baseRadius) / h);
-  } else {
-    const auto& poly = std::get<Polygon>(p.shape);
+  double scale = 0;
+  if (auto* q = std::get_if<Polygon>(&p.shape)) {
+    std::vector<Vec3> v = q->vertices, normals = q->normals;
+    if (p.transform) {
+      const Affine inv = p.transform->Inverse();
+      for (Vec3& x : v) x = p.transform->ApplyPoint(x);
+      for (Vec3& n : normals) n = inv.ApplyTransposed(n);
+      r.front = p.transform->RelativeDeterminant() < 0 ? -1 : 1;
+    }
     Vec3 n;  // Newell's normal, in double
-    for (size_t i = 0; i < poly.vertices.size(); ++i) {
-      const Vec3& a = poly.vertices[i];
-      const Vec3& b = poly.vertices[(i + 1) % poly.vertices.size()];
+    for (size_t i = 0; i < v.size(); ++i) {
+      const Vec3& a = v[i];
+      const Vec3& b = v[(i + 1) % v.size()];
       n += Vec3{(a.y - b.y) * (a.z + b.z), (a.z - b.z) * (a.x + b.x), (a.x - b.x) * (a.y + b.y)};
     }
     n = Normalize(ScaledDown(n));
+    const double offset = Dot(n, v[0]);
     r.normal = V(n);
-    r.v0 = V(poly.vertices[0]);
-    r.groups = PolygonEdgeGroups(poly.vertices, n);
-    for (const Vec3& v : poly.vertices) r.vertices.push_back(V(v));
-    for (const Vec3& v : poly.normals) r.normals.push_back(V(v));
-  }
-  double scale = 0;
-  if (p.transform) {
-    double norm = 0;  // ‖A‖∞
+    r.planeOffset = T(offset);
+    r.groups = PolygonEdgeGroups(v, n);
+    for (const Vec3& x : v) r.vertices.push_back(V(x));
+    for (const Vec3& x : normals) r.normals.push_back(V(x));
+    scale = std::abs(offset);
+  } else if (p.transform) {
+    r.transformed = true;
+    const Affine inv = p.transform->Inverse();
     for (int i = 0; i < 3; ++i)
-      norm = std::max(norm, std::abs(p.transform->m[i][0]) + std::abs(p.transform->m[i][1]) +
-                                std::abs(p.transform->m[i][2]));
-    auto grow = [&](const Vec3& q, double radius) {
-      scale = std::max(scale, MaxAbs(p.transform->ApplyPoint(q)) + radius * norm);
-    };
-    if (auto* s = std::get_if<Sphere>(&p.shape)) grow(s->center, s->radius);
-    if (auto* c = std::get_if<Cone>(&p.shape)) grow(c->base, c->baseRadius), grow(c->apex, c->apexRadius);
-    if (auto* q = std::get_if<Polygon>(&p.shape))
-      for (const Vec3& v : q->vertices) grow(v, 0);
+      for (int j = 0; j < 3; ++j) r.inverse[i][j] = T(inv.m[i][j]);
+    const double norm = LinearNormInf(*p.transform);
+    Vec3 anchor;
+    if (auto* s = std::get_if<Sphere>(&p.shape)) {
+      anchor = s->center;
+      r.radius = T(s->radius);
+      r.radius2 = T(s->radius * s->radius);
+      scale = norm * s->radius;
+    } else {
+      const auto& c = std::get<Cone>(p.shape);
+      anchor = c.base;
+      const Vec3 axis = c.apex - c.base;
+      const double h = Length(axis);
+      r.axis = V(axis / h);
+      r.height = T(h);
+      r.r0 = T(c.baseRadius);
+      r.slope = T((c.apexRadius - c.baseRadius) / h);
+      scale = norm * (MaxAbs(axis) + std::max(c.baseRadius, c.apexRadius));
+    }
+    const Vec3 world = p.transform->ApplyPoint(anchor);
+    r.anchor = V(world);
+    scale += MaxAbs(world);
   } else if (auto* s = std::get_if<Sphere>(&p.shape)) {
+    r.centre = V(s->center);
+    r.radius = T(s->radius);
+    r.radius2 = T(s->radius * s->radius);
     scale = MaxAbs(s->center) + s->radius;
-  } else if (auto* c = std::get_if<Cone>(&p.shape)) {
-    scale = std::max(MaxAbs(c->base), MaxAbs(c->apex)) + std::max(c->baseRadius, c->apexRadius);
   } else {
-    scale = std::abs(Dot(Vec3(r.normal), std::get<Polygon>(p.shape).vertices[0]));
+    const auto& c = std::get<Cone>(p.shape);
+    const Vec3 axis = c.apex - c.base;
+    const double h = Length(axis);
+    r.base = V(c.base);
+    r.axis = V(axis / h);
+    r.height = T(h);
+    r.r0 = T(c.baseRadius);
+    r.slope = T((c.apexRadius - c.baseRadius) / h);
+    scale = std::max(MaxAbs(c.base), MaxAbs(c.apex)) + std::max(c.baseRadius, c.apexRadius);
   }
   r.scale = T(scale);
   return r;
@@ -225,7 +256,7 @@ int Intersect(const Prepared<T>& obj, SphereTest form, Vec3T<T> o, Vec3T<T> d, T
     case ShapeKind::kPolygon: {
       const T nd = Dot(obj.normal, d);
       if (nd == T(0)) return 0;
-      const T t = Dot(obj.normal, obj.v0 - o) / nd;
+      const T t = (obj.planeOffset - Dot(obj.normal, o)) / nd;
       if (!(t > tMin)) return 0;
       if (!InsideAlongRay(obj.vertices, obj.groups, o, d, nd > T(0) ? 1 : -1)) return 0;
       roots[0] = t;
@@ -267,7 +298,7 @@ Vec3T<T> NormalAt(const Prepared<T>& obj, const Vec3T<T>& worldP) {
       break;
     }
     case ShapeKind::kPolygon:
-      n = obj.normal;
+      n = obj.normal * T(obj.front);
       if (!obj.normals.empty()) {
         // Fan triangles from vertex 0: interpolate in the one that holds p.
         for (size_t i = 1; i + 1 < obj.vertices.size(); ++i) {
@@ -349,9 +380,10 @@ class TracerT final : public Tracer {
 
   // How far a secondary or shadow ray leaving a hit skips, so it does not re-hit the
   // surface it leaves: a bound on the hit point's error, which grows with the magnitudes
-  // that computed it — the ray's origin, the distance t and the object's own numbers —
-  // times 1e-9 (double) or 1e-4 (float, ~7 digits). Tied to the hit, not to the scene: a
-  // far "infinite" floor changes nothing here (docs/shading.md).
+  // that computed it — the ray's origin, the distance t and the object's own numbers as its
+  // test uses them (Prepared::scale) — times 1e-9 (double) or 1e-4 (float, ~7 digits). Tied
+  // to the hit, not to the scene: a far "infinite" floor changes nothing here
+  // (docs/shading.md).
   T SecondaryOffset(const V& o, T t, const Prepared<T>& obj) const {
     const T relative = std::is_same_v<T, float> ? T(1e-4) : T(1e-9);
     return relative * (MaxAbs(o) + std::abs(t) + obj.scale);

@@ -1,6 +1,6 @@
 // The frame farm's pieces, in process: frames, the queue, the message header checks, the
-// traffic account and the checkpoint file (torn and damaged records each skipped on their
-// own, the file never cut on resume, another job's checkpoint).
+// traffic account and the checkpoint file (torn records of every length and damaged ones each
+// skipped on their own, the file never cut on resume, another job's checkpoint).
 #include <gtest/gtest.h>
 
 #include <cstring>
@@ -162,6 +162,50 @@ TEST(FrameCheckpoint, ATornLastRecordIsSkippedAndNewFramesFollowItWithoutCutting
   EXPECT_TRUE(c.Damage().badFrames.empty()) << "frame 3 has an intact copy now";
   EXPECT_EQ(c.Damage().unreadableBytes, kHead + 48 + kTail - 5);
   EXPECT_EQ(std::filesystem::file_size(path), full - 5 + kHead + 48 + kTail);
+}
+
+// A crash tears the record being written at any byte. For every length 1..(record size) of
+// the torn piece — inside the marker, the head, the pixels, the hash, and whole at the end of
+// the range — after a good record: resuming keeps the good record, names the torn frame when
+// its head is whole (16 bytes or more) and counts exactly the torn bytes as one unreadable
+// region; the resumed run appends after them (the file is never cut), and the records it
+// writes — another frame, and the torn one rendered again — are read back whole.
+TEST(FrameCheckpoint, ATornRecordOfEveryLengthBeforeAGoodOneCostsOnlyItsBytes) {
+  testing::TempDir dir;
+  const std::string path = dir / "out.png.frames";
+  CheckpointKey key{16, 16, 4, 3, JobHash("scene")};
+  const std::size_t record = kHead + 48 + kTail;
+  for (std::size_t torn = 1; torn <= record; ++torn) {
+    const std::string what =
+        "torn after " + std::to_string(torn) + " of " + std::to_string(record) + " bytes";
+    {
+      FrameCheckpoint c = FrameCheckpoint::Create(path, key);
+      c.Append(0, FramePixels(0));
+      c.Append(3, FramePixels(3));
+    }
+    std::filesystem::resize_file(path, kHeader + record + torn);
+    const bool whole = torn == record, headWhole = torn >= kHead && !whole;
+    {
+      FrameCheckpoint c = FrameCheckpoint::Resume(path, key);
+      EXPECT_EQ(c.Frames().size(), whole ? 2u : 1u) << what;
+      EXPECT_TRUE(c.Frames().count(0) && c.Frames().at(0) == FramePixels(0)) << what;
+      EXPECT_EQ(c.Damage().badFrames, headWhole ? std::vector<int>{3} : std::vector<int>{}) << what;
+      EXPECT_EQ(c.Damage().unreadableBytes, whole ? 0 : torn) << what;
+      c.Append(5, FramePixels(5));
+      c.Append(3, FramePixels(3));
+    }
+    EXPECT_EQ(std::filesystem::file_size(path), kHeader + record + torn + 2 * record)
+        << what << ": cut";
+    FrameCheckpoint c = FrameCheckpoint::Resume(path, key);
+    EXPECT_EQ(c.Frames().size(), 3u) << what;
+    for (const int id : {0, 3, 5}) {
+      EXPECT_TRUE(c.Frames().count(id) && c.Frames().at(id) == FramePixels(id))
+          << what << ", frame " << id;
+    }
+    EXPECT_TRUE(c.Damage().badFrames.empty()) << what << ": frame 3 has an intact copy";
+    EXPECT_EQ(c.Damage().unreadableBytes, whole ? 0 : torn) << what;
+    EXPECT_EQ(c.Damage().unreadableRegions, whole ? 0 : 1) << what;
+  }
 }
 
 // One flipped bit costs exactly the record it is in, wherever it is: the pixels (the frame

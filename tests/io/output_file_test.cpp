@@ -1,13 +1,23 @@
 // Atomic output files (hosts/io/output_file.h): a committed file appears whole; an abandoned
 // or failed one leaves the old file of that name untouched and no temporary behind — on a
 // real full disk (a tiny tmpfs) too; output paths that cannot work are refused up front.
+// Durability as an ordering: Commit's system calls traced as they are made (hosts/io/test_seam.h)
+// — write (the flush), mode, fsync, close, rename, the directory's fsync — with what each
+// finds on disk; each failed in turn; the process killed before each.
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
+#include <cerrno>
+#include <csignal>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 
 #include "fixed/check.h"
 #include "hosts/io/output_file.h"
+#include "hosts/io/test_seam.h"
 #include "hosts/trace/image.h"
 #include "tests/farm/mpi_launch.h"
 
@@ -104,6 +114,213 @@ TEST(OutputFile, SameFileSeesThroughSpellingsAndLinks) {
   EXPECT_TRUE(SameFile(dir / "new.png", dir / "sub/../new.png"));  // neither exists yet
   EXPECT_FALSE(SameFile(dir / "s.nff", dir / "new.png"));
   EXPECT_FALSE(SameFile(dir / "a.png", dir / "b.png"));
+}
+
+// ---- Durability as an ordering (issue 29 item 9) --------------------------------------------
+
+using io::CommitStep;
+
+// The temporaries beside `path` (.NAME.tmp-XXXXXX).
+std::vector<std::string> Temporaries(const std::string& path) {
+  std::vector<std::string> found;
+  const std::string prefix = "." + std::filesystem::path(path).filename().string() + ".tmp-";
+  for (const auto& e :
+       std::filesystem::directory_iterator(std::filesystem::path(path).parent_path()))
+    if (e.path().filename().string().rfind(prefix, 0) == 0) found.push_back(e.path().string());
+  return found;
+}
+
+off_t SizeOf(int fd) {
+  struct stat s;
+  return ::fstat(fd, &s) == 0 ? s.st_size : -1;
+}
+
+// The system calls with `around` put around each: it gets the step, the descriptor it acts
+// on (-1 for rename and the directory's open) and the call, and returns what the call would.
+using Around = std::function<int(CommitStep step, int fd, const std::function<int()>& call)>;
+
+io::CommitCalls Wrapped(Around around) {
+  const io::CommitCalls plain = io::SystemCalls();
+  io::CommitCalls c;
+  c.fflush = [=](std::FILE* f) {
+    return around(CommitStep::kFlush, ::fileno(f), [&] { return plain.fflush(f); });
+  };
+  c.fchmod = [=](int fd, mode_t m) {
+    return around(CommitStep::kChmod, fd, [&] { return plain.fchmod(fd, m); });
+  };
+  c.fsync = [=](int fd) {
+    struct stat s;
+    const bool directory = ::fstat(fd, &s) == 0 && S_ISDIR(s.st_mode);
+    return around(directory ? CommitStep::kSyncDirectory : CommitStep::kSync, fd,
+                  [&] { return plain.fsync(fd); });
+  };
+  c.fclose = [=](std::FILE* f) {
+    return around(CommitStep::kClose, ::fileno(f), [&] { return plain.fclose(f); });
+  };
+  c.rename = [=](const char* a, const char* b) {
+    return around(CommitStep::kRename, -1, [&] { return plain.rename(a, b); });
+  };
+  c.openDirectory = [=](const char* d) {
+    return around(CommitStep::kOpenDirectory, -1, [&] { return plain.openDirectory(d); });
+  };
+  c.close = [=](int fd) {
+    return around(CommitStep::kCloseDirectory, fd, [&] { return plain.close(fd); });
+  };
+  return c;
+}
+
+// Wrapped calls for the test's lifetime.
+struct ScopedSeam {
+  explicit ScopedSeam(Around around) : previous(io::SetCommitCalls(Wrapped(std::move(around)))) {}
+  ~ScopedSeam() { io::SetCommitCalls(std::move(previous)); }
+  io::CommitCalls previous;
+};
+
+// Every call Commit makes, in order, with what the disk holds just before and after it: the
+// bytes reach the temporary at the flush (or before, for more than a buffer), all of them
+// before the fsync; the fsync before the close; the rename only of the closed, synced, whole
+// temporary with its final mode, the old file intact until then; the directory's fsync after
+// the rename, on the output's own directory. A small file and one larger than stdio's buffer.
+TEST(OutputFile, CommitWritesFlushesSyncsClosesRenamesThenSyncsTheDirectory) {
+  for (const std::size_t bytes : {std::size_t(100), (std::size_t(1) << 20) + 100}) {
+    testing::TempDir dir;
+    const std::string path = dir / "out.bin";
+    std::ofstream(path) << "old";
+    const std::string contents(bytes, 'n');
+    std::vector<std::string> calls;
+    int fileFd = -1;
+    ScopedSeam seam([&](CommitStep step, int fd, const std::function<int()>& call) {
+      calls.push_back(io::CommitStepName(step));
+      const std::vector<std::string> temporaries = Temporaries(path);
+      const std::string what = std::to_string(bytes) + " bytes, before " + io::CommitStepName(step);
+      switch (step) {
+        case CommitStep::kFlush:
+          fileFd = fd;
+          EXPECT_LT(SizeOf(fd), off_t(bytes)) << what << ": the stream writes at its flush";
+          break;
+        case CommitStep::kChmod:
+        case CommitStep::kSync:
+          EXPECT_EQ(SizeOf(fd), off_t(bytes)) << what << ": every byte written first";
+          break;
+        case CommitStep::kClose:
+          EXPECT_EQ(calls[calls.size() - 2], "fsync") << what;
+          break;
+        case CommitStep::kRename: {
+          EXPECT_EQ(::fcntl(fileFd, F_GETFD), -1) << what << ": the temporary is closed";
+          EXPECT_EQ(errno, EBADF) << what;
+          EXPECT_EQ(testing::ReadFile(path), "old") << what;
+          EXPECT_EQ(temporaries.size(), 1u) << what;
+          if (temporaries.size() == 1) {
+            EXPECT_EQ(testing::ReadFile(temporaries[0]), contents) << what;
+            const mode_t mask = ::umask(0);
+            ::umask(mask);
+            EXPECT_EQ(std::filesystem::status(temporaries[0]).permissions(),
+                      std::filesystem::perms(0666 & ~mask))
+                << what;
+          }
+          break;
+        }
+        case CommitStep::kOpenDirectory:
+          EXPECT_EQ(testing::ReadFile(path), contents) << what << ": renamed first";
+          EXPECT_TRUE(temporaries.empty()) << what;
+          break;
+        case CommitStep::kSyncDirectory:
+        case CommitStep::kCloseDirectory: {
+          struct stat s, d;
+          EXPECT_EQ(::fstat(fd, &s), 0) << what;
+          EXPECT_EQ(::stat((dir / "").c_str(), &d), 0) << what;
+          EXPECT_TRUE(S_ISDIR(s.st_mode) && s.st_ino == d.st_ino && s.st_dev == d.st_dev)
+              << what << ": the output's own directory";
+          break;
+        }
+      }
+      const int result = call();
+      if (step == CommitStep::kFlush) {
+        EXPECT_EQ(SizeOf(fd), off_t(bytes)) << what << ", after it";
+      }
+      return result;
+    });
+    OutputFile f(path, "file");
+    std::fwrite(contents.data(), 1, contents.size(), f.Stream());
+    EXPECT_EQ(testing::ReadFile(path), "old");
+    f.Commit();
+    EXPECT_EQ(calls, (std::vector<std::string>{"fflush", "fchmod", "fsync", "fclose", "rename",
+                                               "open-dir", "fsync-dir", "close-dir"}));
+    EXPECT_EQ(testing::ReadFile(path), contents);
+  }
+}
+
+// Each step failed in turn (EIO; a failed fclose still closes): up to the rename, the commit
+// fails naming the file and the reason, the old file is intact, no temporary is left and no
+// later step runs — nothing is renamed that was not synced; after it, the new file stands
+// (a directory that cannot be synced loses nothing a crash would not).
+TEST(OutputFile, AFailureAtEveryStepLeavesTheOldFileOrTheWholeNewOne) {
+  for (int failing = 0; failing < io::kCommitSteps; ++failing) {
+    const CommitStep fail = CommitStep(failing);
+    const std::string what = std::string("failing ") + io::CommitStepName(fail);
+    testing::TempDir dir;
+    const std::string path = dir / "out.bin";
+    std::ofstream(path) << "old";
+    std::vector<CommitStep> calls;
+    ScopedSeam seam([&](CommitStep step, int, const std::function<int()>& call) {
+      calls.push_back(step);
+      if (step != fail) return call();
+      if (step == CommitStep::kClose) call();
+      errno = EIO;
+      return -1;
+    });
+    bool threw = false;
+    try {
+      WriteOutputFile(path, "report", "new contents");
+    } catch (const UserError& e) {
+      threw = true;
+      EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << what << ": " << e.what();
+      EXPECT_NE(std::string(e.what()).find(std::strerror(EIO)), std::string::npos)
+          << what << ": " << e.what();
+    }
+    const bool beforeRename = fail <= CommitStep::kRename;
+    EXPECT_EQ(threw, beforeRename) << what;
+    EXPECT_EQ(testing::ReadFile(path), beforeRename ? "old" : "new contents") << what;
+    EXPECT_TRUE(Temporaries(path).empty()) << what;
+    // After a failure, only the close (the stream must not leak): nothing unsynced is renamed.
+    std::vector<CommitStep> expected;
+    for (int s = 0; s < io::kCommitSteps; ++s) {
+      const CommitStep step = CommitStep(s);
+      const bool runs = beforeRename ? step <= fail || step == CommitStep::kClose
+                                     : !(fail == CommitStep::kOpenDirectory && step > fail);
+      if (runs) expected.push_back(step);
+    }
+    EXPECT_EQ(calls, expected) << what;
+  }
+}
+
+// The process killed (SIGKILL) just before each step, as a crash would stop it: `zephyr gen`
+// replacing a scene file leaves the old file whole (before the rename) or the new one whole
+// (after it), never a part; only a kill before the rename leaves a temporary, one.
+TEST(OutputFile, AProcessKilledBeforeEveryStepLeavesTheOldFileOrTheWholeNewOne) {
+  testing::TempDir dir;
+  const std::string path = dir / "s.nff", fresh = dir / "fresh.nff";
+  const std::string gen = "gen spheres --count 40 --seed 7 --size 64x48 --out ";
+  ASSERT_EQ(testing::RunZephyrProcess(gen + fresh).status, 0);
+  const std::string wanted = testing::ReadFile(fresh);
+  for (int s = 0; s < io::kCommitSteps; ++s) {
+    const CommitStep step = CommitStep(s);
+    for (const std::string& t : Temporaries(path)) std::filesystem::remove(t);
+    std::ofstream(path) << "old";
+    const testing::Launch r =
+        testing::RunCommand(std::string("ZEPHYR_TEST_IO_KILL=") + io::CommitStepName(step) + " " +
+                            testing::ZephyrPath() + " " + gen + path);
+    EXPECT_EQ(r.status, 128 + SIGKILL) << io::CommitStepName(step) << ": " << r.output;
+    const bool renamed = step > CommitStep::kRename;
+    EXPECT_EQ(testing::ReadFile(path), renamed ? wanted : "old")
+        << "killed before " << io::CommitStepName(step);
+    EXPECT_EQ(Temporaries(path).size(), renamed ? 0u : 1u)
+        << "killed before " << io::CommitStepName(step);
+  }
+  const testing::Launch bad =
+      testing::RunCommand("ZEPHYR_TEST_IO_KILL=fsink " + testing::ZephyrPath() + " " + gen + path);
+  EXPECT_NE(bad.status, 0);
+  EXPECT_NE(bad.output.find("ZEPHYR_TEST_IO_KILL"), std::string::npos) << bad.output;
 }
 
 }  // namespace

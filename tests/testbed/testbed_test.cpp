@@ -1,7 +1,7 @@
 // The modelled 1992 testbed (docs/testbed.md): counted host work, host profiles, modelled
-// seconds of seq and simd, the platform files, and — when `make smpi` built zephyr-smpi —
-// dist and hetero under smpirun: the same PNG as seq/simd and the same seconds twice
-// (to the last digit).
+// seconds of seq and simd (and each charge by closed form on a tiny scene), the platform
+// files, and — when `make smpi` built zephyr-smpi — dist and hetero under smpirun: the same
+// PNG as seq/simd and the same seconds twice (to the last digit).
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -110,6 +110,190 @@ TEST(TestbedModel, SimdIsArrayPlusScsiPlusHostShading) {
   // which pins bytes to bits / 8, not to bits.
   EXPECT_NEAR(t.at("array").at("scsiBytes").get<double>() / t.at("array").at("scsiSeconds").get<double>(),
               t.at("testbed").at("scsiBandwidth").at("value").get<double>(), 1e-6 * 5e6);
+}
+
+// ---- The charges by closed form (issue 29 item 10) ---------------------------------------
+// Each counted event's modelled seconds by hand on a tiny scene, from the figures the work
+// table, the profile and the array publish (`zephyr testbed profiles`, docs/testbed.md,
+// docs/bitserial.md), not from the functions that compute them.
+
+// The work table: flops and other instructions per event.
+struct PublishedCost {
+  const char* event;
+  double flops, instructions;
+};
+constexpr PublishedCost kWorkTable[] = {
+    {"sphereTest", 21, 12}, {"coneTest", 70, 25}, {"polygonTest", 44, 30}, {"ray", 25, 20},
+    {"hit", 2, 10},         {"shade", 37, 40},    {"lightSample", 66, 40}, {"pixel", 0, 20}};
+constexpr double kMflops = 4.2, kMips = 28.5;  // sparcstation2, the ufmg1992 host
+// The wavetracer array: a 10 MHz clock; one hostPlane (a bit of each of 8192 PEs, 1 KB over
+// SCSI) takes 2048 cycles.
+constexpr double kArrayClock = 10e6, kPlaneCycles = 2048, kPlaneBytes = 8192 / 8;
+
+double SecondsOf(const char* event, double count) {
+  for (const PublishedCost& c : kWorkTable)
+    if (std::string(c.event) == event)
+      return count * (c.flops / (kMflops * 1e6) + c.instructions / (kMips * 1e6));
+  ADD_FAILURE() << "no event " << event;
+  return 0;
+}
+
+// 3×2 pixels of a floor (Kd 0.5, Ks 0.5: a mirror) under two lights, a sphere and a cone
+// hidden below it: every primary ray meets the floor, each hit samples both lights (both
+// above: a shadow ray each, which nothing blocks) and sends one reflected ray, which escapes.
+// Every ray tests all three objects.
+constexpr const char* kTinyScene =
+    "v\nfrom 0 1 3\nat 0 0 0\nup 0 1 0\nangle 30\nhither 0\nresolution 3 2\nb 0 0 0\n"
+    "l -5 10 5 1 1 1\nl 5 10 5 1 1 1\n"
+    "f 1 1 1 0.5 0.5 10 0 0\np 4\n-100 0 -100\n-100 0 100\n100 0 100\n100 0 -100\n"
+    "f 1 0 0 1 0 0 0 0\ns 0 -5 0 1\nc 0 -9 0 1 0 -7 0 0.5\n";
+
+std::string WriteTinyScene(const TempDir& dir) {
+  const std::string path = dir / "tiny.nff";
+  std::ofstream(path) << kTinyScene;
+  return path;
+}
+
+void ExpectEvents(const nlohmann::json& host, const std::map<std::string, double>& counts,
+                  const std::string& what) {
+  double seconds = 0;
+  for (const auto& [event, count] : counts) {
+    const nlohmann::json& e = host.at("events").at(event);
+    EXPECT_EQ(e.at("count").get<double>(), count) << what << ": " << event;
+    EXPECT_NEAR(e.at("seconds").get<double>(), SecondsOf(event.c_str(), count), 1e-15)
+        << what << ": " << event;
+    seconds += SecondsOf(event.c_str(), count);
+  }
+  EXPECT_NEAR(host.at("seconds").get<double>(), seconds, 1e-15) << what;
+}
+
+TEST(TestbedClosedForm, SeqChargesEachCountedEventItsPublishedCost) {
+  TempDir dir;
+  const RenderOutput out = Render(WriteTinyScene(dir), "seq", "ufmg1992");
+  // 6 pixels: 6 primary rays, 12 shadow rays (2 lights), 6 reflected: 24 rays, each testing
+  // the polygon, the sphere and the cone; 6 hits, 6 shaded points, 12 light samples.
+  const std::map<std::string, double> counts = {
+      {"sphereTest", 24}, {"coneTest", 24}, {"polygonTest", 24}, {"ray", 24},
+      {"hit", 6},         {"shade", 6},     {"lightSample", 12}, {"pixel", 6}};
+  const nlohmann::json& t = out.report.at("testbed");
+  ExpectEvents(t.at("host"), counts, "seq");
+  double seconds = 0;
+  for (const auto& [event, count] : counts) seconds += SecondsOf(event.c_str(), count);
+  EXPECT_NEAR(t.at("modelledSeconds").get<double>(), seconds, 1e-15);
+  // 24 · (21/4.2 + 12/28.5) µs for the sphere tests alone, written out once.
+  EXPECT_NEAR(t.at("host").at("events").at("sphereTest").at("seconds").get<double>(),
+              24 * (21 / 4.2e6 + 12 / 28.5e6), 1e-15);
+}
+
+// The SIMD method: each array pass that ran (the first, and the refine pass when one ran) at
+// the array's clock, the host-class cycles as SCSI bytes and seconds, and the host's work:
+// shading from the matrix (one test of the hit object per pixel), plus each uncertain pixel
+// recomputed — one primary ray and one test of every object.
+TEST(TestbedClosedForm, SimdChargesEveryArrayPassTheScsiLinkAndTheHostRecompute) {
+  TempDir dir;
+  const std::string scene = WriteTinyScene(dir);
+  // --frac-bits 6 leaves every pixel uncertain: recomputed (6 each time), or refined on the
+  // array first (auto: more than 1 % uncertain).
+  for (const std::string uncertain : {"recompute", "auto"}) {
+    RenderOptions o;
+    o.method = "simd";
+    o.scenePath = scene;
+    o.progress = false;
+    o.testbed = "ufmg1992";
+    o.simd.formats.fracBits = 6;
+    o.simd.uncertain =
+        uncertain == "recompute" ? simd::UncertainPolicy::kRecompute : simd::UncertainPolicy::kAuto;
+    const RenderOutput out = RunRender(o);
+    const nlohmann::json& pass = out.report.at("simd");
+    const double n = pass.at("uncertain").at("recomputed").get<double>();
+    const bool refined = uncertain == "auto";
+    ASSERT_EQ(pass.contains("refine"), refined) << uncertain;
+    if (!refined) {
+      ASSERT_EQ(n, 6) << "every pixel recomputed";
+    }
+    // The host: 6 primary rays from the matrix, each refined by one polygon test and a hit,
+    // then shaded as seq does (18 secondary rays testing all three objects), and n pixels
+    // recomputed: n rays, n tests of each object.
+    const std::map<std::string, double> counts = {
+        {"sphereTest", 18 + n}, {"coneTest", 18 + n}, {"polygonTest", 6 + 18 + n},
+        {"ray", 24 + n},        {"hit", 6},           {"shade", 6},
+        {"lightSample", 12},    {"pixel", 6}};
+    const nlohmann::json& t = out.report.at("testbed");
+    ExpectEvents(t.at("host"), counts, uncertain);
+    double cycles = 0, hostCycles = 0;
+    for (const nlohmann::json* c :
+         {&pass.at("cycles"), refined ? &pass.at("refine").at("cycles") : nullptr}) {
+      if (!c) continue;
+      cycles += c->at("totalCycles").get<double>();
+      hostCycles += c->at("byClass").at("host").get<double>();
+    }
+    const nlohmann::json& array = t.at("array");
+    EXPECT_NEAR(array.at("seconds").get<double>(), (cycles - hostCycles) / kArrayClock, 1e-12)
+        << uncertain;
+    EXPECT_NEAR(array.at("scsiSeconds").get<double>(), hostCycles / kArrayClock, 1e-12)
+        << uncertain;
+    EXPECT_NEAR(array.at("scsiBytes").get<double>(), hostCycles / kPlaneCycles * kPlaneBytes, 1e-6)
+        << uncertain;
+    double host = 0;
+    for (const auto& [event, count] : counts) host += SecondsOf(event.c_str(), count);
+    EXPECT_NEAR(t.at("modelledSeconds").get<double>(), cycles / kArrayClock + host, 1e-12)
+        << uncertain;
+  }
+}
+
+// The recompute's charge alone, per pixel and per object test: a report with no other work
+// and a pass of C cycles (H of them the host class) on scenes of 0..3 spheres, cones and
+// polygons, for 0, 1 and 7 recomputed pixels: the modelled seconds are C/clock plus, per
+// pixel, one ray and one test of each object.
+TEST(TestbedClosedForm, TheHostRecomputeCostsOneRayAndOneTestPerObjectPerPixel) {
+  const double c = 123456, h = 20480;
+  for (const int spheres : {0, 1, 3})
+    for (const int cones : {0, 2})
+      for (const int polygons : {0, 1, 3}) {
+        Scene scene;
+        auto add = [&](int count, Shape shape) {
+          for (int i = 0; i < count; ++i) scene.objects.emplace_back().shape = shape;
+        };
+        add(spheres, Sphere{});
+        add(cones, Cone{});
+        add(polygons, Polygon{});
+        for (const int pixels : {0, 1, 7}) {
+          nlohmann::json report = TraceStats{}.ToJson();
+          report["simd"] = {{"cycles",
+                             {{"profile", "wavetracer"},
+                              {"clockHz", kArrayClock},
+                              {"totalCycles", c},
+                              {"byClass", {{"host", h}}}}},
+                            {"uncertain", {{"recomputed", pixels}}}};
+          testbed::AddModelledTime("ufmg1992", "simd", scene, report);
+          const std::string what = std::to_string(pixels) + " pixels, " + std::to_string(spheres) +
+                                   " spheres, " + std::to_string(cones) + " cones, " +
+                                   std::to_string(polygons) + " polygons";
+          const double perPixel = SecondsOf("ray", 1) + spheres * SecondsOf("sphereTest", 1) +
+                                  cones * SecondsOf("coneTest", 1) +
+                                  polygons * SecondsOf("polygonTest", 1);
+          const nlohmann::json& t = report.at("testbed");
+          EXPECT_NEAR(t.at("modelledSeconds").get<double>(), c / kArrayClock + pixels * perPixel,
+                      1e-15)
+              << what;
+          EXPECT_NEAR(t.at("host").at("seconds").get<double>(), pixels * perPixel, 1e-15) << what;
+          EXPECT_EQ(t.at("host").at("events").at("ray").at("count").get<double>(), pixels) << what;
+          EXPECT_EQ(t.at("host").at("events").at("sphereTest").at("count").get<double>(),
+                    pixels * spheres)
+              << what;
+          EXPECT_EQ(t.at("host").at("events").at("coneTest").at("count").get<double>(),
+                    pixels * cones)
+              << what;
+          EXPECT_EQ(t.at("host").at("events").at("polygonTest").at("count").get<double>(),
+                    pixels * polygons)
+              << what;
+          EXPECT_EQ(t.at("host").at("events").at("hit").at("count").get<double>(), 0)
+              << what << ": no hit charged";
+          EXPECT_NEAR(t.at("array").at("scsiBytes").get<double>(), h / kPlaneCycles * kPlaneBytes,
+                      1e-9)
+              << what;
+        }
+      }
 }
 
 TEST(TestbedModel, BadTestbedAndUnsimulatedFarmAreUserErrors) {
@@ -312,6 +496,38 @@ TEST(TestbedSimulated, SeqAndSimdOnAPlatformFile) {
   const nlohmann::json j = simulated("seq", platform);
   const double slc = testbed::ModelHostTime(TraceStats::FromJson(j), testbed::HostProfileNamed("sparcstation-slc")).seconds;
   EXPECT_NEAR(j.at("testbed").at("modelledSeconds").get<double>(), slc, 1e-9 * slc);
+}
+
+// The refine pass is charged under SimGrid as well: simd on the tiny scene at --frac-bits 6
+// (every pixel uncertain, so auto refines them on the array) on the paper's platform takes
+// the named testbed's seconds, both passes' cycles included (the SCSI transfer 1.05 times as
+// long, as above).
+TEST(TestbedSimulated, SimdChargesItsRefinePassOnThePlatform) {
+  if (!std::filesystem::exists(SmpiPath())) GTEST_SKIP() << "no zephyr-smpi (make smpi)";
+  TempDir dir;
+  const std::string scene = WriteTinyScene(dir);
+  RenderOptions o;
+  o.method = "simd";
+  o.scenePath = scene;
+  o.progress = false;
+  o.testbed = "ufmg1992";
+  o.simd.formats.fracBits = 6;
+  o.simd.uncertain = simd::UncertainPolicy::kAuto;  // the command line's default
+  const nlohmann::json named = RunRender(o).report;
+  ASSERT_TRUE(named.at("simd").contains("refine"));
+  const nlohmann::json& t = named.at("testbed");
+  const double expected =
+      t.at("modelledSeconds").get<double>() + 0.05 * t.at("array").at("scsiSeconds").get<double>();
+  const std::string report = dir / "r.json";
+  auto r = RunCommand(
+      "timeout -k 5 300 bash " + Repo() + "/tools/testbed/simrun.sh --children 0 --zephyr " +
+      SmpiPath() + " -- render --no-progress --method simd " + scene +
+      " --frac-bits 6 --testbed ufmg1992 --out " + (dir / "s.png") + " --report " + report);
+  ASSERT_EQ(r.status, 0) << r.output;
+  const nlohmann::json j = ReadJson(report);
+  ASSERT_TRUE(j.at("simd").contains("refine"));
+  EXPECT_NEAR(j.at("testbed").at("modelledSeconds").get<double>(), expected, 1e-9 * expected)
+      << j.at("testbed").dump(2);
 }
 
 // this-host: `zephyr testbed calibrate` turns a measured seq render into operations per

@@ -231,6 +231,41 @@ TEST(TraceShade, RefractionAndTotalInternalReflectionSplitTheEnergy) {
   }
 }
 
+// A polygon's front is the side its vertices run counter-clockwise around, seen in its own
+// coordinates; a mirroring transform reverses the winding in the world but not which side is
+// the front (normals map by A⁻ᵀ). A glass pane (ior 1.5) met at 60° from its front is entered
+// (refracted); from its back it would be left past the critical angle 41.8° (reflected).
+TEST(TraceShade, AMirroringTransformKeepsAPolygonsFront) {
+  for (const double mirror : {1.0, -1.0}) {
+    Scene s;
+    s.source = "pane";
+    s.camera = Camera{{0, 0, 1}, {0, 0, 0}, {0, 1, 0}, 40, 0, 3, 3};
+    s.materials = {Material{{1, 1, 1}, 0, 0, 1, 1, 1.5}};
+    Primitive pane;
+    pane.shape = Polygon{{{-10, -10, 0}, {10, -10, 0}, {10, 10, 0}, {-10, 10, 0}}, {}};  // front +z
+    pane.transform = Affine{};
+    pane.transform->m[0][0] = mirror;
+    s.objects.push_back(pane);
+    const double th = 60 * M_PI / 180;
+    const Vec3 o{0, 0, 1}, d{std::sin(th), 0, -std::cos(th)};
+    s.camera.from = o, s.camera.at = o + d;
+    for (const Precision p : {Precision::kFloat, Precision::kDouble}) {
+      TraceOptions options;
+      options.depth = 2;
+      options.precision = p;
+      const auto tracer = Tracer::Create(s, options);
+      TraceStats stats;
+      const PrimaryHit hit = tracer->FirstHit({o, d}, stats);
+      ASSERT_EQ(hit.object, 0);
+      tracer->ShadeFromPrimaryHit(hit, stats);
+      EXPECT_EQ(stats.rays[int(RayKind::kRefracted)], 1u)
+          << "x scaled by " << mirror << ", " << PrecisionName(p);
+      EXPECT_EQ(stats.rays[int(RayKind::kReflected)], 0u)
+          << "x scaled by " << mirror << ", " << PrecisionName(p);
+    }
+  }
+}
+
 // Issue 11: the shadow under a sphere resting on a floor: at pixel (35, 38) the floor is
 // in shadow, so only the ambient term is left (SPD light rule: one light without a colour
 // gives 1/2 and an ambient 1/2; Kd 0.8 · C 0.8 · 1/2 = 0.32). The floor's size must not
