@@ -13,7 +13,9 @@
 
 #include <CLI/CLI.hpp>
 
+#include "fixed/check.h"
 #include "hosts/cmd/flags.h"
+#include "hosts/methods/memory_budget.h"
 #include "tests/farm/mpi_launch.h"
 
 namespace zephyr {
@@ -105,6 +107,32 @@ TEST(MemoryPreflight, AnImageLargerThanMemoryIsRefusedWithTheLargestThatFits) {
   const int side = std::stoi(seqMessage.substr(at + 14));
   EXPECT_GT(side, 7000);
   EXPECT_LT(side, 8192);
+}
+
+// The estimate against a given limit, exactly: a need equal to the limit fits, one byte more
+// does not, and the largest square named is the one whose pixels fill the limit less the
+// fixed bytes (floor of the square root).
+TEST(MemoryPreflight, TheLimitIsInclusiveAndTheLargestSquareLeavesTheFixedBytes) {
+  const MemoryNeed need{.perPixel = 32, .pixels = 200 * 200, .fixedBytes = 64 << 20};
+  const uint64_t exact = need.Bytes();
+  EXPECT_EQ(exact, (uint64_t(64) << 20) + 32 * 200 * 200);
+  EXPECT_NO_THROW(CheckMemoryFits("t", need, {exact, "test"}));
+  for (const auto& [limit, side] : std::vector<std::pair<uint64_t, int>>{
+           {exact - 1, 199}, {(uint64_t(64) << 20) + 32 * 100 * 100, 100},
+           {(uint64_t(64) << 20) + 32 * 100 * 100 - 1, 99}, {(uint64_t(64) << 20) + 31, 0}}) {
+    try {
+      CheckMemoryFits("t", need, {limit, "test"});
+      ADD_FAILURE() << limit << " accepted";
+    } catch (const UserError& e) {
+      const std::string m = e.what();
+      EXPECT_NE(m.find("t needs about"), std::string::npos) << m;
+      EXPECT_NE(m.find("(test)"), std::string::npos) << m;
+      if (side > 0)
+        EXPECT_NE(m.find("fits is about " + std::to_string(side) + "x" + std::to_string(side)), std::string::npos) << m;
+      else
+        EXPECT_NE(m.find("no image fits"), std::string::npos) << m;
+    }
+  }
 }
 
 // Every flag of every method is checked before any work: with a scene path that does not

@@ -131,3 +131,39 @@ TEST(TracePov, ExportMapsOpacityAndTransforms) {
 
 }  // namespace
 }  // namespace zephyr
+
+namespace zephyr {
+namespace {
+
+// The value written after `key` in `pov` (the first occurrence), as a number.
+double ValueAfter(const std::string& pov, const std::string& key) {
+  const size_t at = pov.find(key + " ");
+  EXPECT_NE(at, std::string::npos) << key << " missing in\n" << pov;
+  return at == std::string::npos ? -1 : std::stod(pov.substr(at + key.size() + 1));
+}
+
+// POV-Ray weights a surface's own lighting (ambient, diffuse, highlight) by its opacity
+// 1 − T and ours does not (docs/shading.md): the exporter writes each of them divided by the
+// opacity, and the mirror weight and transmission as given, for every material.
+TEST(TracePov, EveryLocalWeightIsDividedByTheOpacity) {
+  for (double t : {0.0, 0.25, 0.5, 0.8})
+    for (double ks : {0.1, 0.3})
+      for (double kd : {0.2, 0.6}) {
+        Scene s = GenerateTransformedShowcase(8, 8);
+        for (Material& m : s.materials) m.t = t, m.ks = ks, m.kd = kd, m.shine = 20, m.ior = 1.5;
+        const std::string pov = ExportPov(s, 3);
+        const std::string where = "T " + std::to_string(t) + " Ks " + std::to_string(ks) + " Kd " + std::to_string(kd);
+        EXPECT_NEAR(ValueAfter(pov, "diffuse"), kd / (1 - t), 1e-12) << where;
+        EXPECT_NEAR(ValueAfter(pov, "ambient"), kd / (1 - t), 1e-12) << where;
+        EXPECT_NEAR(ValueAfter(pov, "phong"), ks / (1 - t), 1e-12) << where;
+        EXPECT_NEAR(ValueAfter(pov, "phong_size"), 20, 1e-12) << where;
+        const size_t reflection = pov.find("reflection { ");
+        ASSERT_NE(reflection, std::string::npos) << pov;
+        EXPECT_NEAR(std::stod(pov.substr(reflection + 13)), ks, 1e-12) << where;
+        if (t > 0) EXPECT_NEAR(ValueAfter(pov, "transmit"), t, 1e-12) << where;
+        else EXPECT_EQ(pov.find("transmit"), std::string::npos) << where;
+      }
+}
+
+}  // namespace
+}  // namespace zephyr
