@@ -8,6 +8,7 @@
 #include "hosts/simd/pass.h"
 #include "hosts/trace/exact.h"
 #include "hosts/scene/gen.h"
+#include "hosts/scene/nff.h"
 
 namespace zephyr::simd {
 namespace {
@@ -425,6 +426,36 @@ TEST(SimdRefine, PolicyNameParses) {
   EXPECT_EQ(ParseUncertainPolicy("auto"), UncertainPolicy::kAuto);
   EXPECT_STREQ(UncertainPolicyName(UncertainPolicy::kAuto), "auto");
   EXPECT_THROW(ParseUncertainPolicy("refin"), UserError);
+}
+
+}  // namespace
+}  // namespace zephyr::simd
+
+namespace zephyr::simd {
+namespace {
+
+// The near root counts only beyond hither (docs/simd.md): a sphere the hither plane cuts
+// shows its far side where its near side is closer than hither, on the array as in the exact
+// reference — first object and t — with the eye outside the sphere, and with hither 0 the
+// near side itself.
+TEST(SimdPrimary, ANearRootInsideHitherGivesTheFarRoot) {
+  for (double hither : {0.0, 4.0, 5.0, 5.9}) {
+    const std::string text = "b 0 0 0\nv\nfrom 0 0 10\nat 0 0 0\nup 0 1 0\nangle 20\nhither " + std::to_string(hither) +
+                             "\nresolution 32 32\nf 1 1 1 1 0 0 0 0\ns 0 0 5 1\ns 0 0 -3 0.5\n";
+    const Scene scene = ParseNffOrThrow(text, "hither.nff");
+    const PrimaryPass pass = RunPrimaryPass(scene, {});
+    const std::vector<PrimaryHit> want = ExactHits(scene);
+    int farSide = 0;
+    for (size_t i = 0; i < want.size(); ++i) {
+      if (pass.matrix.flags[i] & kUncertainFlags) continue;  // recomputed on the host: not the array's answer
+      EXPECT_EQ(pass.matrix.hits[i].object, want[i].object) << "hither " << hither << " pixel " << i;
+      if (want[i].object >= 0) {
+        EXPECT_NEAR(pass.matrix.hits[i].t, want[i].t, 1e-2) << "hither " << hither << " pixel " << i;
+        farSide += want[i].object == 0 && want[i].t > 5;
+      }
+    }
+    if (hither > 4.1) EXPECT_GT(farSide, 0) << "no pixel saw the sphere's far side at hither " << hither;
+  }
 }
 
 }  // namespace
