@@ -593,3 +593,28 @@ TEST(TestbedSimulated, TooFewHostsNamesTheFile) {
 
 }  // namespace
 }  // namespace zephyr
+
+namespace zephyr {
+namespace {
+
+// Every ray kind is one counted ray set-up (WorkEvent::kRay: primary, shadow, reflected and
+// refracted alike): each kind alone, in any amount, adds exactly its count.
+TEST(TestbedWork, EveryRayKindIsCountedAsARay) {
+  for (int kind = 0; kind < kRayKinds; ++kind)
+    for (uint64_t n : {uint64_t(1), uint64_t(7), uint64_t(1) << 40}) {
+      TraceStats s;
+      s.rays[kind] = n;
+      const std::vector<double> c = testbed::EventCounts(s);
+      EXPECT_EQ(c[int(testbed::WorkEvent::kRay)], double(n)) << "ray kind " << kind;
+      double others = 0;
+      for (int e = 0; e < testbed::kWorkEvents; ++e)
+        if (e != int(testbed::WorkEvent::kRay)) others += c[e];
+      EXPECT_EQ(others, 0) << "ray kind " << kind;
+    }
+  TraceStats all;
+  for (int kind = 0; kind < kRayKinds; ++kind) all.rays[kind] = uint64_t(10) << kind;
+  EXPECT_EQ(testbed::EventCounts(all)[int(testbed::WorkEvent::kRay)], 10 + 20 + 40 + 80);
+}
+
+}  // namespace
+}  // namespace zephyr
