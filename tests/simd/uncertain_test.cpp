@@ -170,3 +170,43 @@ TEST(SimdUncertain, NearTieFlagFollowsThePairRule) {
 
 }  // namespace
 }  // namespace zephyr::simd
+
+namespace zephyr::simd {
+namespace {
+
+// A polygon's t bound divides by the least n̂·d a ray reaching it can have, less that
+// denominator's own error eE (the grazing band): with the plane at distance n from the eye and
+// its farthest vertex at R, a polygon seen so edge-on that n/R <= eE has every hit flagged,
+// and otherwise tError >= R·eE / (n/R − eE) (docs/simd.md, "Error bounds").
+TEST(SimdUncertain, ANearlyEdgeOnPolygonsBoundCountsItsDenominatorsError) {
+  const SimdOptions o = Keep(12);
+  auto floorAt = [](double n) {
+    Scene s = SphereScene({});
+    Polygon p;
+    p.vertices = {{-1, -n, -2}, {1, -n, -2}, {1, -n, -4}, {-1, -n, -4}};
+    Primitive prim;
+    prim.shape = p;
+    s.objects.push_back(prim);
+    return s;
+  };
+  const double eE = Bounds(floorAt(1), 0, o).grazeBand;
+  ASSERT_GT(eE, 0);
+  int flagged = 0, bounded = 0;
+  for (double k : {0.25, 0.5, 0.9, 1.2, 2.0, 8.0}) {
+    const double n = k * eE * std::sqrt(17.0);
+    const ObjectBounds b = Bounds(floorAt(n), 0, o);
+    const double ratio = n / b.farthest;
+    if (ratio <= eE) {
+      EXPECT_TRUE(b.alwaysUncertain) << "n/R = " << ratio / eE << " eE";
+      ++flagged;
+    } else if (!b.alwaysUncertain) {
+      EXPECT_GE(b.tError, b.farthest * eE / (ratio - eE)) << "n/R = " << ratio / eE << " eE";
+      ++bounded;
+    }
+  }
+  EXPECT_GT(flagged, 0);
+  EXPECT_GT(bounded, 0);
+}
+
+}  // namespace
+}  // namespace zephyr::simd
