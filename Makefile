@@ -113,11 +113,11 @@ FUZZ_BIN  := $(BUILD)/fuzz/nff_fuzz
 # The reader, the host tracer and the SIMD planner (with the arithmetic and array it
 # plans for); not the pass itself, which runs the array and is far too slow per input,
 # nor the OpenMP layer blocks (bitserial/blocks.cpp) the planner never calls.
-FUZZ_SRCS := tests/fuzz/nff_fuzz.cpp hosts/scene/nff.cpp hosts/scene/scene.cpp hosts/io/output_file.cpp \
+FUZZ_SRCS := tests/fuzz/nff_fuzz.cpp hosts/scene/nff.cpp hosts/scene/scene.cpp hosts/io/output_file.cpp hosts/io/test_seam.cpp \
              hosts/scene/geometry.cpp hosts/trace/tracer.cpp hosts/trace/sphere_kernels.cpp \
              $(filter-out $(OPENMP_SRCS),$(wildcard fixed/*.cpp bitserial/*.cpp)) \
              hosts/trace/exact.cpp \
-             $(addprefix hosts/simd/,plan.cpp bounds.cpp ops.cpp sphere.cpp sphere_float.cpp ellipsoid.cpp polygon.cpp cone.cpp)
+             $(addprefix hosts/simd/,plan.cpp audit.cpp bounds.cpp ops.cpp sphere.cpp sphere_float.cpp ellipsoid.cpp polygon.cpp cone.cpp)
 FUZZ_OBJS := $(FUZZ_SRCS:%.cpp=$(BUILD)/fuzz/obj/%.o)
 FUZZ_SAN  := -fno-sanitize-recover=all
 FUZZ_RUN   = mkdir -p $(BUILD)/fuzz/corpus && $(FUZZ_BIN) -max_len=4096 -timeout=10 \
