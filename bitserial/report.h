@@ -9,6 +9,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "bitserial/cost.h"
 #include "bitserial/profile.h"
@@ -19,7 +20,9 @@ class CycleReport {
  public:
   // Keeps its own copy of the profile, so a report outlives its machine (a layer block's
   // report is the whole machine's, bitserial/blocks.h).
-  CycleReport(const MachineProfile* profile, int layers) : profile_(*profile), layers_(layers) {}
+  CycleReport(const MachineProfile* profile, int layers);
+  // A sum of no runs (no profile yet): the first Add takes its profile.
+  CycleReport() = default;
 
   // Charges one call of `op` whose per-layer micro-op counts are `counts`.
   void Charge(const std::string& op, const MicroOpCounts& counts);
@@ -29,19 +32,32 @@ class CycleReport {
   void Clear();
   // The same calls and micro-op counts of every op (the same instruction stream).
   bool SameCharges(const CycleReport& other) const;
+  // Charge, ChargeWhole, Clear and SameCharges are for the report of one run of a program (a
+  // machine's); a sum of runs (Add) is read, not charged (ZEPHYR_CHECK).
 
-  int Layers() const { return layers_; }
-  double LayerCycles() const;  // one layer's instruction stream
-  double TotalCycles() const { return LayerCycles() * layers_; }
-  double ClassCycles(CycleClass c) const { return byClass_[static_cast<int>(c)] * layers_; }
+  // This report plus `other`'s runs after its own: a program run several times (the SIMD
+  // pass's array passes) reported as one. Totals, classes and ops are summed run by run;
+  // the layers are listed run after run. The profiles must be the same (ZEPHYR_CHECK),
+  // unless this report is empty (default-constructed).
+  void Add(const CycleReport& other);
+  int Runs() const { return int(runs_.size()); }  // runs summed (1 unless Add was called)
+  CycleReport Run(int k) const;                    // the k-th run's own report, 0 <= k < Runs()
+  const MachineProfile& Profile() const { return profile_; }
+
+  int Layers() const;           // over every run
+  double LayerCycles() const;   // one layer's instruction stream (one run only: ZEPHYR_CHECK)
+  double TotalCycles() const;
+  double ClassCycles(CycleClass c) const;
   // Total cycles charged to `op` over all layers (0 if never charged) and its call count.
   double OpCycles(const std::string& op) const;
   int64_t OpCalls(const std::string& op) const;
-  double ModelledSeconds() const { return TotalCycles() / profile_.clockHz; }
+  double ModelledSeconds() const;  // at the profile's clock, summed run by run
 
   // {"profile", "clockHz", "layers", "totalCycles", "modelledSeconds", "byClass": {...},
-  //  "byLayer": [...], "byOp": {"add": {"calls", "cycles", "byClass", "microOps"}}}
+  //  "byLayer": [...], "byOp": {"add": {"calls", "cycles", "byClass", "microOps"}}}; a sum of
+  // several runs gives each layer's run too ("byLayer": [{"layer", "pass", "cycles"}]).
   nlohmann::json Json() const;
+  // One run's table (a sum's is each run's table: see Run).
   std::string Table() const;
 
  private:
@@ -51,10 +67,19 @@ class CycleReport {
     MicroOpCounts whole;   // over all layers (ChargeWhole)
     std::array<double, kCycleClassCount> byClass{};
   };
+  // One run of a program: every layer charged the same (per layer, times `layers`).
+  struct ProgramRun {
+    int layers = 0;
+    std::array<double, kCycleClassCount> byClass{};  // per layer
+    std::map<std::string, OpStats> ops{};            // per layer
+    double LayerCycles() const;
+    double TotalCycles() const { return LayerCycles() * layers; }
+  };
+  ProgramRun& Single();
+  const ProgramRun& Single() const;
+
   MachineProfile profile_;
-  int layers_;
-  std::array<double, kCycleClassCount> byClass_{};  // per layer
-  std::map<std::string, OpStats> ops_;              // per layer
+  std::vector<ProgramRun> runs_;  // one, or the runs Add summed
 };
 
 }  // namespace zephyr::bitserial

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# tools/charts.sh — `make charts` (issue 7): the paper's §6 experiments, speed against
+# tools/charts.sh — `make charts`: the paper's §6 experiments, speed against
 # accuracy, and where the sphere test fails, as CSV data and PNG charts under docs/results/.
 #
 # Written in bash + jq + awk + gnuplot (tools/setup.sh installs jq and gnuplot-nox): every
@@ -83,7 +83,7 @@ echo "method,objects,children,frame,rep,host_s,time_s,model_s,simd_host_s,shade_
 #                parent) + .distributionSeconds (first setup sent -> last frame back)
 #   model_s      .simd.modelledSeconds: the SIMD machine's cycles at the profile's clock
 #   simd_host_s  .simd.hostSeconds: the emulator's wall time for those cycles
-#   shade_s      .phases.host_shading: simd's shading of the matrix on the host
+#   shade_s      .phases.hostShading: simd's shading of the matrix on the host
 #   bytes        .distributed.traffic.{parentToChildren,childrenToParent}.total payload + envelope
 #   pixels       sum of .distributed.perChild[].pixels; frames from .distributed.frames
 JQ_ROW='
@@ -93,7 +93,7 @@ JQ_ROW='
   [ .phases.render,
     (if $d == null then .phases.render
      else ($d.time.parentPassSeconds // 0) + $d.time.distributionSeconds end),
-    .simd.modelledSeconds, .simd.hostSeconds, .phases.host_shading,
+    .simd.modelledSeconds, .simd.hostSeconds, .phases.hostShading,
     bytes("parentToChildren"), bytes("childrenToParent"),
     (if $d == null then null else ([$d.perChild[].pixels] | add) end),
     $d.frames.total?, $d.frames.sent?, $d.frames.skipped? ]

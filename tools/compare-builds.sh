@@ -4,7 +4,12 @@
 # and every NFF scene in SCENES (default: the SPD samples in tests/fuzz/corpus; point it at a
 # folder of Eric Haines' SPD scenes for more), all at 128×128.
 #
-#   [SCENES=DIR] tools/compare-builds.sh OLD/zephyr NEW/zephyr [WORKDIR]
+#   [SCENES=DIR] [OLD_JQ=FILTER] tools/compare-builds.sh OLD/zephyr NEW/zephyr [WORKDIR]
+#
+# seq and simd run a second time with --testbed ufmg1992 (the modelled seconds); each run's
+# standard output (the cycle report, the summary line) is compared too, with its wall-clock
+# figures blanked. OLD_JQ is a jq filter applied to the old build's reports first: a change
+# that renames report keys lists the renames there (docs/report.md lists them).
 #
 # Used to show that a change which should not change behaviour (a re-layout, a speed-up)
 # does not: every PNG and CSV must be byte-identical, and every report identical once the
@@ -34,46 +39,63 @@ fi
 
 # Removes what differs between two runs of the same build. Each child's ready message
 # carries its process id and its stats message its timings, as text: their sizes vary.
-normalise() {
-  jq -S 'walk(if type == "object" then with_entries(select(.key
+normalise() {  # normalise REPORT [JQ_FILTER]
+  jq -S "${2:-.}"' | walk(if type == "object" then with_entries(select(.key
            | test("[Ss]econds|^perChild$|^phases$|^pid$|^host$|[Rr]ealTime") | not)) else . end)
          | del(.distributed.traffic.childrenToParent.stats?,
                .distributed.traffic.childrenToParent.ready.payloadBytes?,
                .distributed.traffic.childrenToParent.total.payloadBytes?)' "$1"
 }
 
-run() {  # run BIN OUTDIR SCENE METHOD
+# The wall-clock figures of the cycle report and the summary line, the output folder, and
+# the bytes the children sent back (their stats messages carry timings as text).
+untimed() {
+  sed -E "s/host time [0-9.e+-]+ s; real-time factor [0-9.e+infa-]+/host time T/; s/rendered in [0-9.]+ s/rendered in T s/;
+          s#$work/(old|new)/#OUT/#g; s/[0-9]+ back\$/N back/" "$1"
+}
+
+run() {  # run BIN OUTDIR SCENE METHOD [--testbed NAME]
   local bin=$1 dir=$2 scene=$3 method=$4 name
-  name=$(basename "$scene" .nff).$method
+  name=$(basename "$scene" .nff).$method${6:+.$6}
   local args=(render --method "$method" "$scene" --out "$dir/$name.png" --report "$dir/$name.json"
-              --no-progress)
+              --no-progress ${5:+"$5" "$6"})
   case $method in  # dist and hetero produce no --dump-primary (it is an error there)
     seq|simd) args+=(--dump-primary "$dir/$name.csv") ;;
   esac
   case $method in
-    dist|hetero) mpirun --oversubscribe -np 3 "$bin" "${args[@]}" --frame 32 >/dev/null 2>"$dir/$name.err" ;;
-    *) "$bin" "${args[@]}" >/dev/null 2>"$dir/$name.err" ;;
+    dist|hetero) mpirun --oversubscribe -np 3 "$bin" "${args[@]}" --frame 32 >"$dir/$name.out" 2>"$dir/$name.err" ;;
+    *) "$bin" "${args[@]}" >"$dir/$name.out" 2>"$dir/$name.err" ;;
   esac
   echo $? > "$dir/$name.rc"
 }
 
 same=0; diff=0
+compare() {  # compare NAME: every output of one run of both builds
+  local name=$1 ext a b r
+  for ext in rc png csv json out; do
+    a="$work/old/$name.$ext" b="$work/new/$name.$ext"
+    [ -e "$a" ] || [ -e "$b" ] || continue
+    case $ext in
+      json) cmp -s <(normalise "$a" "${OLD_JQ:-.}" 2>/dev/null) <(normalise "$b" 2>/dev/null); r=$? ;;
+      out) cmp -s <(untimed "$a") <(untimed "$b"); r=$? ;;
+      *) cmp -s "$a" "$b"; r=$? ;;
+    esac
+    if [ $r -eq 0 ]; then same=$((same + 1)); echo "same      $name.$ext"
+    else diff=$((diff + 1)); echo "DIFFERENT $name.$ext"; fi
+  done
+}
+
 for scene in "$work"/scenes/*.nff; do
+  base=$(basename "$scene" .nff)
   for method in seq simd dist hetero; do
     run "$old" "$work/old" "$scene" "$method"
     run "$new" "$work/new" "$scene" "$method"
-    name=$(basename "$scene" .nff).$method
-    for ext in rc png csv json; do
-      a="$work/old/$name.$ext" b="$work/new/$name.$ext"
-      [ -e "$a" ] || [ -e "$b" ] || continue
-      if [ "$ext" = json ]; then
-        cmp -s <(normalise "$a" 2>/dev/null) <(normalise "$b" 2>/dev/null); r=$?
-      else
-        cmp -s "$a" "$b"; r=$?
-      fi
-      if [ $r -eq 0 ]; then same=$((same + 1)); echo "same      $name.$ext"
-      else diff=$((diff + 1)); echo "DIFFERENT $name.$ext"; fi
-    done
+    compare "$base.$method"
+  done
+  for method in seq simd; do
+    run "$old" "$work/old" "$scene" "$method" --testbed ufmg1992
+    run "$new" "$work/new" "$scene" "$method" --testbed ufmg1992
+    compare "$base.$method.ufmg1992"
   done
 done
 echo "compare-builds: $same identical, $diff different (outputs in $work)"

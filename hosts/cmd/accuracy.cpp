@@ -19,6 +19,7 @@
 #include "hosts/cmd/command.h"
 #include "hosts/cmd/flags.h"
 #include "hosts/methods/memory_budget.h"
+#include "hosts/methods/report.h"
 #include "hosts/cmd/simd_flags.h"
 #include "hosts/trace/exact.h"
 #include "hosts/trace/image.h"
@@ -130,11 +131,12 @@ CommandRegistration reg("accuracy", [](CLI::App& program) {
       j["number"] = NumberSystemName(pass.plan.number);
       if (pass.plan.number == NumberSystem::kFloat) j["floatFormat"] = pass.plan.floatFormat.Name();
       j["fracBits"] = pass.plan.fracBits;
-      j["cycles"] = pass.cycles["totalCycles"];
-      j["hostSeconds"] = pass.hostSeconds;
+      const nlohmann::json section = PrimaryPassJson(pass);  // as render --report writes it
+      j["cycles"] = pass.array.cycles.TotalCycles();
+      j["hostSeconds"] = pass.array.hostSeconds;
       j["tErrorBound"] = pass.plan.tErrorBound;
-      j["uncertain"] = pass.Json()["uncertain"];
-      if (pass.refinedPixels > 0) j["refine"] = pass.Json()["refine"];
+      j["uncertain"] = section["uncertain"];
+      if (pass.refine) j["refine"] = section["refine"];
     } else {
       j["precision"] = PrecisionName(seqOptions.precision);
       j["hostSeconds"] = seqSeconds;  // one render of the image in that precision (shading included)
@@ -153,8 +155,8 @@ CommandRegistration reg("accuracy", [](CLI::App& program) {
                 std::isfinite(psnr) ? "" : " (identical: seq double is the reference itself)");
     if (!simd) return;
     std::printf("uncertain: %lld overflow, %lld grazing, %lld near tie, %lld recomputed\n",
-                (long long)pass.overflowPixels, (long long)pass.grazingPixels,
-                (long long)pass.tiePixels, (long long)pass.recomputedPixels);
+                (long long)pass.uncertain.overflow, (long long)pass.uncertain.grazing,
+                (long long)pass.uncertain.nearTie, (long long)pass.recomputedPixels);
   });
 });
 

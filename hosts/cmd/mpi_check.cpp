@@ -234,7 +234,7 @@ void RunCheck(CheckArgs& a) {
   if (ServeIfChild(o.mode, factory)) return;  // a child: served frames, no output
   const FramedResult result = RenderFrames(buildJob(), a.farm);
   WritePfm(a.out, o.width, o.height, result.image);
-  WriteJson(a.report, result.report);
+  WriteJson(a.report, result.report.Json());
   RemoveCheckpoint(result.checkpointPath);  // only now: the outputs are on disk
 }
 

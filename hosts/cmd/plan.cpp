@@ -36,9 +36,9 @@ CommandRegistration planCommand("plan", [](CLI::App& program) {
     keep.formats = {plan.fracBits, plan.dirFracBits, plan.distIntBits};
     if (plan.number == NumberSystem::kFloat) keep.floatFormat = plan.floatFormat;
     const PrimaryPass probe = RunPrimaryPass(small, keep);
-    const double layerCycles = probe.cycles["totalCycles"].get<double>() / probe.plan.layers;
+    const double layerCycles = probe.array.cycles.TotalCycles() / probe.plan.layers;
     const double cycles = layerCycles * plan.layers;
-    const double clock = probe.cycles["clockHz"].get<double>();
+    const double clock = probe.array.cycles.Profile().clockHz;
     if (*json) {
       nlohmann::json j = plan.Json();
       j["objects"] = plan.ObjectsJson();

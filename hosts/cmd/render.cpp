@@ -21,25 +21,21 @@ namespace {
 
 std::string RenderSummary(const RenderOptions& options, const RenderOutput& out) {
   char line[512];
-  const nlohmann::json& r = out.report;
-  double seconds = r.contains("phases") && r["phases"].contains("render")
-                       ? r["phases"]["render"].get<double>()
-                       : 0.0;
+  const auto render = out.phases.find("render");
+  const double seconds = render != out.phases.end() ? render->second : 0.0;
   std::snprintf(line, sizeof line, "%s: %dx%d, %zu objects, rendered in %.3f s", options.method.c_str(),
-                out.image.width, out.image.height, r["scene"]["objects"].get<size_t>(), seconds);
+                out.image.width, out.image.height, out.scene.objects, seconds);
   std::string s = line;
-  if (r.contains("distributed")) {
-    const nlohmann::json& d = r["distributed"];
-    const nlohmann::json& bytes = d["traffic"];
-    auto total = [&](const char* way) {
-      const nlohmann::json& t = bytes[way]["total"];
-      return t["payloadBytes"].get<double>() + t["envelopeBytes"].get<double>();
+  if (out.farm) {
+    const FarmReport& d = *out.farm;
+    auto total = [](const TrafficAccount& t) {
+      const TrafficCount c = t.Total();
+      return double(c.payloadBytes) + double(c.envelopeBytes);
     };
     std::snprintf(line, sizeof line,
-                  "; %d children, %d frames sent, %d skipped, %.0f bytes to children, %.0f back",
-                  d["children"].get<int>(), d["frames"]["sent"].get<int>(),
-                  d["frames"]["skipped"].get<int>(), total("parentToChildren"),
-                  total("childrenToParent"));
+                  "; %d children, %d frames sent, %zu skipped, %.0f bytes to children, %.0f back",
+                  d.children, d.framesSent, d.skippedFrames.size(), total(d.parentToChildren),
+                  total(d.childrenToParent));
     s += line;
   }
   if (!options.out.empty()) s += "\n  image  " + options.out;
@@ -71,17 +67,18 @@ CommandRegistration reg("render", [](CLI::App& program) {
   cmd->add_flag("--no-progress", *noProgress, "No progress bar even on a terminal");
   auto simdFlags = std::make_shared<SimdFlags>();
   simdFlags->AddTo(*cmd, "simd: ");
-  AddInteger(*cmd, "--frame", o->dist.frameSize, 1, kMaxResolution, "dist/hetero: frame size F (F×F frames)");
-  cmd->add_flag("--resume", o->dist.resume,
-                "dist/hetero: render only the frames missing from OUT.frames (the checkpoint)");
-  AddNumber(*cmd, "--child-timeout", o->dist.childTimeoutSeconds, kMinChildTimeoutSeconds, kNoUpperEnd,
-            "dist/hetero: seconds a child may hold frames without answering");
-  AddInteger(*cmd, "--in-flight", o->dist.framesInFlight, 1, kMaxFramesInFlight,
-             "dist/hetero: frames handed to a child before it returns one");
+  const std::vector<CLI::Option*> farmFlags = {
+      AddInteger(*cmd, "--frame", o->dist.frameSize, 1, kMaxResolution, "dist/hetero: frame size F (F×F frames)"),
+      cmd->add_flag("--resume", o->dist.resume,
+                    "dist/hetero: render only the frames missing from OUT.frames (the checkpoint)"),
+      AddNumber(*cmd, "--child-timeout", o->dist.childTimeoutSeconds, kMinChildTimeoutSeconds, kNoUpperEnd,
+                "dist/hetero: seconds a child may hold frames without answering"),
+      AddInteger(*cmd, "--in-flight", o->dist.framesInFlight, 1, kMaxFramesInFlight,
+                 "dist/hetero: frames handed to a child before it returns one")};
   cmd->add_option("--testbed", o->testbed,
                   "Model the paper's 1992 system (ufmg1992): the report's \"testbed\" gives "
                   "modelled seconds (dist/hetero: under smpirun, docs/testbed.md)");
-  cmd->callback([o, positional, precision, sphereTest, noProgress, simdFlags, outputs] {
+  cmd->callback([o, positional, precision, sphereTest, noProgress, simdFlags, outputs, farmFlags] {
     RenderOptions options = *o;
     for (CLI::Option* flag : outputs)  // `--out ''` is a mistake, not "no output"
       if (flag->count() > 0 && flag->as<std::string>().empty())
@@ -95,7 +92,17 @@ CommandRegistration reg("render", [](CLI::App& program) {
     options.trace.precision = ParsePrecision(*precision);
     options.trace.sphereTest = ParseSphereTest(*sphereTest);
     options.progress = !*noProgress && StderrIsTerminal();
-    options.simd = simdFlags->Options();
+    options.simd = simdFlags->Options();  // its value errors first
+    // A flag the method would ignore is a mistake (as in `accuracy`), refused before any work
+    // (after the values: a bad value is named as such whatever the method).
+    const RenderMethodUse use = RenderMethodUses(options.method);
+    if (!use.array && !simdFlags->Given().empty())
+      throw UserError(simdFlags->Given().front() + ": --method " + options.method +
+                      " runs no SIMD pass (the flag applies to " + RenderMethodsUsing(true, false) + ")");
+    for (const CLI::Option* flag : farmFlags)
+      if (!use.farm && flag->count() > 0)
+        throw UserError(flag->get_name() + ": --method " + options.method +
+                        " has no frame farm (the flag applies to " + RenderMethodsUsing(false, true) + ")");
     RenderOutput out = RunRender(options);
     std::printf("%s\n", RenderSummary(options, out).c_str());
   });

@@ -9,7 +9,7 @@
 //
 //   if (ServeIfChild("dist", factory)) return;  // a child: served frames, has no output
 //   FramedResult r = RenderFrames(job, options);  // the parent
-//   ... write r.image and r.report ...
+//   ... write r.image and r.report (a FarmReport) ...
 //
 // Files: farm.h (this interface), child.cpp (the child loop), parent.cpp (the parent: queue,
 // losses, checkpoint, report), frame.h (frames and the queue), protocol.h (messages),
@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "hosts/farm/frame.h"
+#include "hosts/farm/protocol.h"
 #include "hosts/farm/session.h"
 
 namespace zephyr {
@@ -74,9 +75,50 @@ struct FramedOptions {
   int framesInFlight = 2;           // frames handed to a child before it returns one
 };
 
+// One child as the parent saw it, and its stats message's figures (docs/distributed.md,
+// "Accounting"). Seconds are the child's wall clock (SimGrid's under simulation).
+struct ChildReport {
+  int rank = 0;
+  std::string host;  // from its ready message
+  long pid = -1;
+  std::uint64_t framesAccepted = 0, pixels = 0;  // results the parent pasted
+  std::string lostReason;                        // "" = not lost
+  struct Stats {
+    int framesRendered = 0;
+    double setupSeconds = 0, busySeconds = 0, idleSeconds = 0;
+    TrafficAccount sent, received;
+    // The FrameWork's own counters (FrameWork::Stats), as the child sent them: the farm
+    // knows no pixel; the method that made the work decodes them.
+    nlohmann::json work = nlohmann::json::object();
+  };
+  std::optional<Stats> stats;  // none when no stats message arrived (a lost child)
+};
+
+// The parent's figures of a finished job (docs/distributed.md, "Accounting").
+struct FarmReport {
+  std::string method;
+  int ranks = 0, children = 0, frameSize = 0, framesInFlight = 0;
+  double childTimeoutSeconds = 0;
+  int framesTotal = 0, frameColumns = 0, frameRows = 0, framesSent = 0;
+  std::vector<int> skippedFrames;  // degenerate (no primary hit): filled at the parent
+  int resumedFrames = 0;           // --resume: frames read back from the checkpoint
+  std::vector<int> damagedFrames;  // --resume: frames whose checkpoint records were damaged
+  std::vector<int> lostFrames;     // frames handed out again after their child was lost
+  TrafficAccount parentToChildren, childrenToParent;
+  int ignoredMessages = 0;
+  std::vector<ChildReport> perChild;
+  double parentPassSeconds = 0;    // FramedJob::parentPassSeconds
+  double distributionSeconds = 0;  // wall time handing out and collecting frames
+  double parentCpuSeconds = 0;     // the parent's CPU time over it
+  double ChildrenBusySeconds() const;  // over the children that sent stats
+  double ChildrenIdleSeconds() const;
+  // The report's "distributed" section (render --report, mpi-check --report).
+  nlohmann::json Json() const;
+};
+
 struct FramedResult {
   std::vector<std::byte> image;  // imageWidth × imageHeight × bytesPerPixel, row-major
-  nlohmann::json report;         // see docs/distributed.md, "Accounting"
+  FarmReport report;
   // The checkpoint holding every frame ("" = none). It is left on disk: the caller deletes
   // it (RemoveCheckpoint) only once its outputs are safely written.
   std::string checkpointPath;

@@ -50,7 +50,7 @@ struct ChildState {
   Clock::time_point lastProgress;
   std::uint64_t frames = 0, pixels = 0;
   double busyFromResults = 0;
-  nlohmann::json stats;
+  std::optional<ChildReport::Stats> stats;
   std::string lostReason;
 };
 
@@ -84,7 +84,7 @@ class Parent {
   void StopAll();
   void CollectStats();
   [[noreturn]] void Abandon(const std::string& why);
-  nlohmann::json Report() const;
+  FarmReport Report() const;
   ChildState& Child(int rank) { return children_[rank - 1]; }
 
   const FramedJob& job_;
@@ -299,13 +299,13 @@ void Parent::CollectStats() {
   PollBackoff backoff;
   auto waiting = [&] {
     return std::count_if(children_.begin(), children_.end(), [](const ChildState& c) {
-      return c.alive && c.setUp && c.stopped && c.stats.is_null();
+      return c.alive && c.setUp && c.stopped && !c.stats;
     });
   };
   while (waiting() > 0) {
     if (SecondsSince(start) > options_.childTimeoutSeconds) {
       for (ChildState& c : children_)
-        if (c.alive && c.setUp && c.stats.is_null()) c.lostReason = "no stats after stop";
+        if (c.alive && c.setUp && !c.stats) c.lostReason = "no stats after stop";
       return;
     }
     auto m = mpi_.TryReceive(-1, received_);
@@ -324,10 +324,14 @@ void Parent::CollectStats() {
       continue;
     }
     try {
-      child.stats = nlohmann::json::parse(Text(m->payload));
-      TrafficAccount::FromJson(child.stats.at("sent"));
-      child.stats.at("busySeconds").get<double>();
-      child.stats.at("idleSeconds").get<double>();
+      const nlohmann::json j = nlohmann::json::parse(Text(m->payload));
+      child.stats = ChildReport::Stats{.framesRendered = j.value("frames", 0),
+                                       .setupSeconds = j.value("setupSeconds", 0.0),
+                                       .busySeconds = j.at("busySeconds").get<double>(),
+                                       .idleSeconds = j.at("idleSeconds").get<double>(),
+                                       .sent = TrafficAccount::FromJson(j.at("sent")),
+                                       .received = TrafficAccount::FromJson(j.at("received")),
+                                       .work = j.value("work", nlohmann::json::object())};
     } catch (const nlohmann::json::exception& e) {
       throw UserError("malformed stats message from child rank " + std::to_string(child.rank) +
                       ": " + e.what());
@@ -391,55 +395,24 @@ FramedResult Parent::Run() {
   return {std::move(image_), Report(), checkpoint_ ? checkpoint_->Path() : std::string()};
 }
 
-nlohmann::json Parent::Report() const {
-  nlohmann::json children = nlohmann::json::array();
-  double busy = 0, idle = 0;
-  for (const ChildState& c : children_) {
-    nlohmann::json j = {{"rank", c.rank},     {"host", c.host},
-                        {"pid", c.pid},       {"framesAccepted", c.frames},
-                        {"pixels", c.pixels}, {"lost", !c.lostReason.empty()}};
-    if (!c.lostReason.empty()) j["lostReason"] = c.lostReason;
-    if (!c.stats.is_null()) {
-      j["framesRendered"] = c.stats.value("frames", 0);
-      j["setupSeconds"] = c.stats.value("setupSeconds", 0.0);
-      j["busySeconds"] = c.stats.value("busySeconds", 0.0);
-      j["idleSeconds"] = c.stats.value("idleSeconds", 0.0);
-      j["sent"] = c.stats["sent"];
-      j["received"] = c.stats["received"];
-      j["work"] = c.stats.value("work", nlohmann::json::object());
-      busy += c.stats.value("busySeconds", 0.0);
-      idle += c.stats.value("idleSeconds", 0.0);
-    }
-    children.push_back(j);
-  }
-  const int sentFrames = int(sent_.Of(MessageKind::kWork).messages);
-  return {
-      {"method", job_.method},
-      {"ranks", mpi_.Size()},
-      {"children", mpi_.Size() - 1},
-      {"frameSize", job_.frameSize},
-      {"framesInFlight", options_.framesInFlight},
-      {"childTimeoutSeconds", options_.childTimeoutSeconds},
-      {"frames",
-       {{"total", grid_.Count()},
-        {"columns", grid_.Columns()},
-        {"rows", grid_.Rows()},
-        {"sent", sentFrames},
-        {"skipped", skipped_.size()},
-        {"skippedIds", skipped_},
-        {"resumed", resumed_},
-        {"checkpointDamaged", checkpointBad_},
-        {"lost", lost_}}},
-      {"traffic", {{"parentToChildren", sent_.ToJson()}, {"childrenToParent", received_.ToJson()}}},
-      {"ignoredMessages", ignoredMessages_},
-      {"perChild", children},
-      {"time",
-       {{"parentPassSeconds", job_.parentPassSeconds},
-        {"distributionSeconds", distributionSeconds_},
-        {"parentCpuSeconds", distributionCpuSeconds_},
-        {"childrenBusySeconds", busy},
-        {"childrenIdleSeconds", idle}}},
-  };
+FarmReport Parent::Report() const {
+  FarmReport r;
+  r.method = job_.method;
+  r.ranks = mpi_.Size(), r.children = mpi_.Size() - 1;
+  r.frameSize = job_.frameSize, r.framesInFlight = options_.framesInFlight;
+  r.childTimeoutSeconds = options_.childTimeoutSeconds;
+  r.framesTotal = grid_.Count(), r.frameColumns = grid_.Columns(), r.frameRows = grid_.Rows();
+  r.framesSent = int(sent_.Of(MessageKind::kWork).messages);
+  r.skippedFrames = skipped_, r.resumedFrames = resumed_, r.damagedFrames = checkpointBad_;
+  r.lostFrames = lost_;
+  r.parentToChildren = sent_, r.childrenToParent = received_;
+  r.ignoredMessages = ignoredMessages_;
+  for (const ChildState& c : children_)
+    r.perChild.push_back({.rank = c.rank, .host = c.host, .pid = c.pid, .framesAccepted = c.frames,
+                          .pixels = c.pixels, .lostReason = c.lostReason, .stats = c.stats});
+  r.parentPassSeconds = job_.parentPassSeconds;
+  r.distributionSeconds = distributionSeconds_, r.parentCpuSeconds = distributionCpuSeconds_;
+  return r;
 }
 
 }  // namespace
@@ -448,6 +421,71 @@ FramedResult RenderFrames(const FramedJob& job, const FramedOptions& options) {
   StartFarm(job.method);
   Parent parent(job, options);
   return parent.Run();
+}
+
+}  // namespace zephyr
+
+namespace zephyr {
+
+double FarmReport::ChildrenBusySeconds() const {
+  double busy = 0;
+  for (const ChildReport& c : perChild)
+    if (c.stats) busy += c.stats->busySeconds;
+  return busy;
+}
+
+double FarmReport::ChildrenIdleSeconds() const {
+  double idle = 0;
+  for (const ChildReport& c : perChild)
+    if (c.stats) idle += c.stats->idleSeconds;
+  return idle;
+}
+
+nlohmann::json FarmReport::Json() const {
+  nlohmann::json childList = nlohmann::json::array();
+  for (const ChildReport& c : perChild) {
+    nlohmann::json j = {{"rank", c.rank},     {"host", c.host},
+                        {"pid", c.pid},       {"framesAccepted", c.framesAccepted},
+                        {"pixels", c.pixels}, {"lost", !c.lostReason.empty()}};
+    if (!c.lostReason.empty()) j["lostReason"] = c.lostReason;
+    if (c.stats) {
+      j["framesRendered"] = c.stats->framesRendered;
+      j["setupSeconds"] = c.stats->setupSeconds;
+      j["busySeconds"] = c.stats->busySeconds;
+      j["idleSeconds"] = c.stats->idleSeconds;
+      j["sent"] = c.stats->sent.ToJson();
+      j["received"] = c.stats->received.ToJson();
+      j["work"] = c.stats->work;
+    }
+    childList.push_back(j);
+  }
+  return {
+      {"method", method},
+      {"ranks", ranks},
+      {"children", children},
+      {"frameSize", frameSize},
+      {"framesInFlight", framesInFlight},
+      {"childTimeoutSeconds", childTimeoutSeconds},
+      {"frames",
+       {{"total", framesTotal},
+        {"columns", frameColumns},
+        {"rows", frameRows},
+        {"sent", framesSent},
+        {"skipped", skippedFrames.size()},
+        {"skippedIds", skippedFrames},
+        {"resumed", resumedFrames},
+        {"checkpointDamaged", damagedFrames},
+        {"lost", lostFrames}}},
+      {"traffic", {{"parentToChildren", parentToChildren.ToJson()}, {"childrenToParent", childrenToParent.ToJson()}}},
+      {"ignoredMessages", ignoredMessages},
+      {"perChild", childList},
+      {"time",
+       {{"parentPassSeconds", parentPassSeconds},
+        {"distributionSeconds", distributionSeconds},
+        {"parentCpuSeconds", parentCpuSeconds},
+        {"childrenBusySeconds", ChildrenBusySeconds()},
+        {"childrenIdleSeconds", ChildrenIdleSeconds()}}},
+  };
 }
 
 }  // namespace zephyr

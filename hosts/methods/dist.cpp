@@ -10,6 +10,7 @@
 #include "fixed/check.h"
 #include "hosts/methods/farmed.h"
 #include "hosts/methods/methods.h"
+#include "hosts/testbed/simulation.h"
 #include "hosts/testbed/testbed.h"
 
 namespace zephyr {
@@ -65,7 +66,7 @@ void RenderDist(const Scene& scene, const RenderOptions& options, RenderOutput& 
   job.pasted = [](const Frame& f) { farmed::ChargeParentPixels(f.PixelCount()); };
   FramedResult result = RenderFrames(job, farmed::FarmOptions(options));
   out.image = farmed::ToImage(result.image, c.width, c.height);
-  out.report["distributed"] = result.report;
+  out.farm = std::move(result.report);
   if (!result.checkpointPath.empty()) out.removeWhenWritten.push_back(result.checkpointPath);
 }
 

@@ -13,6 +13,7 @@
 #include "hosts/farm/session.h"
 #include "hosts/io/output_file.h"
 #include "hosts/scene/nff.h"
+#include "hosts/testbed/simulation.h"
 #include "hosts/testbed/testbed.h"
 
 namespace zephyr::farmed {
@@ -109,6 +110,23 @@ nlohmann::json ChildStats::Json() const {
     j["testbed"]["clockAtStats"] = now;
   }
   return j;
+}
+
+testbed::FarmTimes FarmTimesOf(const FarmReport& report) {
+  testbed::FarmTimes t;
+  t.parentPassSeconds = report.parentPassSeconds;
+  for (const ChildReport& c : report.perChild) {
+    testbed::FarmTimes::Child child{.rank = c.rank, .host = c.host};
+    // Decoding the child's stats message: "work"."testbed"."busySeconds" (simulated only).
+    try {
+      if (c.stats && c.stats->work.contains("testbed"))
+        child.busySeconds = c.stats->work.at("testbed").at("busySeconds").get<double>();
+    } catch (const nlohmann::json::exception& e) {
+      throw UserError("malformed stats message from child rank " + std::to_string(c.rank) + ": " + e.what());
+    }
+    t.children.push_back(child);
+  }
+  return t;
 }
 
 void ChargeParentPixels(std::uint64_t pixels) {

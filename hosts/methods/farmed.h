@@ -12,6 +12,7 @@
 
 #include "hosts/farm/farm.h"
 #include "hosts/methods/render.h"
+#include "hosts/testbed/testbed.h"
 
 namespace zephyr::farmed {
 
@@ -66,6 +67,11 @@ void CheckFarmOptions(const RenderOptions& options);
 // handled (a frame's slice packed, or its result pasted into the image), charged as that many
 // "pixel" events of the work table to the parent's simulated host. Nothing outside it.
 void ChargeParentPixels(std::uint64_t pixels);
+
+// What the testbed needs of a finished farm (testbed::FarmTimes): per child its rank, host
+// and, under simulation, the busy seconds its stats message's "work" (ChildStats::Json) gave.
+// UserError for a malformed "work" section (it came from a child over MPI).
+testbed::FarmTimes FarmTimesOf(const FarmReport& report);
 
 // The farm's image bytes (kPixelBytes a pixel, row-major) as an Image.
 Image ToImage(const std::vector<std::byte>& bytes, int width, int height);

@@ -20,6 +20,7 @@
 #include "hosts/methods/methods.h"
 #include "hosts/simd/direction.h"
 #include "hosts/simd/pass.h"
+#include "hosts/testbed/simulation.h"
 #include "hosts/testbed/testbed.h"
 
 namespace zephyr {
@@ -168,15 +169,17 @@ void RenderHetero(const Scene& scene, const RenderOptions& options, RenderOutput
   job.imageWidth = c.width, job.imageHeight = c.height, job.frameSize = options.dist.frameSize;
   job.bytesPerPixel = kPixelBytes;
   auto start = std::chrono::steady_clock::now();
-  const simd::PrimaryPass pass = simd::RunPrimaryPass(scene, options.simd);
+  simd::PrimaryPass pass = simd::RunPrimaryPass(scene, options.simd);
   job.parentPassSeconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  if (testbed::Simulated()) job.parentPassSeconds = testbed::ChargeArrayPass(pass, scene);
+  if (testbed::Simulated())
+    job.parentPassSeconds = testbed::ChargeArrayCycles(pass.array.cycles, pass.refine ? &pass.refine->array.cycles : nullptr,
+                                                       uint64_t(pass.recomputedPixels), scene, "heterogeneous");
   job.setup = farmed::SetupText(
       "hetero", scene, options.trace,
       {{"dirFracBits", pass.plan.dirFracBits},
-       {"refineDirFracBits", pass.refinedPixels > 0 ? pass.refine["dirFracBits"].get<int>() : -1}});
-  std::fprintf(stdout, "cycle report (SIMD primary pass):\n%s", pass.cycleTable.c_str());
+       {"refineDirFracBits", pass.refine ? pass.refine->dirFracBits : -1}});
+  std::fprintf(stdout, "cycle report (SIMD primary pass):\n%s", pass.array.Table().c_str());
   // The parent's own work, charged under the simulated testbed: packing each frame's slice,
   // shading the degenerate frames, pasting the children's frames.
   job.sliceFor = [&](const Frame& f) {
@@ -195,12 +198,13 @@ void RenderHetero(const Scene& scene, const RenderOptions& options, RenderOutput
   };
   FramedResult result = RenderFrames(job, farmed::FarmOptions(options));
   out.image = farmed::ToImage(result.image, c.width, c.height);
-  out.report["simd"] = pass.Json();
-  out.report["distributed"] = result.report;
+  out.farm = std::move(result.report);
   if (!result.checkpointPath.empty()) out.removeWhenWritten.push_back(result.checkpointPath);
   if (!options.dumpPrimary.empty())  // the parent holds the whole matrix: as for simd
     for (size_t i = 0; i < pass.matrix.hits.size(); ++i)
       out.primary.push_back({pass.matrix.hits[i], pass.matrix.flags[i]});
+  pass.matrix = {};  // the image and the dump have it
+  out.simd = std::move(pass);
 }
 
 void CheckHeteroOptions(const RenderOptions& o) { farmed::CheckFarmOptions(o); }

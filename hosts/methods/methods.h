@@ -6,8 +6,8 @@
 
 namespace zephyr {
 
-// Fills out.image (and out.primary when options.dumpPrimary is set) and adds the method's
-// sections to out.report.
+// Fills out.image (and out.primary when options.dumpPrimary is set) and the method's typed
+// results (out.hostWork, out.simd, out.farm).
 using RenderMethod = void (*)(const Scene& scene, const RenderOptions& options,
                               RenderOutput& out);
 
@@ -33,6 +33,7 @@ struct RenderMethodEntry {
   // docs/errors.md "Memory". RunRender refuses a run that cannot fit before any work.
   double bytesPerPixel = 0;
   double dumpBytesPerPixel = 0;
+  bool usesArray = false;  // runs the SIMD pass on the emulated array (--machine applies)
 };
 
 void RenderSeq(const Scene& scene, const RenderOptions& options, RenderOutput& out);      // seq.cpp

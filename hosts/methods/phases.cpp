@@ -6,15 +6,14 @@
 
 namespace zephyr {
 
-PhaseTimer::PhaseTimer(nlohmann::json& report, std::string name)
-    : report_(report), name_(std::move(name)), start_(std::chrono::steady_clock::now()) {}
+PhaseTimer::PhaseTimer(Phases& phases, std::string name)
+    : phases_(phases), name_(std::move(name)), start_(std::chrono::steady_clock::now()) {}
 
 double PhaseTimer::Stop() {
   if (!running_) return 0;
   running_ = false;
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-  nlohmann::json& slot = report_["phases"][name_];
-  slot = (slot.is_number() ? slot.get<double>() : 0.0) + s;
+  phases_[name_] += s;
   return s;
 }
 

@@ -1,25 +1,28 @@
-// hosts/methods/phases.h — what every render method reports: phase timings into the JSON report
-// tree, and a progress bar on stderr when it is a terminal.
+// hosts/methods/phases.h — what every render method reports: phase timings (typed, written into
+// the report by hosts/methods/report.h), and a progress bar on stderr when it is a terminal.
 #pragma once
 
 #include <chrono>
 #include <cstdint>
+#include <map>
 #include <string>
-
-#include <nlohmann/json.hpp>
 
 namespace zephyr {
 
-// Adds the seconds since construction to report["phases"][name] when Stop() is called (or
-// on destruction). Phases with the same name accumulate.
+// Wall seconds per phase of a render, by name (lowerCamel: "readScene", "render",
+// "primaryPass", "hostShading", "writePng", "dumpPrimary"; docs/background.md).
+using Phases = std::map<std::string, double>;
+
+// Adds the seconds since construction to phases[name] when Stop() is called (or on
+// destruction). Phases with the same name accumulate.
 class PhaseTimer {
  public:
-  PhaseTimer(nlohmann::json& report, std::string name);
+  PhaseTimer(Phases& phases, std::string name);
   ~PhaseTimer() { Stop(); }
   double Stop();  // returns the seconds added (0 if already stopped)
 
  private:
-  nlohmann::json& report_;
+  Phases& phases_;
   std::string name_;
   std::chrono::steady_clock::time_point start_;
   bool running_ = true;

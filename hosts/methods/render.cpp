@@ -7,9 +7,11 @@
 
 #include "fixed/check.h"
 #include "hosts/io/output_file.h"
+#include "hosts/methods/farmed.h"
 #include "hosts/methods/memory_budget.h"
 #include "hosts/methods/methods.h"
 #include "hosts/methods/phases.h"
+#include "hosts/methods/report.h"
 #include "hosts/scene/nff.h"
 #include "hosts/testbed/testbed.h"
 
@@ -20,19 +22,21 @@ namespace {
 // The table of methods (docs/background.md, "The four methods").
 constexpr RenderMethodEntry kMethods[] = {
     {"seq", "sequential: the host traces every ray in floating point", RenderSeq, nullptr, nullptr,
-     /*bytesPerPixel=*/32, /*dumpBytesPerPixel=*/110},
+     /*bytesPerPixel=*/32, /*dumpBytesPerPixel=*/110, /*usesArray=*/false},
     {"simd",
      "SIMD/sequential: primary rays on the emulated array in fixed point, secondary rays on "
      "the host",
-     RenderSimd, nullptr, nullptr, /*bytesPerPixel=*/104, /*dumpBytesPerPixel=*/60},
+     RenderSimd, nullptr, nullptr, /*bytesPerPixel=*/104, /*dumpBytesPerPixel=*/60, /*usesArray=*/true},
     {"dist",
      "distributed: under mpirun, children trace whole F×F frames handed out on demand "
      "(bit-identical to seq)",
-     RenderDist, DistChildEntry, CheckDistOptions, /*bytesPerPixel=*/64, /*dumpBytesPerPixel=*/0},
+     RenderDist, DistChildEntry, CheckDistOptions, /*bytesPerPixel=*/64, /*dumpBytesPerPixel=*/0,
+     /*usesArray=*/false},
     {"hetero",
      "heterogeneous: the SIMD primary pass at the parent, children shade the frames with a hit "
      "(under mpirun; bit-identical to simd)",
-     RenderHetero, HeteroChildEntry, CheckHeteroOptions, /*bytesPerPixel=*/122, /*dumpBytesPerPixel=*/60},
+     RenderHetero, HeteroChildEntry, CheckHeteroOptions, /*bytesPerPixel=*/122, /*dumpBytesPerPixel=*/60,
+     /*usesArray=*/true},
 };
 
 }  // namespace
@@ -66,25 +70,48 @@ void CheckRenderOutputs(const RenderOptions& options) {
                {{"the scene file", options.scenePath}});
 }
 
-RenderOutput RunRender(const RenderOptions& options) {
+namespace {
+
+const RenderMethodEntry& MethodNamed(const std::string& method) {
   auto it = std::find_if(std::begin(kMethods), std::end(kMethods),
-                         [&](const RenderMethodEntry& m) { return options.method == m.name; });
+                         [&](const RenderMethodEntry& m) { return method == m.name; });
   if (it == std::end(kMethods)) {
     std::string known;
     for (const auto& name : RenderMethodNames()) known += (known.empty() ? "" : ", ") + name;
-    throw UserError("--method: unknown method '" + options.method + "' (known: " + known + ")");
+    throw UserError("--method: unknown method '" + method + "' (known: " + known + ")");
   }
+  return *it;
+}
+
+}  // namespace
+
+RenderMethodUse RenderMethodUses(const std::string& method) {
+  const RenderMethodEntry& m = MethodNamed(method);
+  return {.array = m.usesArray, .farm = m.child != nullptr};
+}
+
+std::string RenderMethodsUsing(bool array, bool farm) {
+  std::string names;
+  for (const RenderMethodEntry& m : kMethods)
+    if ((!array || m.usesArray) && (!farm || m.child != nullptr)) names += (names.empty() ? "" : ", ") + std::string(m.name);
+  return names;
+}
+
+RenderOutput RunRender(const RenderOptions& options) {
+  const RenderMethodEntry* it = &MethodNamed(options.method);
   RenderOutput out;
   if (it->child) it->child(options);  // a child rank serves frames and ends there
   // Every output and option is checked before the scene is read: nothing is computed for an
   // output that could not be written.
   CheckRenderOutputs(options);
   if (it->check) it->check(options);
-  testbed::CheckModelledTimeRequest(options.testbed, options.method, options.simd.profile);
-  out.report["method"] = options.method;
+  testbed::CheckModelledTimeRequest(options.testbed, options.method, it->child != nullptr, it->usesArray,
+                                    options.simd.profile);
+  out.method = options.method;
+  out.trace = options.trace;
   Scene scene;
   {
-    PhaseTimer timer(out.report, "read_scene");
+    PhaseTimer timer(out.phases, "readScene");
     scene = ReadNffFile(options.scenePath);
   }
   for (const std::string& w : scene.warnings) std::fprintf(stderr, "zephyr: %s\n", w.c_str());
@@ -93,30 +120,40 @@ RenderOutput RunRender(const RenderOptions& options) {
                       std::to_string(c.height),
                   {.perPixel = it->bytesPerPixel + (options.dumpPrimary.empty() ? 0 : it->dumpBytesPerPixel),
                    .pixels = uint64_t(c.width) * uint64_t(c.height)});
-  out.report["scene"] = {{"path", options.scenePath}, {"objects", scene.objects.size()},
-                         {"lights", scene.lights.size()}, {"width", c.width}, {"height", c.height}};
-  out.report["options"] = {{"depth", options.trace.depth},
-                           {"precision", PrecisionName(options.trace.precision)},
-                           {"sphere_test", SphereTestName(options.trace.sphereTest)}};
+  out.scene = {.path = options.scenePath, .objects = scene.objects.size(), .lights = scene.lights.size(),
+               .width = c.width, .height = c.height};
   {
-    PhaseTimer timer(out.report, "render");
+    PhaseTimer timer(out.phases, "render");
     it->render(scene, options, out);
   }
-  testbed::AddModelledTime(options.testbed, options.method, scene, out.report);  // --testbed: modelled 1992 seconds
+  // --testbed: modelled 1992 seconds of the counted work.
+  testbed::CountedWork work;
+  if (out.hostWork) work.host = &*out.hostWork;
+  if (out.simd) {
+    work.arrayCycles = &out.simd->array.cycles;
+    if (out.simd->refine) work.refineCycles = &out.simd->refine->array.cycles;
+    work.recomputedPixels = uint64_t(out.simd->recomputedPixels);
+  }
+  testbed::FarmTimes farmTimes;
+  if (out.farm) {
+    farmTimes = farmed::FarmTimesOf(*out.farm);
+    work.farm = &farmTimes;
+  }
+  out.testbed = testbed::ModelTime(options.testbed, work, scene);
   ZEPHYR_CHECK(out.image.width == c.width && out.image.height == c.height);
   try {
     if (!options.out.empty()) {
-      PhaseTimer timer(out.report, "write_png");
+      PhaseTimer timer(out.phases, "writePng");
       WritePng(options.out, out.image);
     }
     if (!options.dumpPrimary.empty()) {
       if (out.primary.size() != size_t(c.width) * c.height)
         throw UserError("--dump-primary: method '" + options.method + "' does not produce primary hits");
-      PhaseTimer timer(out.report, "dump_primary");
+      PhaseTimer timer(out.phases, "dumpPrimary");
       WritePrimaryCsv(options.dumpPrimary, c.width, c.height, out.primary);
     }
     if (!options.report.empty())
-      WriteOutputFile(options.report, "report", out.report.dump(2) + "\n");
+      WriteOutputFile(options.report, "report", RenderReportJson(out).dump(2) + "\n");
   } catch (const UserError& e) {
     if (out.removeWhenWritten.empty()) throw;
     // The rendered frames are still on disk: say so, and how to finish without re-rendering.

@@ -9,13 +9,15 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
+#include "hosts/farm/farm.h"
+#include "hosts/methods/phases.h"
 #include "hosts/scene/scene.h"
 #include "hosts/simd/pass.h"
+#include "hosts/testbed/testbed.h"
 #include "hosts/trace/image.h"
 #include "hosts/trace/tracer.h"
 
@@ -56,17 +58,42 @@ struct PrimarySample {
   uint32_t flags = 0;
 };
 
+// What a render made, typed until the report is written (RenderReportJson,
+// hosts/methods/report.h: the one place the report's schema lives).
 struct RenderOutput {
   Image image;
   std::vector<PrimarySample> primary;  // filled when options.dumpPrimary is set, row-major
-  nlohmann::json report;               // the method adds "phases", counters, its own sections
+  std::string method;
+  struct SceneFacts {
+    std::string path;
+    std::size_t objects = 0, lights = 0;
+    int width = 0, height = 0;
+  } scene;
+  TraceOptions trace;
+  Phases phases;                          // wall seconds per phase
+  std::optional<TraceStats> hostWork;     // seq, simd: the host's counted work
+  // simd, hetero: the primary pass (its matrix emptied once the image and dump have it).
+  std::optional<simd::PrimaryPass> simd;
+  std::optional<FarmReport> farm;         // dist, hetero: the frame farm's figures
+  std::optional<testbed::ModelledTime> testbed;  // --testbed: modelled seconds
   // Files deleted once every output is written (dist/hetero's frame checkpoint); kept when
   // a write fails, so --resume can finish the job.
   std::vector<std::string> removeWhenWritten;
 };
 
-// The registered method names, in the table's order (seq, simd, dist, hetero).
+// The registered method names, sorted (dist, hetero, seq, simd).
 std::vector<std::string> RenderMethodNames();
+
+// What a method uses beyond the shared options, for the command line to refuse a flag the
+// method would ignore: the SIMD pass on the array (its formats, --uncertain, --machine,
+// --threads), the frame farm under mpirun (--frame, --resume, --child-timeout, --in-flight).
+struct RenderMethodUse {
+  bool array = false, farm = false;
+};
+// UserError for an unknown method (listing the known ones).
+RenderMethodUse RenderMethodUses(const std::string& method);
+// The methods that use the array, or the farm, for messages ("simd, hetero").
+std::string RenderMethodsUsing(bool array, bool farm);
 
 // Checks every output path and the method's options (CheckRenderOutputs, then the method's
 // own check), reads the scene and runs the method, then writes --out, --dump-primary and

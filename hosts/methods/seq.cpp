@@ -17,7 +17,7 @@ void RenderSeq(const Scene& scene, const RenderOptions& options, RenderOutput& o
   progress.Finish();
   out.primary.clear();
   for (const PrimaryHit& h : hits) out.primary.push_back({h, 0});
-  out.report.update(stats.ToJson());
+  out.hostWork = stats;
 }
 
 }  // namespace zephyr

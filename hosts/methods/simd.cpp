@@ -13,30 +13,31 @@ void RenderSimd(const Scene& scene, const RenderOptions& options, RenderOutput& 
   const auto tracer = Tracer::Create(scene, options.trace);  // its option errors before the pass
   simd::PrimaryPass pass;
   {
-    PhaseTimer timer(out.report, "primary_pass");
+    PhaseTimer timer(out.phases, "primaryPass");
     pass = simd::RunPrimaryPass(scene, options.simd);
   }
-  std::fprintf(stdout, "cycle report (SIMD primary pass):\n%s", pass.cycleTable.c_str());
+  std::fprintf(stdout, "cycle report (SIMD primary pass):\n%s", pass.array.Table().c_str());
   std::fprintf(stdout, "uncertain pixels: %lld overflow, %lld grazing, %lld near tie; %lld recomputed on the host\n",
-               (long long)pass.overflowPixels, (long long)pass.grazingPixels,
-               (long long)pass.tiePixels, (long long)pass.recomputedPixels);
-  if (pass.refinedPixels > 0)
+               (long long)pass.uncertain.overflow, (long long)pass.uncertain.grazing,
+               (long long)pass.uncertain.nearTie, (long long)pass.recomputedPixels);
+  if (pass.refine)
     std::fprintf(stdout, "refine pass: %lld pixel(s) at %d fraction bits in %d layer(s), %.4g cycles; %lld still uncertain\n%s",
-                 (long long)pass.refinedPixels, pass.refine["fracBits"].get<int>(), pass.refine["layers"].get<int>(),
-                 pass.refine["cycles"]["totalCycles"].get<double>(), (long long)pass.refine["stillUncertain"].get<int64_t>(),
-                 pass.refineCycleTable.c_str());
+                 (long long)pass.refine->pixels, pass.refine->fracBits, pass.refine->layers,
+                 pass.refine->array.cycles.TotalCycles(), (long long)pass.refine->stillUncertain,
+                 pass.refine->array.Table().c_str());
   TraceStats stats;
   out.image = Image(c.width, c.height);
   {
-    PhaseTimer timer(out.report, "host_shading");
+    PhaseTimer timer(out.phases, "hostShading");
     simd::ShadeRegion(*tracer, pass.matrix, 0, 0, c.width, c.height, out.image.pixels, stats);
   }
   out.primary.clear();
   if (!options.dumpPrimary.empty())
     for (size_t i = 0; i < pass.matrix.hits.size(); ++i)
       out.primary.push_back({pass.matrix.hits[i], pass.matrix.flags[i]});
-  out.report.update(stats.ToJson());
-  out.report["simd"] = pass.Json();
+  out.hostWork = stats;
+  pass.matrix = {};  // the image and the dump have it
+  out.simd = std::move(pass);
 }
 
 }  // namespace zephyr

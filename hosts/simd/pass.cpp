@@ -24,19 +24,6 @@ using bitserial::Space;
 using fixed::Fixed;
 using fixed::Format;
 
-nlohmann::json PrimaryPass::Json() const {
-  nlohmann::json j = {{"plan", plan.Json()},
-          {"cycles", cycles},
-          {"hostSeconds", hostSeconds},
-          {"modelledSeconds", modelledSeconds},
-          {"realTimeFactor", hostSeconds > 0 ? modelledSeconds / hostSeconds : 0.0},
-          {"recomputeSeconds", recomputeSeconds},
-          {"uncertain", {{"overflow", overflowPixels}, {"grazing", grazingPixels},
-                         {"nearTie", tiePixels}, {"recomputed", recomputedPixels}}}};
-  if (!refine.is_null()) j["refine"] = refine;
-  return j;
-}
-
 namespace {
 
 // The per-pixel matrix on the array, in external memory in this order (docs/simd.md, "The
@@ -167,98 +154,61 @@ void ReadMatrix(Machine& m, const ArrayMatrix& a, MatrixRaw& r, int64_t passFirs
   for (int64_t pe = 0; pe < m.VirtualPes(); ++pe) r.overflow[first + pe] = m.Overflow(pe) || m.DivideByZero(pe);
 }
 
-// One run of the program on the array (every array pass): the matrix as read, the cycle
-// report and timing.
+// One run of the program on the array (every array pass): the matrix as read, the passes'
+// reports.
 struct ArrayRun {
   explicit ArrayRun(int64_t pes) : raw(pes) {}
   MatrixRaw raw;
-  nlohmann::json cycles;
-  std::string cycleTable;
-  double hostSeconds = 0, modelledSeconds = 0;
+  ArrayRunReport report;
 };
 
-// One array pass's cycle report with its memory and timing, as JSON and as a table.
-struct PassReport {
-  nlohmann::json cycles;
-  std::string table;
-  double hostSeconds = 0, modelledSeconds = 0;
-};
-
-PassReport ReportCycles(const bitserial::BlockedRun& run, const bitserial::MachineProfile& profile,
-                        double hostSeconds) {
-  PassReport pass;
-  const bitserial::CycleReport& report = run.report;
-  pass.hostSeconds = hostSeconds;
-  pass.modelledSeconds = report.ModelledSeconds();
-  pass.cycles = report.Json();
+// One array pass's report: its blocked run's cycles and memory, its wall time, its PEs.
+ArrayPassReport ReportPass(const bitserial::BlockedRun& run, double hostSeconds, int64_t firstPe, int64_t pes) {
   const bitserial::PeMemory& mem = run.memory;
-  pass.cycles["memory"] = {
-      {"internal", {{"peakBitsPerPe", mem.PeakUsed(Space::Internal)}, {"capacityBitsPerPe", mem.Capacity(Space::Internal)}}},
-      {"external", {{"peakBitsPerPe", mem.PeakUsed(Space::External)}, {"capacityBitsPerPe", mem.Capacity(Space::External)}}}};
-  pass.cycles["hostSeconds"] = pass.hostSeconds;
-  pass.cycles["realTimeFactor"] = pass.modelledSeconds / pass.hostSeconds;
-  pass.table = report.Table() +
-               fmt::format("memory per virtual PE: internal {} of {} bits, external {} of {} bits\n"
-                           "modelled time {:.4f} s at {:g} MHz; host time {:.4f} s; real-time factor {:.2f}\n",
-                           mem.PeakUsed(Space::Internal), mem.Capacity(Space::Internal),
-                           mem.PeakUsed(Space::External), mem.Capacity(Space::External),
-                           pass.modelledSeconds, profile.clockHz / 1e6, pass.hostSeconds,
-                           pass.modelledSeconds / pass.hostSeconds);
-  return pass;
+  return {.cycles = run.report,
+          .internalPeakBits = mem.PeakUsed(Space::Internal),
+          .internalCapacityBits = mem.Capacity(Space::Internal),
+          .externalPeakBits = mem.PeakUsed(Space::External),
+          .externalCapacityBits = mem.Capacity(Space::External),
+          .hostSeconds = hostSeconds,
+          .firstPe = firstPe,
+          .pes = pes};
 }
 
-// Adds the numbers of `add` into `into`, key by key (integers stay integers).
-void AddInto(nlohmann::json& into, const nlohmann::json& add) {
-  if (add.is_object()) {
-    for (const auto& [key, value] : add.items()) AddInto(into[key], value);
-  } else if (into.is_null()) {
-    into = add;
-  } else if (into.is_number_integer() && add.is_number_integer()) {
-    into = into.get<int64_t>() + add.get<int64_t>();
-  } else {
-    into = into.get<double>() + add.get<double>();
-  }
+// One pass's table: its cycle report, its memory, its modelled and host time.
+std::string PassTable(const ArrayPassReport& pass) {
+  const double modelled = pass.cycles.ModelledSeconds();
+  return pass.cycles.Table() +
+         fmt::format("memory per virtual PE: internal {} of {} bits, external {} of {} bits\n"
+                     "modelled time {:.4f} s at {:g} MHz; host time {:.4f} s; real-time factor {:.2f}\n",
+                     pass.internalPeakBits, pass.internalCapacityBits, pass.externalPeakBits,
+                     pass.externalCapacityBits, modelled, pass.cycles.Profile().clockHz / 1e6,
+                     pass.hostSeconds, modelled / pass.hostSeconds);
 }
 
-// The report of every array pass together: one pass's as it is; several passes' summed (the
-// same keys: layers, totalCycles, modelledSeconds, byClass, byLayer, byOp, hostSeconds and
-// realTimeFactor over every pass; memory of the first, the largest) with each pass's own
-// report under "passes", which PEs (and, for the image, rows) it ran, and each pass's table.
-void CombinePasses(ArrayRun& run, const std::vector<PassReport>& passes, const PrimaryPlan& plan, bool rows) {
-  if (passes.size() == 1) {
-    run.cycles = passes[0].cycles, run.cycleTable = passes[0].table, run.modelledSeconds = passes[0].modelledSeconds;
-    return;
-  }
-  const nlohmann::json& head = passes[0].cycles;
-  nlohmann::json total = {{"profile", head["profile"]}, {"clockHz", head["clockHz"]}, {"layers", 0},
-                          {"totalCycles", 0.0}, {"modelledSeconds", 0.0}, {"byClass", nlohmann::json::object()},
-                          {"byLayer", nlohmann::json::array()}, {"byOp", nlohmann::json::object()},
-                          {"memory", head["memory"]}, {"passes", nlohmann::json::array()}};
+}  // namespace
+
+std::string ArrayRunReport::Table() const {
+  if (passes.size() == 1) return PassTable(passes[0]);
+  std::string table;
   for (size_t k = 0; k < passes.size(); ++k) {
-    const nlohmann::json& c = passes[k].cycles;
-    for (const char* key : {"layers", "totalCycles", "modelledSeconds", "byClass", "byOp"}) AddInto(total[key], c[key]);
-    for (const nlohmann::json& layer : c["byLayer"])
-      total["byLayer"].push_back({{"layer", total["byLayer"].size()}, {"pass", k}, {"cycles", layer["cycles"]}});
-    const int64_t first = int64_t(k) * plan.pesPerPass, pes = std::min(plan.pesPerPass, plan.virtualPes - first);
-    nlohmann::json entry = {{"pass", k}, {"firstPe", first}, {"pes", pes}, {"cycles", c}};
-    std::string what = fmt::format("virtual PEs {}..{}", first, first + pes - 1);
-    if (rows) {
-      entry["rows"] = {first / plan.width, (first + pes) / plan.width - 1};
-      what = fmt::format("rows {}..{} ({} virtual PEs)", first / plan.width, (first + pes) / plan.width - 1, pes);
-    }
-    total["passes"].push_back(entry);
-    run.cycleTable += fmt::format("array pass {} of {}: {}\n", k + 1, passes.size(), what) + passes[k].table;
+    const ArrayPassReport& p = passes[k];
+    const std::string what =
+        rowWidth > 0 ? fmt::format("rows {}..{} ({} virtual PEs)", p.firstPe / rowWidth,
+                                   (p.firstPe + p.pes) / rowWidth - 1, p.pes)
+                     : fmt::format("virtual PEs {}..{}", p.firstPe, p.firstPe + p.pes - 1);
+    table += fmt::format("array pass {} of {}: {}\n", k + 1, passes.size(), what) + PassTable(p);
   }
-  run.modelledSeconds = total["modelledSeconds"].get<double>();
-  total["hostSeconds"] = run.hostSeconds;
-  total["realTimeFactor"] = run.modelledSeconds / run.hostSeconds;
-  run.cycleTable += fmt::format(
+  const double modelled = ModelledSeconds();
+  table += fmt::format(
       "total over {} array passes: {} layers, {:.0f} cycles; modelled time {:.4f} s at {:g} MHz; host time {:.4f} s; "
       "real-time factor {:.2f}\n",
-      passes.size(), total["layers"].get<int64_t>(), total["totalCycles"].get<double>(), run.modelledSeconds,
-      head["clockHz"].get<double>() / 1e6, run.hostSeconds, run.modelledSeconds / run.hostSeconds);
-  run.cycles = std::move(total);
+      passes.size(), cycles.Layers(), cycles.TotalCycles(), modelled, cycles.Profile().clockHz / 1e6, hostSeconds,
+      modelled / hostSeconds);
+  return table;
 }
+
+namespace {
 
 // The host side: decode the matrix, count the flags.
 void DecodeMatrix(PrimaryPass& pass, const MatrixRaw& raw) {
@@ -276,9 +226,9 @@ void DecodeMatrix(PrimaryPass& pass, const MatrixRaw& raw) {
     if (raw.overflow[pe]) fl |= kOverflow;
     if (raw.grazing[pe]) fl |= kGrazing;
     if (raw.nearTie[pe]) fl |= kNearTie;
-    if (fl & kOverflow) ++pass.overflowPixels;
-    if (fl & kGrazing) ++pass.grazingPixels;
-    if (fl & kNearTie) ++pass.tiePixels;
+    if (fl & kOverflow) ++pass.uncertain.overflow;
+    if (fl & kGrazing) ++pass.uncertain.grazing;
+    if (fl & kNearTie) ++pass.uncertain.nearTie;
   }
 }
 
@@ -290,7 +240,7 @@ void HandleUncertain(PrimaryPass& pass, const Scene& scene, const PrimaryRays& r
   const int64_t uncertain = std::count_if(out.flags.begin(), out.flags.end(), isUncertain);
   if (policy == UncertainPolicy::kFail && uncertain > 0)
     throw UserError(fmt::format("--uncertain fail: {} uncertain pixel(s): {} overflow, {} grazing, {} near tie",
-                                uncertain, pass.overflowPixels, pass.grazingPixels, pass.tiePixels));
+                                uncertain, pass.uncertain.overflow, pass.uncertain.grazing, pass.uncertain.nearTie));
   if (policy == UncertainPolicy::kKeep || policy == UncertainPolicy::kFail || uncertain == 0) return;
   TraceOptions trace;
   trace.depth = 1;
@@ -363,23 +313,23 @@ void FitPasses(PrimaryPlan& plan, const bitserial::MachineProfile& profile, cons
 // complete pass with its own layers, matrix readout and cycle report. Each pass runs whole
 // on one layer block at a time (bitserial/blocks.h): no operation of the program crosses
 // layers, so the matrix, the flags and the cycle report are those of op-by-op execution.
-ArrayRun RunArray(const Scene& scene, const PrimaryPlan& plan, const SimdOptions& options, const PrimaryRays& rays,
+ArrayRun RunArray(const PrimaryPlan& plan, const SimdOptions& options, const PrimaryRays& rays,
                   const std::vector<int64_t>& pixels) {
   ArrayRun run(plan.virtualPes);
   const auto start = std::chrono::steady_clock::now();
   const bitserial::MachineProfile profile = MachineProfileOf(options);
-  std::vector<PassReport> reports;
   for (int k = 0; k < plan.passes; ++k) {
     const auto passStart = std::chrono::steady_clock::now();
     const int64_t first = int64_t(k) * plan.pesPerPass, pes = std::min(plan.pesPerPass, plan.virtualPes - first);
     const bitserial::BlockedRun blocked = bitserial::RunLayerBlocks(
         profile, pes, {.blockLayers = options.blockLayers, .threads = options.threads},
         [&](Machine& m) { RunProgram(m, plan, rays, pixels, first, &run.raw); });
-    reports.push_back(ReportCycles(
-        blocked, profile, std::chrono::duration<double>(std::chrono::steady_clock::now() - passStart).count()));
+    run.report.passes.push_back(ReportPass(
+        blocked, std::chrono::duration<double>(std::chrono::steady_clock::now() - passStart).count(), first, pes));
+    run.report.cycles.Add(blocked.report);
   }
-  run.hostSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  CombinePasses(run, reports, plan, pixels.empty());
+  run.report.hostSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  run.report.rowWidth = pixels.empty() ? plan.width : 0;
   return run;
 }
 
@@ -397,7 +347,7 @@ void Refine(PrimaryPass& pass, const Scene& scene, const SimdOptions& options, c
   if (pixels.empty()) return;
   PrimaryPlan plan = PlanRefinePass(scene, options, pass.plan, int64_t(pixels.size()), kRefineExtraBits);
   FitPasses(plan, MachineProfileOf(options), rays, pixels, 1);
-  const ArrayRun run = RunArray(scene, plan, options, rays, pixels);
+  const ArrayRun run = RunArray(plan, options, rays, pixels);
   int64_t still = 0, overflow = 0, grazing = 0, tie = 0;
   for (size_t k = 0; k < pixels.size(); ++k) {
     uint32_t fl = 0;
@@ -412,14 +362,14 @@ void Refine(PrimaryPass& pass, const Scene& scene, const SimdOptions& options, c
     out.flags[pixels[k]] = fl != 0 ? fl : kRefined;
     still += fl != 0;
   }
-  pass.refinedPixels = int64_t(pixels.size());
-  pass.refine = {{"pixels", pixels.size()}, {"layers", plan.layers}, {"fracBits", plan.fracBits},
-                 {"dirFracBits", plan.dirFracBits}, {"tErrorBound", plan.tErrorBound},
-                 {"stillUncertain", still},
-                 {"uncertain", {{"overflow", overflow}, {"grazing", grazing}, {"nearTie", tie}}},
-                 {"hostSeconds", run.hostSeconds}, {"modelledSeconds", run.modelledSeconds},
-                 {"cycles", run.cycles}};
-  pass.refineCycleTable = run.cycleTable;
+  pass.refine = RefineResult{.pixels = int64_t(pixels.size()),
+                             .layers = plan.layers,
+                             .fracBits = plan.fracBits,
+                             .dirFracBits = plan.dirFracBits,
+                             .tErrorBound = plan.tErrorBound,
+                             .stillUncertain = still,
+                             .uncertain = {.overflow = overflow, .grazing = grazing, .nearTie = tie},
+                             .array = run.report};
 }
 
 }  // namespace
@@ -429,11 +379,8 @@ PrimaryPass RunPrimaryPass(const Scene& scene, const SimdOptions& options) {
   pass.plan = PlanPrimaryPass(scene, options);
   const PrimaryRays rays(scene.camera);
   FitPasses(pass.plan, MachineProfileOf(options), rays, {}, pass.plan.width);
-  ArrayRun run = RunArray(scene, pass.plan, options, rays, {});
-  pass.cycles = std::move(run.cycles);
-  pass.cycleTable = std::move(run.cycleTable);
-  pass.hostSeconds = run.hostSeconds;
-  pass.modelledSeconds = run.modelledSeconds;
+  ArrayRun run = RunArray(pass.plan, options, rays, {});
+  pass.array = std::move(run.report);
   const auto hostStart = std::chrono::steady_clock::now();
   DecodeMatrix(pass, run.raw);
   run.raw = MatrixRaw(0);  // the decoded matrix holds it all now; free it before the recompute

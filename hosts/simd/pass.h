@@ -11,10 +11,11 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
+#include "bitserial/report.h"
 
 #include "hosts/scene/scene.h"
 #include "hosts/simd/plan.h"
@@ -45,22 +46,58 @@ struct PrimaryMatrix {
   std::vector<uint32_t> flags;
 };
 
+// One array pass (docs/simd.md, "Several array passes"): its run of the program's cycle
+// report, the memory it used per virtual PE (peak and capacity, bits), its wall time on this
+// host (seconds), and the plan's virtual PEs it ran (firstPe .. firstPe + pes - 1).
+struct ArrayPassReport {
+  bitserial::CycleReport cycles;
+  int64_t internalPeakBits = 0, internalCapacityBits = 0;
+  int64_t externalPeakBits = 0, externalCapacityBits = 0;
+  double hostSeconds = 0;
+  int64_t firstPe = 0, pes = 0;
+};
+
+// Every array pass of one run of the program (the first pass's, or the refine pass's):
+// each pass's report, their sum, and the wall time of them all (seconds).
+struct ArrayRunReport {
+  std::vector<ArrayPassReport> passes;
+  bitserial::CycleReport cycles;  // every pass's, summed (bitserial::CycleReport::Add)
+  double hostSeconds = 0;
+  // The passes hold whole image rows of this width (the first pass), or 0 (the refine pass:
+  // compacted pixels); for the table's "rows a..b".
+  int rowWidth = 0;
+  double ModelledSeconds() const { return cycles.ModelledSeconds(); }
+  // The printable cycle report: one pass's table, or each pass's and the total.
+  std::string Table() const;
+};
+
+// The first pass's uncertain pixels by cause (a pixel may have several).
+struct UncertainCounts {
+  int64_t overflow = 0, grazing = 0, nearTie = 0;
+};
+
+// --uncertain refine (or auto over budget): the refine pass over the uncertain pixels,
+// compacted (docs/simd.md, "Refine pass").
+struct RefineResult {
+  int64_t pixels = 0;          // the pixels it ran on
+  int layers = 0;              // virtual-PE layers of its plan
+  int fracBits = 0, dirFracBits = 0;
+  double tErrorBound = 0;      // its plan's bound on t (scene units)
+  int64_t stillUncertain = 0;  // pixels it could not certify (then recomputed on the host)
+  UncertainCounts uncertain;   // of those, by cause
+  ArrayRunReport array;
+};
+
 struct PrimaryPass {
   PrimaryPlan plan;
   PrimaryMatrix matrix;
-  nlohmann::json cycles;      // bitserial::CycleReport::Json() plus memory and timing
-  std::string cycleTable;     // the printable cycle report
-  double hostSeconds = 0;     // wall time of the emulated pass (array part)
-  double modelledSeconds = 0; // at the profile's clock
-  double recomputeSeconds = 0;
+  ArrayRunReport array;        // the first pass on the array: cycles, passes, wall time
+  double recomputeSeconds = 0; // the host's part after the array: decode, refine, recompute
   // The first pass's uncertain pixels (by cause), and how many the host recomputed.
-  int64_t overflowPixels = 0, grazingPixels = 0, tiePixels = 0, recomputedPixels = 0;
-  // --uncertain refine: the pixels the refine pass ran on (0: none ran), and its report
-  // (pixels, layers, formats, stillUncertain and its causes, cycles, timing; null if none).
-  int64_t refinedPixels = 0;
-  nlohmann::json refine;
-  std::string refineCycleTable;
-  nlohmann::json Json() const;  // everything above but the matrix and the tables
+  UncertainCounts uncertain;
+  int64_t recomputedPixels = 0;
+  std::optional<RefineResult> refine;  // when a refine pass ran
+  int64_t RefinedPixels() const { return refine ? refine->pixels : 0; }
 };
 
 // Fraction bits the refine pass adds to the planned widths (docs/simd.md, "Refine pass").

@@ -6,14 +6,8 @@
 
 #include "bitserial/profile.h"
 #include "fixed/check.h"
-#include "hosts/simd/pass.h"
+#include "hosts/testbed/simulation.h"
 
-#ifdef ZEPHYR_SMPI
-#include <mpi.h>
-#include <simgrid/plugins/load.h>
-#include <simgrid/s4u.hpp>
-#include <xbt/config.hpp>
-#endif
 
 namespace zephyr::testbed {
 
@@ -36,47 +30,27 @@ const std::map<std::string, Testbed>& Testbeds() {
   return testbeds;
 }
 
-// The SIMD pass's modelled seconds split into the array's own cycles and the host link
-// (the cycle report's "host" class: the matrix moving over SCSI), summed over the array
-// passes that ran: the first, and the refine pass when one ran (`refine` is null otherwise).
-struct ArraySplit {
-  double arraySeconds = 0, scsiSeconds = 0, scsiBytes = 0, clockHz = 0, arrayCycles = 0;
-  double refineCycles = 0;  // the refine pass's share of arrayCycles + its host class
-};
-ArraySplit SplitPass(const nlohmann::json& cycles, const nlohmann::json& refine) {
+}  // namespace
+
+ArraySplit SplitArrayCycles(const bitserial::CycleReport& first, const bitserial::CycleReport* refine) {
   ArraySplit a;
-  const bitserial::MachineProfile profile = bitserial::Profile(cycles.at("profile").get<std::string>());
-  a.clockHz = cycles.at("clockHz").get<double>();
+  const bitserial::MachineProfile& profile = first.Profile();
+  a.clockHz = profile.clockHz;
   double host = 0;
-  for (const nlohmann::json* pass : {&cycles, refine.is_null() ? nullptr : &refine}) {
+  for (const bitserial::CycleReport* pass : {&first, refine}) {
     if (!pass) continue;
-    ZEPHYR_CHECK(pass->at("clockHz").get<double>() == a.clockHz);
-    const double passHost = pass->at("byClass").at("host").get<double>();
-    a.arrayCycles += pass->at("totalCycles").get<double>() - passHost;
+    ZEPHYR_CHECK(pass->Profile().clockHz == a.clockHz);
+    const double passHost = pass->ClassCycles(bitserial::CycleClass::Host);
+    a.arrayCycles += pass->TotalCycles() - passHost;
     host += passHost;
-    if (pass == &refine) a.refineCycles = pass->at("totalCycles").get<double>();
+    if (pass == refine) a.refineCycles = pass->TotalCycles();
   }
   a.arraySeconds = a.arrayCycles / a.clockHz;
   a.scsiSeconds = host / a.clockHz;
-  // One hostPlane moves one bit of every physical PE.
   const double planeCycles = profile.Cost(bitserial::MicroOp::HostPlane);
   a.scsiBytes = planeCycles > 0 ? host / planeCycles * profile.physicalPes / 8 : 0;
   return a;
 }
-
-// The refine pass's cycle report in a SIMD report's "simd" object (null when none ran).
-nlohmann::json RefineCycles(const nlohmann::json& pass) {
-  return pass.contains("refine") ? pass.at("refine").at("cycles") : nlohmann::json();
-}
-
-// This rank's charged host seconds (ChargeHostWork), and the part ChargeArrayPass charged
-// (the uncertain pixels recomputed): under SMPI every rank has its own copy of globals.
-double charged = 0, passHost = 0;
-double ChargedSeconds() { return charged; }
-double PassHostSeconds() { return passHost; }
-nlohmann::json LinkBytes(double now);
-
-}  // namespace
 
 nlohmann::json Testbed::Json() const {
   return {{"name", name},
@@ -109,10 +83,10 @@ std::vector<std::string> TestbedNames() {
   return names;
 }
 
-void CheckModelledTimeRequest(const std::string& testbedName, const std::string& method,
-                              const std::string& arrayProfile) {
+void CheckModelledTimeRequest(const std::string& testbedName, const std::string& method, bool farmed,
+                              bool usesArray, const std::string& arrayProfile) {
   if (testbedName.empty()) return;
-  if (method == "dist" || method == "hetero") {
+  if (farmed) {
     if (!Simulated())
       throw UserError("--testbed with --method " + method +
                       " runs on a simulated network: build/bin/zephyr-smpi under smpirun "
@@ -121,105 +95,135 @@ void CheckModelledTimeRequest(const std::string& testbedName, const std::string&
   }
   if (Simulated()) return;  // the platform file names the hosts
   const Testbed& bed = TestbedNamed(testbedName);
-  if (method == "simd" && arrayProfile != bed.arrayProfile)
+  if (usesArray && arrayProfile != bed.arrayProfile)
     throw UserError("--testbed " + bed.name + ": its array is '" + bed.arrayProfile +
                     "', but --machine chose '" + arrayProfile + "'");
 }
 
-void AddModelledTime(const std::string& testbedName, const std::string& method,
-                     const Scene& scene, nlohmann::json& r) {
-  if (testbedName.empty()) return;
-  nlohmann::json t;
-  if (method == "dist" || method == "hetero") {
-    if (!Simulated())
-      throw UserError("--testbed with --method " + method +
-                      " runs on a simulated network: build/bin/zephyr-smpi under smpirun "
-                      "(`make smpi`; docs/testbed.md)");
-    t["testbed"] = testbedName;
-    const double now = SimulatedNow();
-    t["modelledSeconds"] = now;
-    t["clock"] = "SimGrid (simulated seconds from MPI start to the finished image at the parent)";
-    const double pass = r.at("distributed").at("time").value("parentPassSeconds", 0.0);
-    const double hostWork = ChargedSeconds() - (method == "hetero" ? PassHostSeconds() : 0);
-    t["parent"] = SimulatedHost();
-    t["parent"]["arrayPassSeconds"] = method == "hetero" ? pass : 0.0;
-    t["parent"]["hostWorkSeconds"] = hostWork;
-    t["parent"]["hostWorkSource"] =
-        "pixels packed into slices and pasted from results (one work-table pixel each), "
-        "degenerate frames shaded; the array pass apart";
-    t["parent"]["waitingSeconds"] = now - hostWork - (method == "hetero" ? pass : 0.0);
-    nlohmann::json children = nlohmann::json::array();
-    for (const auto& c : r.at("distributed").at("perChild")) {
-      nlohmann::json j = {{"rank", c.at("rank")}, {"host", c.at("host")}};
-      if (c.contains("work") && c.at("work").contains("testbed")) {
-        const auto& s = c.at("work").at("testbed");
-        j["busySeconds"] = s.at("busySeconds");
-        j["idleSeconds"] = now - s.at("busySeconds").get<double>();
-      }
-      children.push_back(j);
-    }
-    t["children"] = children;
-    t["childrenIdleSource"] = "modelledSeconds minus the child's charged work";
-    t["links"] = LinkBytes(now);
-    r["testbed"] = t;
-    return;
+namespace {
+
+// A farmed render under simulation: SimGrid's clock, the parent's split, the children's.
+ModelledTime FarmTime(const std::string& testbedName, const FarmTimes& farm) {
+  if (!Simulated())
+    throw UserError("--testbed with a farmed method runs on a simulated network: build/bin/zephyr-smpi "
+                    "under smpirun (`make smpi`; docs/testbed.md)");
+  ModelledTime t;
+  t.testbed = testbedName;
+  const double now = SimulatedNow();
+  t.modelledSeconds = now;
+  t.clock = "SimGrid (simulated seconds from MPI start to the finished image at the parent)";
+  t.simulatedHost = SimulatedHost();
+  ModelledTime::FarmSplit f;
+  f.arrayPassSeconds = farm.parentPassSeconds;
+  f.hostWorkSeconds = ChargedHostSeconds() - ChargedPassHostSeconds();
+  f.waitingSeconds = now - f.hostWorkSeconds - farm.parentPassSeconds;
+  for (const FarmTimes::Child& c : farm.children) {
+    ModelledTime::FarmSplit::Child child{.rank = c.rank, .host = c.host};
+    if (c.busySeconds) child.busySeconds = *c.busySeconds, child.idleSeconds = now - *c.busySeconds;
+    f.children.push_back(child);
   }
-  TraceStats stats;
-  try {
-    stats = TraceStats::FromJson(r);
-  } catch (const nlohmann::json::exception&) {
-    throw UserError("--testbed: method '" + method + "' does not report counted work");
-  }
+  f.links = LinkLoads(now);
+  t.farm = std::move(f);
+  return t;
+}
+
+}  // namespace
+
+std::optional<ModelledTime> ModelTime(const std::string& testbedName, const CountedWork& work,
+                                      const Scene& scene) {
+  if (testbedName.empty()) return std::nullopt;
+  if (work.farm) return FarmTime(testbedName, *work.farm);
+  if (!work.host) throw UserError("--testbed: the method counts no host work to model");
+  TraceStats stats = *work.host;
+  ModelledTime t;
+  t.testbed = testbedName;
   if (Simulated()) {
     // seq/simd under smpirun on a platform (tools/testbed/simrun.sh --children 0): the
     // counted work is charged to this rank's simulated host, the array's cycles to the
     // platform's array host and the matrix to the link between them, as for hetero.
     const double start = SimulatedNow();
-    t["testbed"] = testbedName;
-    t["clock"] = "SimGrid (simulated seconds of the charged work on the platform's hosts)";
-    t["hostProfile"] = SimulatedHost();
-    if (method == "simd") {
-      const nlohmann::json& pass = r.at("simd");
+    t.clock = "SimGrid (simulated seconds of the charged work on the platform's hosts)";
+    t.simulatedHost = SimulatedHost();
+    if (work.arrayCycles) {
       const double arrayStart = SimulatedNow();
-      ChargeArrayCycles(pass.at("cycles"), RefineCycles(pass),
-                        pass.at("uncertain").at("recomputed").get<uint64_t>(), scene,
-                        "SIMD/sequential");
-      t["array"] = {{"seconds", SimulatedNow() - arrayStart},
-                    {"what", "array cycles at the array host's speed, the matrix over the link to "
-                             "it, the uncertain pixels recomputed on this host"}};
+      ChargeArrayCycles(*work.arrayCycles, work.refineCycles, work.recomputedPixels, scene, "SIMD/sequential");
+      t.simulatedArraySeconds = SimulatedNow() - arrayStart;
     }
-    t["host"] = {{"seconds", ChargeHostWork(stats)}, {"events", stats.ToJson()}};
-    t["modelledSeconds"] = SimulatedNow() - start;
-    r["testbed"] = t;
-    return;
+    t.simulatedHostSeconds = ChargeHostWork(stats);
+    t.simulatedEvents = stats;
+    t.modelledSeconds = SimulatedNow() - start;
+    return t;
   }
   const Testbed& bed = TestbedNamed(testbedName);
   const HostProfile& host = HostProfileNamed(bed.parentProfile);
-  t["testbed"] = bed.Json();
-  t["hostProfile"] = host.Json();
-  if (method == "simd") {
-    const nlohmann::json& pass = r.at("simd");
-    if (pass.at("cycles").at("profile").get<std::string>() != bed.arrayProfile)
-      throw UserError("--testbed " + bed.name + ": its array is '" + bed.arrayProfile +
-                      "', but --machine chose '" + pass.at("cycles").at("profile").get<std::string>() + "'");
+  t.bed = &bed;
+  t.hostProfile = &host;
+  double arraySeconds = 0;
+  if (work.arrayCycles) {
+    const std::string& profile = work.arrayCycles->Profile().name;
+    if (profile != bed.arrayProfile)
+      throw UserError("--testbed " + bed.name + ": its array is '" + bed.arrayProfile + "', but --machine chose '" +
+                      profile + "'");
     // The host recomputes each uncertain pixel against every object, in double.
-    stats.Add(RecomputeWork(pass.at("uncertain").at("recomputed").get<uint64_t>(), scene));
-    const ArraySplit a = SplitPass(pass.at("cycles"), RefineCycles(pass));
-    const HostTime h = ModelHostTime(stats, host);
-    t["array"] = {{"profile", bed.arrayProfile},  {"clockHz", a.clockHz},
-                  {"cycles", a.arrayCycles},      {"seconds", a.arraySeconds},
-                  {"scsiBytes", a.scsiBytes},     {"scsiSeconds", a.scsiSeconds},
+    stats.Add(RecomputeWork(work.recomputedPixels, scene));
+    t.array = ModelledTime::ArrayShare{profile, SplitArrayCycles(*work.arrayCycles, work.refineCycles)};
+    arraySeconds = t.array->split.arraySeconds + t.array->split.scsiSeconds;
+  }
+  t.host = ModelHostTime(stats, host);
+  t.modelledSeconds = arraySeconds + t.host->seconds;
+  return t;
+}
+
+nlohmann::json ModelledTime::Json() const {
+  nlohmann::json t;
+  if (farm) {
+    t["testbed"] = testbed;
+    t["modelledSeconds"] = modelledSeconds;
+    t["clock"] = clock;
+    t["parent"] = simulatedHost;
+    t["parent"]["arrayPassSeconds"] = farm->arrayPassSeconds;
+    t["parent"]["hostWorkSeconds"] = farm->hostWorkSeconds;
+    t["parent"]["hostWorkSource"] =
+        "pixels packed into slices and pasted from results (one work-table pixel each), "
+        "degenerate frames shaded; the array pass apart";
+    t["parent"]["waitingSeconds"] = farm->waitingSeconds;
+    nlohmann::json children = nlohmann::json::array();
+    for (const FarmSplit::Child& c : farm->children) {
+      nlohmann::json j = {{"rank", c.rank}, {"host", c.host}};
+      if (c.busySeconds) j["busySeconds"] = *c.busySeconds, j["idleSeconds"] = *c.idleSeconds;
+      children.push_back(j);
+    }
+    t["children"] = children;
+    t["childrenIdleSource"] = "modelledSeconds minus the child's charged work";
+    t["links"] = farm->links;
+    return t;
+  }
+  if (!clock.empty()) {  // seq/simd under simulation
+    t["testbed"] = testbed;
+    t["clock"] = clock;
+    t["hostProfile"] = simulatedHost;
+    if (simulatedArraySeconds)
+      t["array"] = {{"seconds", *simulatedArraySeconds},
+                    {"what", "array cycles at the array host's speed, the matrix over the link to "
+                             "it, the uncertain pixels recomputed on this host"}};
+    t["host"] = {{"seconds", simulatedHostSeconds.value_or(0)}, {"events", simulatedEvents.ToJson()}};
+    t["modelledSeconds"] = modelledSeconds;
+    return t;
+  }
+  t["testbed"] = bed->Json();
+  t["hostProfile"] = hostProfile->Json();
+  if (array) {
+    const ArraySplit& a = array->split;
+    t["array"] = {{"profile", array->profile},  {"clockHz", a.clockHz},
+                  {"cycles", a.arrayCycles},    {"seconds", a.arraySeconds},
+                  {"scsiBytes", a.scsiBytes},   {"scsiSeconds", a.scsiSeconds},
                   {"refineCycles", a.refineCycles},
                   {"cyclesSource", "the first pass's cycle report, and the refine pass's if one ran"},
                   {"scsiSource", "the cycle reports' host class (hostPlane cycles of the matrix)"}};
-    t["host"] = h.Json();
-    t["modelledSeconds"] = a.arraySeconds + a.scsiSeconds + h.seconds;
-  } else {
-    const HostTime h = ModelHostTime(stats, host);
-    t["host"] = h.Json();
-    t["modelledSeconds"] = h.seconds;
   }
-  r["testbed"] = t;
+  t["host"] = host->Json();
+  t["modelledSeconds"] = modelledSeconds;
+  return t;
 }
 
 namespace {
@@ -310,119 +314,5 @@ std::string Hostfile(int children) {
   for (int i = 1; i <= children; ++i) s += "child-" + std::to_string(i) + "\n";
   return s;
 }
-
-
-// ---- Simulation ---------------------------------------------------------------------------
-#ifdef ZEPHYR_SMPI
-
-bool Simulated() { return true; }
-
-double SimulatedNow() { return simgrid::s4u::Engine::get_clock(); }
-
-namespace {
-const HostProfile* ProfileOf(simgrid::s4u::Host* h) {
-  const char* name = h->get_property("zephyr:profile");
-  return name ? &HostProfileNamed(name) : nullptr;
-}
-}  // namespace
-
-nlohmann::json SimulatedHost() {
-  simgrid::s4u::Host* h = simgrid::s4u::this_actor::get_host();
-  const HostProfile* p = ProfileOf(h);
-  return {{"host", h->get_name()}, {"speedFlops", h->get_speed()},
-          {"profile", p ? p->name : std::string("(none: flops + instructions at the host speed)")}};
-}
-
-double ChargeHostWork(const TraceStats& work) {
-  simgrid::s4u::Host* h = simgrid::s4u::this_actor::get_host();
-  const double start = SimulatedNow();
-  // With a profile: its modelled seconds, as flops at this host's speed (so the charge is
-  // exactly those seconds on an unshared host). Without: every operation as one flop.
-  double flops;
-  if (const HostProfile* p = ProfileOf(h)) {
-    flops = ModelHostTime(work, *p).seconds * h->get_speed();
-  } else {
-    const HostTime t = ModelHostTime(work, HostProfileNamed("sparcstation2"));
-    flops = t.flops + t.instructions;
-  }
-  if (flops > 0) smpi_execute_flops(flops);
-  charged += SimulatedNow() - start;
-  return SimulatedNow() - start;
-}
-
-namespace {
-bool linkLoadPlugin() {
-  const std::string plugin = simgrid::config::get_value<std::string>("plugin");
-  return plugin.find("link_load") != std::string::npos;
-}
-bool linksTracked = false;
-}  // namespace
-
-void StartLinkAccounting() {
-  if (!linkLoadPlugin()) return;
-  for (simgrid::s4u::Link* link : simgrid::s4u::Engine::get_instance()->get_all_links())
-    sg_link_load_track(link);
-  linksTracked = true;
-}
-
-namespace {
-nlohmann::json LinkBytes(double now) {
-  nlohmann::json links = nlohmann::json::array();
-  if (!linksTracked) return links;
-  for (simgrid::s4u::Link* link : simgrid::s4u::Engine::get_instance()->get_all_links()) {
-    const double bytes = sg_link_get_cum_load(link);
-    // SimGrid keeps bandwidths in bytes per second.
-    links.push_back({{"link", link->get_name()},
-                     {"bytes", bytes},
-                     {"bandwidthBytesPerSecond", link->get_bandwidth()},
-                     {"busyFraction", now > 0 ? bytes / link->get_bandwidth() / now : 0.0}});
-  }
-  return links;
-}
-}  // namespace
-
-double ChargeArrayPass(const simd::PrimaryPass& pass, const Scene& scene) {
-  return ChargeArrayCycles(pass.cycles,
-                           pass.refine.is_null() ? nlohmann::json() : pass.refine.at("cycles"),
-                           uint64_t(pass.recomputedPixels), scene, "heterogeneous");
-}
-
-double ChargeArrayCycles(const nlohmann::json& cycles, const nlohmann::json& refineCycles,
-                         uint64_t recomputedPixels, const Scene& scene, const std::string& method) {
-  const double start = SimulatedNow();
-  simgrid::s4u::Host* self = simgrid::s4u::this_actor::get_host();
-  const auto arrays = simgrid::s4u::Engine::get_instance()->get_filtered_hosts([](simgrid::s4u::Host* h) {
-    const char* role = h->get_property("zephyr:role");
-    return role && std::string(role) == "array";
-  });
-  if (arrays.size() != 1)
-    throw UserError("the platform has " + std::to_string(arrays.size()) +
-                    " hosts with zephyr:role=array; the " + method + " method needs exactly one "
-                    "(docs/testbed.md)");
-  const ArraySplit a = SplitPass(cycles, refineCycles);
-  // The array computes at its clock (the platform gives its speed in cycles per second).
-  simgrid::s4u::this_actor::exec_init(a.arrayCycles)->set_host(arrays[0])->wait();
-  if (a.scsiBytes > 0) simgrid::s4u::Comm::sendto(arrays[0], self, uint64_t(a.scsiBytes));
-  passHost += ChargeHostWork(RecomputeWork(recomputedPixels, scene));
-  return SimulatedNow() - start;
-}
-
-#else
-
-bool Simulated() { return false; }
-double SimulatedNow() { return 0; }
-nlohmann::json SimulatedHost() { return nlohmann::json::object(); }
-double ChargeHostWork(const TraceStats&) { return 0; }
-double ChargeArrayPass(const simd::PrimaryPass&, const Scene&) { return 0; }
-double ChargeArrayCycles(const nlohmann::json&, const nlohmann::json&, uint64_t, const Scene&,
-                         const std::string&) {
-  return 0;
-}
-void StartLinkAccounting() {}
-namespace {
-nlohmann::json LinkBytes(double) { return nlohmann::json::array(); }
-}  // namespace
-
-#endif
 
 }  // namespace zephyr::testbed

@@ -5,27 +5,24 @@
 // network (a SimGrid platform: one shared Ethernet, the SCSI link to the array).
 //
 //   * seq and simd need no network: `zephyr render --testbed ufmg1992` adds report
-//     "testbed" with the modelled seconds from the counted work (AddModelledTime).
+//     "testbed" with the modelled seconds from the counted work (ModelTime).
 //   * dist and hetero run unmodified under SimGrid's SMPI (build/bin/zephyr-smpi under
-//     smpirun, `make smpi`): each child charges its counted work to its simulated host
-//     (ChargeHostWork), the parent charges the array pass (ChargeArrayPass); the report's
-//     modelled seconds are SimGrid's clock. In the ordinary build these calls do nothing.
+//     smpirun, `make smpi`): each child charges its counted work to its simulated host,
+//     the parent charges the array pass (hosts/testbed/simulation.h); the report's
+//     modelled seconds are SimGrid's clock. In the ordinary build those calls do nothing.
 #pragma once
 
+#include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include "bitserial/report.h"
 #include "hosts/scene/scene.h"
 #include "hosts/testbed/host_profile.h"
 #include "hosts/trace/tracer.h"
-
-namespace zephyr {
-namespace simd {
-struct PrimaryPass;
-}
-}  // namespace zephyr
 
 namespace zephyr::testbed {
 
@@ -65,58 +62,92 @@ nlohmann::json CalibrateThisHost(const nlohmann::json& report, const std::string
 // smpirun's hostfile for it: rank 0 on the parent, rank i on child-i.
 std::string Hostfile(int children);
 
-// True in the build made with smpicxx (zephyr-smpi), where time is SimGrid's.
-bool Simulated();
+// The SIMD pass's cycles split into the array's own and the host link's (the cycle reports'
+// "host" class: the matrix moving over SCSI), summed over the array passes that ran: the
+// first pass's report, and the refine pass's when one ran (null otherwise). Cycles at the
+// profile's clock (Hz); bytes: one hostPlane moves one bit of every physical PE.
+struct ArraySplit {
+  double arraySeconds = 0, scsiSeconds = 0, scsiBytes = 0, clockHz = 0, arrayCycles = 0;
+  double refineCycles = 0;  // the refine pass's share of arrayCycles + its host class
+};
+ArraySplit SplitArrayCycles(const bitserial::CycleReport& first, const bitserial::CycleReport* refine);
 
-// Modelled seconds on the testbed `testbedName` ("" = none: does nothing) of a finished
-// render of `scene` by `method`, from the counts in its report (the method's TraceStats at
-// the top level; simd's cycle report under "simd"). Adds report["testbed"]:
-// {"testbed", "modelledSeconds", "host": HostTime, "array": {...}}. For dist/hetero it
-// requires the simulated build and reports SimGrid's clock (UserError otherwise), with what
-// the simulation measured: "parent" (its charged host work and array pass, seconds),
-// "children" (per child: simulated busy and idle seconds) and "links" (per platform link:
-// bytes carried, from SimGrid's link_load plugin when simrun.sh enabled it). seq and simd
-// under simulation (`simrun.sh --children 0 --platform FILE`) charge their counted work to
-// the rank's host and simd's array cycles to the platform's array host (ChargeArrayCycles),
-// and report SimGrid's seconds for them. UserError for an unknown testbed (naming simrun.sh
-// when it is a file) or a method that counts no work.
-// Everything AddModelledTime will refuse that the command line alone decides, checked before
-// any work: an unknown testbed, dist/hetero outside SimGrid, a --machine other than the
-// testbed's array. `arrayProfile` is the machine profile the SIMD pass would use. No-op
-// when `testbedName` is empty.
-void CheckModelledTimeRequest(const std::string& testbedName, const std::string& method,
-                              const std::string& arrayProfile);
+// The farm's figures the testbed needs (dist, hetero under simulation): per child its rank,
+// host and the simulated seconds its charged work took (none when its stats did not say).
+struct FarmTimes {
+  struct Child {
+    int rank = 0;
+    std::string host;
+    std::optional<double> busySeconds{};
+  };
+  std::vector<Child> children;
+  double parentPassSeconds = 0;  // the array pass at the parent (hetero; 0 for dist)
+};
 
-void AddModelledTime(const std::string& testbedName, const std::string& method,
-                     const Scene& scene, nlohmann::json& report);
+// A finished render's counted work, for the testbed to price. The testbed knows no method:
+// it prices what was counted.
+struct CountedWork {
+  const TraceStats* host = nullptr;  // the host's counted work (seq; simd's shading); null: none
+  // The SIMD pass (simd, hetero): the first pass's cycle report, the refine pass's (null when
+  // none ran), and the uncertain pixels the host recomputed in double.
+  const bitserial::CycleReport* arrayCycles = nullptr;
+  const bitserial::CycleReport* refineCycles = nullptr;
+  uint64_t recomputedPixels = 0;
+  const FarmTimes* farm = nullptr;  // the frame farm (dist, hetero); null: one process
+};
 
-// Under simulation: charges counted host work to this rank's simulated host (its profile
-// is the platform host's "zephyr:profile" property; without one, the work's flops plus
-// instructions at the host's speed). Returns the simulated seconds charged (0 otherwise).
-double ChargeHostWork(const TraceStats& work);
+// Modelled seconds of a render on a testbed (the report's "testbed" section). Outside
+// simulation (one process: seq, simd) from the work table and the array's cycles; under
+// simulation SimGrid's clock and what the simulation measured.
+struct ModelledTime {
+  std::string testbed;        // the testbed's name
+  double modelledSeconds = 0;
+  // Outside simulation: the testbed, the host's profile and modelled time; the array's share
+  // when the SIMD pass ran.
+  const Testbed* bed = nullptr;
+  const HostProfile* hostProfile = nullptr;
+  std::optional<HostTime> host;
+  struct ArrayShare {
+    std::string profile;
+    ArraySplit split;
+  };
+  std::optional<ArrayShare> array;
+  // Under simulation: what the clock measured, this rank's simulated host (SimulatedHost()).
+  std::string clock;
+  nlohmann::json simulatedHost;
+  // seq/simd under simulation: the host's charged seconds and its events, the array's.
+  std::optional<double> simulatedHostSeconds, simulatedArraySeconds;
+  TraceStats simulatedEvents;
+  // dist/hetero under simulation: the parent's split, the children, the links' bytes.
+  struct FarmSplit {
+    double arrayPassSeconds = 0, hostWorkSeconds = 0, waitingSeconds = 0;
+    struct Child {
+      int rank = 0;
+      std::string host;
+      std::optional<double> busySeconds{}, idleSeconds{};
+    };
+    std::vector<Child> children;
+    nlohmann::json links;  // SimGrid's link_load figures per link (LinkLoads)
+  };
+  std::optional<FarmSplit> farm;
+  nlohmann::json Json() const;  // the report's "testbed" section (docs/testbed.md)
+};
 
-// Under simulation, at the parent: the SIMD pass's array cycles (its first pass and, when
-// one ran, its refine pass) on the platform's array host ("zephyr:role" = "array"), the
-// matrix over the SCSI link between them, and the host's share of the pass (uncertain
-// pixels recomputed) on the parent. Returns the simulated seconds it took (0 when not
-// simulated).
-double ChargeArrayPass(const simd::PrimaryPass& pass, const Scene& scene);
-// The same from the passes' cycle reports (JSON, as `render --report` writes them under
-// "simd": "cycles", and "refine"."cycles" or null when no refine pass ran) and the count of
-// uncertain pixels recomputed on the host; `method` names the caller in the UserError for a
-// platform without exactly one array host.
-double ChargeArrayCycles(const nlohmann::json& cycles, const nlohmann::json& refineCycles,
-                         uint64_t recomputedPixels, const Scene& scene, const std::string& method);
+// Everything ModelTime will refuse that the command line alone decides, checked before any
+// work: an unknown testbed, a farmed method outside SimGrid, a --machine other than the
+// testbed's array (`arrayProfile`: the machine profile the SIMD pass would use; only when
+// `usesArray`). No-op when `testbedName` is empty. `method` only names it in messages.
+void CheckModelledTimeRequest(const std::string& testbedName, const std::string& method, bool farmed,
+                              bool usesArray, const std::string& arrayProfile);
 
-// Under simulation, at the parent before its first message: starts counting the bytes every
-// platform link carries (SimGrid's link_load plugin, `--cfg=plugin:link_load`, which
-// tools/testbed/simrun.sh sets; without it nothing is counted). Does nothing otherwise.
-void StartLinkAccounting();
-
-// The simulated seconds since the simulation started (0 when not simulated).
-double SimulatedNow();
-
-// Under simulation, a JSON object with this rank's host name, its profile and speed.
-nlohmann::json SimulatedHost();
+// The modelled seconds on the testbed `testbedName` ("" = none: nullopt) of the counted work
+// of a finished render of `scene`. A farmed render (work.farm) needs the simulated build
+// and reports SimGrid's clock (UserError otherwise); seq and simd under simulation
+// (`simrun.sh --children 0 --platform FILE`) charge their counted work to the rank's host
+// and the array's cycles to the platform's array host (ChargeArrayCycles). UserError for an
+// unknown testbed (naming simrun.sh when it is a file), an array of another profile than
+// the testbed's, or work that counts nothing.
+std::optional<ModelledTime> ModelTime(const std::string& testbedName, const CountedWork& work,
+                                      const Scene& scene);
 
 }  // namespace zephyr::testbed

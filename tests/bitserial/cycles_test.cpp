@@ -275,7 +275,7 @@ TEST(BitserialCycles, CyclesCommandPrintsBatchersFigures) {
 }
 
 // `zephyr cycles` passes --rounding, --overflow, --frac and --external to the engine: its
-// figure equals the engine's own for the same operation (issue 17: div, 16 bits, 8 fraction
+// figure equals the engine's own for the same operation (div, 16 bits, 8 fraction
 // bits, nearest: 2899 cycles on the WaveTracer).
 TEST(BitserialCycles, CyclesCommandFollowsPolicyAndPlacement) {
   const Format f = Format::Signed(7, 8);
@@ -376,6 +376,50 @@ TEST(BitserialReduce, NoActivePeGivesTheDocumentedIdentity) {
     EXPECT_TRUE(ReduceMax(a).raw == 1) << f.Name();
     EXPECT_TRUE(ReduceMin(a).raw == 1) << f.Name();
   }
+}
+
+}  // namespace
+}  // namespace zephyr::bitserial
+
+namespace zephyr::bitserial {
+namespace {
+
+// A sum of program runs (CycleReport::Add, the SIMD pass's array passes): every figure is
+// the runs' figures added, the layers are listed run after run with their run, each run is
+// kept whole, and a one-run report is exactly its run.
+TEST(BitserialCycleReport, AddSumsRunsAndKeepsEach) {
+  const MachineProfile profile = Profile("wavetracer");
+  MicroOpCounts a, b;
+  a.Add(MicroOp::AluStep, 7), a.Add(MicroOp::ReadInternal, 3);
+  b.Add(MicroOp::HostPlane, 2), b.Add(MicroOp::AluStep, 5);
+  CycleReport first(&profile, 3), second(&profile, 2);
+  first.Charge("add", a), first.Charge("add", a);
+  second.Charge("add", a), second.Charge("hostRead", b);
+  CycleReport sum;
+  sum.Add(first);
+  EXPECT_EQ(sum.Json(), first.Json()) << "one run: exactly its report";
+  sum.Add(second);
+  ASSERT_EQ(sum.Runs(), 2);
+  EXPECT_EQ(sum.Layers(), 5);
+  EXPECT_EQ(sum.TotalCycles(), first.TotalCycles() + second.TotalCycles());
+  EXPECT_EQ(sum.ModelledSeconds(), first.ModelledSeconds() + second.ModelledSeconds());
+  for (int c = 0; c < kCycleClassCount; ++c)
+    EXPECT_EQ(sum.ClassCycles(CycleClass(c)), first.ClassCycles(CycleClass(c)) + second.ClassCycles(CycleClass(c)));
+  EXPECT_EQ(sum.OpCalls("add"), 3);
+  EXPECT_EQ(sum.OpCalls("hostRead"), 1);
+  EXPECT_EQ(sum.OpCycles("add"), first.OpCycles("add") + second.OpCycles("add"));
+  EXPECT_EQ(sum.Run(0).Json(), first.Json());
+  EXPECT_EQ(sum.Run(1).Json(), second.Json());
+  const nlohmann::json j = sum.Json();
+  EXPECT_EQ(j["layers"], 5);
+  EXPECT_EQ(j["totalCycles"].get<double>(), sum.TotalCycles());
+  ASSERT_EQ(j["byLayer"].size(), 5u);
+  EXPECT_EQ(j["byLayer"][3]["layer"], 3);
+  EXPECT_EQ(j["byLayer"][3]["pass"], 1);
+  EXPECT_EQ(j["byLayer"][3]["cycles"].get<double>(), second.LayerCycles());
+  EXPECT_EQ(j["byOp"]["add"]["calls"], 3);
+  EXPECT_EQ(j["byOp"]["add"]["microOps"]["aluStep"].get<int64_t>(), 7 * 2 * 3 + 7 * 2);
+  EXPECT_EQ(j["byOp"]["hostRead"]["cycles"].get<double>(), second.OpCycles("hostRead"));
 }
 
 }  // namespace

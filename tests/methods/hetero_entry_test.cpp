@@ -74,7 +74,7 @@ TEST(HeteroEntry, RecomputedDirectionIsTheMatrixDirectionBitForBit) {
       options.formats.dirFracBits = dirBits;
       const simd::PrimaryPass pass = simd::RunPrimaryPass(scene, options);
       // As the parent's set-up message names them (hosts/methods/hetero.cpp).
-      const int refineBits = pass.refinedPixels > 0 ? pass.refine["dirFracBits"].get<int>() : -1;
+      const int refineBits = pass.refine ? pass.refine->dirFracBits : -1;
       int mismatches = 0, recomputed = 0, refined = 0;
       for (int y = 0; y < scene.camera.height; ++y)
         for (int x = 0; x < scene.camera.width; ++x) {

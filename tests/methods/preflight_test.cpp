@@ -1,4 +1,4 @@
-// Everything a run can refuse is refused before any work, once, in words (issue 23): device
+// Everything a run can refuse is refused before any work, once, in words: device
 // nodes named as outputs by any command, a run larger than the process's memory, every flag
 // of every method (checked before the scene is even read), numeric flags' messages, and the
 // cycle report on standard output.
@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include <CLI/CLI.hpp>
@@ -189,6 +190,37 @@ TEST(FlagPreflight, EveryBadFlagIsRefusedBeforeTheSceneIsRead) {
   EXPECT_NE(mismatch.output.find("its array is 'wavetracer', but --machine chose 'mpp'"), std::string::npos)
       << mismatch.output;
   EXPECT_EQ(mismatch.output.find("cycle report"), std::string::npos) << mismatch.output;
+}
+
+// A flag the method would ignore is refused, before the scene is read: the SIMD pass's flags
+// on seq and dist, the frame farm's on seq and simd. The methods that use them accept them.
+TEST(FlagPreflight, RenderRefusesAFlagItsMethodIgnores) {
+  TempDir dir;
+  const std::string missing = dir / "no-such-scene.nff";
+  const std::vector<std::tuple<std::string, std::string, std::string>> cases = {
+      {"seq", "--frac-bits 12", "--frac-bits: --method seq runs no SIMD pass (the flag applies to simd, hetero)"},
+      {"seq", "--uncertain keep", "--uncertain: --method seq runs no SIMD pass"},
+      {"seq", "--machine mpp", "--machine: --method seq runs no SIMD pass"},
+      {"dist", "--threads 2", "--threads: --method dist runs no SIMD pass"},
+      {"seq", "--frame 8", "--frame: --method seq has no frame farm (the flag applies to dist, hetero)"},
+      {"simd", "--frame 8", "--frame: --method simd has no frame farm"},
+      {"simd", "--resume", "--resume: --method simd has no frame farm"},
+      {"seq", "--in-flight 4", "--in-flight: --method seq has no frame farm"},
+      {"simd", "--child-timeout 5", "--child-timeout: --method simd has no frame farm"},
+  };
+  for (const auto& [method, flag, message] : cases) {
+    const std::string args = "render --no-progress --method " + method + " " + missing + " " + flag;
+    const auto r = RunZephyrProcess(args);
+    EXPECT_NE(r.status, 0) << args;
+    EXPECT_NE(r.output.find(message), std::string::npos) << args << "\n" << r.output;
+    EXPECT_EQ(r.output.find("no-such-scene"), std::string::npos) << "the scene was read first: " << args;
+  }
+  // The methods that use the flags take them (here they get as far as the missing scene).
+  for (const std::string& args : {std::string("--method simd --frac-bits 12 --uncertain keep --machine mpp"),
+                                  std::string("--method seq --depth 3 --precision float")}) {
+    const auto r = RunZephyrProcess("render --no-progress " + missing + " " + args);
+    EXPECT_NE(r.output.find("no-such-scene"), std::string::npos) << args << "\n" << r.output;
+  }
 }
 
 // The other commands' numeric flags speak the same way (no CLI11 conversion message, no

@@ -141,7 +141,7 @@ TEST(SimdAdversarial, PolygonsInOnePlaneAreNoNearTie) {
   EXPECT_EQ(planes, (std::vector<int>{0, 0, 0, 0}));
   const PrimaryPass planned = ExpectSound(s, {8, -1});
   EXPECT_EQ(planned.plan.planeClasses, 1);
-  EXPECT_EQ(planned.tiePixels, 0);
+  EXPECT_EQ(planned.uncertain.nearTie, 0);
   int onQuad = 0;
   for (const PrimaryHit& h : planned.matrix.hits) onQuad += h.object >= 0;
   EXPECT_GT(onQuad, 150);

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "hosts/scene/gen.h"
+#include "hosts/methods/report.h"
 #include "hosts/simd/pass.h"
 
 namespace zephyr::simd {
@@ -25,7 +26,7 @@ Scene EveryKind() {
 
 // The report without what depends on the host's speed (timing).
 nlohmann::json Untimed(const PrimaryPass& pass) {
-  nlohmann::json j = pass.Json();
+  nlohmann::json j = PrimaryPassJson(pass);
   for (nlohmann::json* k : {&j, &j["cycles"]})
     for (const char* key : {"hostSeconds", "realTimeFactor", "recomputeSeconds"}) k->erase(key);
   if (j.contains("refine"))
@@ -58,7 +59,7 @@ void ExpectSameMatrix(const PrimaryMatrix& a, const PrimaryMatrix& b, const std:
 void ExpectSamePass(const PrimaryPass& a, const PrimaryPass& b, const std::string& what) {
   ExpectSameMatrix(a.matrix, b.matrix, what);
   EXPECT_EQ(Untimed(a).dump(), Untimed(b).dump()) << what;
-  EXPECT_EQ(UntimedTable(a.cycleTable), UntimedTable(b.cycleTable)) << what;
+  EXPECT_EQ(UntimedTable(a.array.Table()), UntimedTable(b.array.Table())) << what;
 }
 
 void CheckBlocksAgainstOpByOp(const Scene& scene, SimdOptions o) {
@@ -66,7 +67,7 @@ void CheckBlocksAgainstOpByOp(const Scene& scene, SimdOptions o) {
   o.threads = 1;
   const PrimaryPass whole = RunPrimaryPass(scene, o);
   ASSERT_GE(whole.plan.layers, 3);
-  ASSERT_GT(whole.grazingPixels, 0);  // flags to compare, not only hits
+  ASSERT_GT(whole.uncertain.grazing, 0);  // flags to compare, not only hits
   for (const auto& [layers, threads] : {std::pair{1, 1}, {1, 2}, {1, 4}, {2, 2}, {3, 4}}) {
     o.blockLayers = layers, o.threads = threads;
     ExpectSamePass(whole, RunPrimaryPass(scene, o),
@@ -95,7 +96,7 @@ TEST(SimdBlocks, RecomputeAndRefineSameOnAnyThreadCount) {
     o.formats.fracBits = 8;  // many uncertain pixels for the host (and the refine pass)
     o.threads = 1;
     const PrimaryPass one = RunPrimaryPass(scene, o);
-    ASSERT_GT(policy == UncertainPolicy::kRefine ? one.refinedPixels : one.recomputedPixels, 0)
+    ASSERT_GT(policy == UncertainPolicy::kRefine ? one.RefinedPixels() : one.recomputedPixels, 0)
         << UncertainPolicyName(policy);
     for (int threads : {2, 4}) {
       o.threads = threads;

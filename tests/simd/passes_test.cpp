@@ -7,6 +7,7 @@
 
 #include "fixed/check.h"
 #include "hosts/scene/gen.h"
+#include "hosts/methods/report.h"
 #include "hosts/simd/pass.h"
 #include "hosts/trace/tracer.h"
 
@@ -49,8 +50,13 @@ TEST(SimdPasses, TwoPassesGiveTheOnePassMatrixAndSeqsFirstHits) {
     ASSERT_EQ(two.matrix.hits[i].object, one.matrix.hits[i].object) << i;
     ASSERT_EQ(two.matrix.hits[i].t, one.matrix.hits[i].t) << i;
   }
-  // The report: each pass's own, and the total.
-  const nlohmann::json& c = two.cycles;
+  // The report: each pass's own, and the total (typed, then as the report writes it).
+  ASSERT_EQ(two.array.passes.size(), 2u);
+  EXPECT_EQ(two.array.cycles.Runs(), 2);
+  EXPECT_EQ(two.array.cycles.TotalCycles(),
+            two.array.passes[0].cycles.TotalCycles() + two.array.passes[1].cycles.TotalCycles());
+  EXPECT_EQ(two.array.passes[1].firstPe, 48 * 128);
+  const nlohmann::json c = ArrayRunJson(two.array);
   ASSERT_EQ(c["passes"].size(), 2u) << c.dump();
   double total = 0;
   for (const nlohmann::json& p : c["passes"]) {
@@ -62,8 +68,8 @@ TEST(SimdPasses, TwoPassesGiveTheOnePassMatrixAndSeqsFirstHits) {
   EXPECT_DOUBLE_EQ(c["totalCycles"].get<double>(), total);
   EXPECT_EQ(c["layers"].get<int>(), 2);
   EXPECT_EQ(c["byLayer"].size(), 2u);
-  EXPECT_NE(two.cycleTable.find("array pass 2 of 2: rows 48..95"), std::string::npos) << two.cycleTable;
-  EXPECT_NE(two.cycleTable.find("total over 2 array passes"), std::string::npos) << two.cycleTable;
+  EXPECT_NE(two.array.Table().find("array pass 2 of 2: rows 48..95"), std::string::npos) << two.array.Table();
+  EXPECT_NE(two.array.Table().find("total over 2 array passes"), std::string::npos) << two.array.Table();
 
   // With recompute: every pixel's first object is the sequential tracer's.
   o.uncertain = UncertainPolicy::kRecompute;

@@ -41,7 +41,7 @@ TEST(SimdPrimary, FirstObjectAgreesOnEveryPixelRandomSpheres) {
   const PrimaryPass pass = RunPrimaryPass(scene, {});
   EXPECT_EQ(ObjectMismatches(pass.matrix, ExactHits(scene)), 0);
   EXPECT_EQ(pass.plan.layers, 1);
-  EXPECT_GT(pass.cycles["totalCycles"].get<double>(), 0);
+  EXPECT_GT(pass.array.cycles.TotalCycles(), 0);
 }
 
 TEST(SimdPrimary, FirstObjectAgreesOnEveryPixelSphereflake) {
@@ -154,12 +154,12 @@ TEST(SimdPrimary, UncertainPixelsAreFlaggedAndRecomputed) {
     EXPECT_FALSE(kept.matrix.flags[i] & kRecomputed);
   }
   ASSERT_GT(onFirst, 0);
-  EXPECT_GE(kept.tiePixels, onFirst);
+  EXPECT_GE(kept.uncertain.nearTie, onFirst);
   // Too few integer bits: the distances overflow and are flagged; recompute repairs them.
   SimdOptions narrow;
   narrow.formats.intBits = 2;
   const PrimaryPass repaired = RunPrimaryPass(scene, narrow);
-  EXPECT_GT(repaired.overflowPixels, 0);
+  EXPECT_GT(repaired.uncertain.overflow, 0);
   EXPECT_EQ(repaired.recomputedPixels,
             std::count_if(repaired.matrix.flags.begin(), repaired.matrix.flags.end(), [](uint32_t f) { return f != 0; }));
   EXPECT_EQ(ObjectMismatches(repaired.matrix, want), 0);
@@ -199,7 +199,7 @@ TEST(SimdPrimary, RecomputeRepairsEveryPixelAtLowWidths) {
     const int64_t flagged = std::count_if(pass.matrix.flags.begin(), pass.matrix.flags.end(),
                                           [](uint32_t f) { return f != 0; });
     EXPECT_EQ(pass.recomputedPixels, flagged);
-    EXPECT_EQ(pass.Json()["uncertain"]["recomputed"].get<int64_t>(), flagged);
+    EXPECT_EQ(pass.recomputedPixels, flagged);
     EXPECT_GT(flagged, 0) << bits;  // at these widths some pixels are always uncertain
     if (previousFlagged >= 0) {
       EXPECT_LE(flagged, previousFlagged) << bits;  // wider: fewer
@@ -221,8 +221,8 @@ TEST(SimdPrimary, TransformedPrimitivesRunOnTheArray) {
   EXPECT_EQ(ObjectMismatches(pass.matrix, ExactHits(scene)), 0);
   // Every primitive, cones included, is tested on the array (no host-tested objects): the
   // divisions run there, and the cone program's multi × multi products (its heights) too.
-  EXPECT_GT(pass.cycles["byOp"]["mul"]["cycles"].get<double>(), 0) << pass.cycles.dump();
-  EXPECT_GT(pass.cycles["byOp"]["div"]["cycles"].get<double>(), 0) << pass.cycles.dump();
+  EXPECT_GT(pass.array.cycles.OpCycles("mul"), 0) << pass.array.cycles.Json().dump();
+  EXPECT_GT(pass.array.cycles.OpCycles("div"), 0) << pass.array.cycles.Json().dump();
   const auto want = ExactHits(scene);
   for (int bits : {6, 10, 16}) {
     SimdOptions o;
@@ -311,9 +311,9 @@ void CheckScene(const Scene& scene, int neverHit) {
     const PrimaryPass pass = RunPrimaryPass(scene, o);
     EXPECT_EQ(ObjectMismatches(pass.matrix, want), 0) << bits << " fraction bits";
     // The cone program's ops: multi × multi products (the heights) appear only for cones.
-    EXPECT_GT(pass.cycles["byOp"]["mul"]["cycles"].get<double>(), 0) << pass.cycles.dump();
-    EXPECT_GT(pass.cycles["byOp"]["div"]["cycles"].get<double>(), 0);
-    EXPECT_GT(pass.cycles["byOp"]["sqrt"]["cycles"].get<double>(), 0);
+    EXPECT_GT(pass.array.cycles.OpCycles("mul"), 0) << pass.array.cycles.Json().dump();
+    EXPECT_GT(pass.array.cycles.OpCycles("div"), 0);
+    EXPECT_GT(pass.array.cycles.OpCycles("sqrt"), 0);
     // With `keep`: every unflagged pixel has the right object and t within the bound.
     o.uncertain = UncertainPolicy::kKeep;
     const PrimaryPass kept = RunPrimaryPass(scene, o);
@@ -332,7 +332,7 @@ void CheckScene(const Scene& scene, int neverHit) {
     if (bits < 0) {  // at the planned width the array decides a good share of cone pixels
       EXPECT_GE(coneCertain, conePixels / 4) << conePixels;
     } else {  // at 8 bits the bounds flag (nearly) everything: recompute does the work
-      EXPECT_GT(kept.grazingPixels, int64_t(want.size()) / 2);
+      EXPECT_GT(kept.uncertain.grazing, int64_t(want.size()) / 2);
     }
   }
 }
@@ -370,20 +370,20 @@ void CheckRefine(const Scene& scene, int fracBits) {
   o.formats.fracBits = fracBits;
   o.uncertain = UncertainPolicy::kRefine;
   const PrimaryPass pass = RunPrimaryPass(scene, o);
-  const int64_t first = pass.overflowPixels + pass.grazingPixels + pass.tiePixels;
+  const int64_t first = pass.uncertain.overflow + pass.uncertain.grazing + pass.uncertain.nearTie;
   ASSERT_GT(first, 0) << "the scene should have uncertain pixels at " << fracBits << " bits";
-  ASSERT_GT(pass.refinedPixels, 0);
-  EXPECT_LE(pass.refinedPixels, first);
-  EXPECT_LT(pass.refinedPixels, pass.plan.virtualPes);
-  EXPECT_EQ(pass.refine["fracBits"].get<int>(), std::min(pass.plan.fracBits + kRefineExtraBits, 56));
-  EXPECT_EQ(pass.recomputedPixels, pass.refine["stillUncertain"].get<int64_t>());
-  EXPECT_LT(pass.recomputedPixels, pass.refinedPixels) << "refine certified nothing";
+  ASSERT_GT(pass.RefinedPixels(), 0);
+  EXPECT_LE(pass.RefinedPixels(), first);
+  EXPECT_LT(pass.RefinedPixels(), pass.plan.virtualPes);
+  EXPECT_EQ(pass.refine->fracBits, std::min(pass.plan.fracBits + kRefineExtraBits, 56));
+  EXPECT_EQ(pass.recomputedPixels, pass.refine->stillUncertain);
+  EXPECT_LT(pass.recomputedPixels, pass.RefinedPixels()) << "refine certified nothing";
   EXPECT_EQ(ObjectMismatches(pass.matrix, want), 0);
   for (size_t i = 0; i < want.size(); ++i) {
     if (pass.matrix.flags[i] & kRecomputed) continue;
     ASSERT_EQ(pass.matrix.hits[i].object, want[i].object) << fracBits << " bits, pixel " << i;
   }
-  EXPECT_GT(pass.refine["cycles"]["totalCycles"].get<double>(), 0);
+  EXPECT_GT(pass.refine->array.cycles.TotalCycles(), 0);
 }
 
 TEST(SimdRefine, CertifiesSoundlyOnSpheresAtLowAndPlannedWidths) {
@@ -406,15 +406,15 @@ TEST(SimdRefine, AutoRefinesOnlyAboveTheHostBudget) {
     o.formats.fracBits = bits;
     o.uncertain = UncertainPolicy::kAuto;
     const PrimaryPass automatic = RunPrimaryPass(scene, o);
-    const int64_t flagged = automatic.overflowPixels + automatic.grazingPixels + automatic.tiePixels;
+    const int64_t flagged = automatic.uncertain.overflow + automatic.uncertain.grazing + automatic.uncertain.nearTie;
     ASSERT_GT(flagged, 0) << bits;
     const bool above = double(flagged) > kAutoRefineShare * 64 * 64;
     EXPECT_EQ(above, bits == 8) << "the case should have " << (bits == 8 ? "many" : "few") << " flags: " << flagged;
     o.uncertain = above ? UncertainPolicy::kRefine : UncertainPolicy::kRecompute;
     const PrimaryPass same = RunPrimaryPass(scene, o);
-    EXPECT_EQ(automatic.refinedPixels, same.refinedPixels) << bits;
+    EXPECT_EQ(automatic.RefinedPixels(), same.RefinedPixels()) << bits;
     EXPECT_EQ(automatic.recomputedPixels, same.recomputedPixels) << bits;
-    EXPECT_EQ(above, automatic.refinedPixels > 0) << bits;
+    EXPECT_EQ(above, automatic.RefinedPixels() > 0) << bits;
     for (size_t i = 0; i < same.matrix.hits.size(); ++i)
       ASSERT_EQ(automatic.matrix.hits[i].object, same.matrix.hits[i].object) << bits << " bits, pixel " << i;
   }
@@ -454,7 +454,9 @@ TEST(SimdPrimary, ANearRootInsideHitherGivesTheFarRoot) {
         farSide += want[i].object == 0 && want[i].t > 5;
       }
     }
-    if (hither > 4.1) EXPECT_GT(farSide, 0) << "no pixel saw the sphere's far side at hither " << hither;
+    if (hither > 4.1) {
+      EXPECT_GT(farSide, 0) << "no pixel saw the sphere's far side at hither " << hither;
+    }
   }
 }
 

@@ -103,7 +103,7 @@ RefinedT Measure(const Scene& scene, int fracBits) {
   o.uncertain = UncertainPolicy::kRefine;
   const PrimaryPass refined = RunPrimaryPass(scene, o);
   const PrimaryPlan plan =
-      PlanRefinePass(scene, o, refined.plan, refined.refinedPixels, kRefineExtraBits);
+      PlanRefinePass(scene, o, refined.plan, refined.RefinedPixels(), kRefineExtraBits);
   const PrimaryRays rays(scene.camera);
   const double tMin = std::max(scene.camera.hither, 0.0);
   const std::vector<int> planes = exact::CoplanarPolygons(scene);

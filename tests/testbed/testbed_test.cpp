@@ -10,8 +10,10 @@
 #include <sstream>
 #include <vector>
 
+#include "bitserial/report.h"
 #include "fixed/check.h"
 #include "hosts/methods/render.h"
+#include "hosts/methods/report.h"
 #include "hosts/scene/nff.h"
 #include "hosts/testbed/host_profile.h"
 #include "hosts/testbed/testbed.h"
@@ -46,7 +48,7 @@ RenderOutput Render(const std::string& scene, const std::string& method, const s
 TEST(TestbedWork, SeqCountsEveryPixelAndShadesEveryHit) {
   TempDir dir;
   const RenderOutput out = Render(WriteScene(dir), "seq", "");
-  const TraceStats s = TraceStats::FromJson(out.report);
+  const TraceStats s = *out.hostWork;
   EXPECT_EQ(s.pixels, 24u * 16u);
   EXPECT_EQ(s.rays[int(RayKind::kPrimary)], 24u * 16u);
   EXPECT_EQ(s.shades, s.hits);  // every ray that hits is shaded
@@ -82,11 +84,11 @@ TEST(TestbedModel, SeqReportsModelledSecondsFromItsCounts) {
   const std::string scene = WriteScene(dir);
   const RenderOutput a = Render(scene, "seq", "ufmg1992");
   const RenderOutput b = Render(scene, "seq", "ufmg1992");
-  const nlohmann::json& t = a.report.at("testbed");
+  const nlohmann::json t = RenderReportJson(a).at("testbed");
   const double seconds = t.at("modelledSeconds").get<double>();
   EXPECT_GT(seconds, 0);
-  EXPECT_EQ(seconds, b.report.at("testbed").at("modelledSeconds").get<double>());
-  const testbed::HostTime h = testbed::ModelHostTime(TraceStats::FromJson(a.report),
+  EXPECT_EQ(seconds, RenderReportJson(b).at("testbed").at("modelledSeconds").get<double>());
+  const testbed::HostTime h = testbed::ModelHostTime(*a.hostWork,
                                                      testbed::HostProfileNamed("sparcstation2"));
   EXPECT_DOUBLE_EQ(seconds, h.seconds);
   EXPECT_EQ(t.at("host").at("events").at("pixel").at("count").get<double>(), 24 * 16);
@@ -95,8 +97,8 @@ TEST(TestbedModel, SeqReportsModelledSecondsFromItsCounts) {
 TEST(TestbedModel, SimdIsArrayPlusScsiPlusHostShading) {
   TempDir dir;
   const RenderOutput out = Render(WriteScene(dir), "simd", "ufmg1992");
-  const nlohmann::json& t = out.report.at("testbed");
-  const nlohmann::json& cycles = out.report.at("simd").at("cycles");
+  const nlohmann::json t = RenderReportJson(out).at("testbed");
+  const nlohmann::json cycles = RenderReportJson(out).at("simd").at("cycles");
   const double clock = cycles.at("clockHz").get<double>();
   EXPECT_DOUBLE_EQ(t.at("array").at("scsiSeconds").get<double>(),
                    cycles.at("byClass").at("host").get<double>() / clock);
@@ -112,7 +114,7 @@ TEST(TestbedModel, SimdIsArrayPlusScsiPlusHostShading) {
               t.at("testbed").at("scsiBandwidth").at("value").get<double>(), 1e-6 * 5e6);
 }
 
-// ---- The charges by closed form (issue 29 item 10) ---------------------------------------
+// ---- The charges by closed form ---------------------------------------
 // Each counted event's modelled seconds by hand on a tiny scene, from the figures the work
 // table, the profile and the array publish (`zephyr testbed profiles`, docs/testbed.md,
 // docs/bitserial.md), not from the functions that compute them.
@@ -175,7 +177,7 @@ TEST(TestbedClosedForm, SeqChargesEachCountedEventItsPublishedCost) {
   const std::map<std::string, double> counts = {
       {"sphereTest", 24}, {"coneTest", 24}, {"polygonTest", 24}, {"ray", 24},
       {"hit", 6},         {"shade", 6},     {"lightSample", 12}, {"pixel", 6}};
-  const nlohmann::json& t = out.report.at("testbed");
+  const nlohmann::json t = RenderReportJson(out).at("testbed");
   ExpectEvents(t.at("host"), counts, "seq");
   double seconds = 0;
   for (const auto& [event, count] : counts) seconds += SecondsOf(event.c_str(), count);
@@ -204,7 +206,7 @@ TEST(TestbedClosedForm, SimdChargesEveryArrayPassTheScsiLinkAndTheHostRecompute)
     o.simd.uncertain =
         uncertain == "recompute" ? simd::UncertainPolicy::kRecompute : simd::UncertainPolicy::kAuto;
     const RenderOutput out = RunRender(o);
-    const nlohmann::json& pass = out.report.at("simd");
+    const nlohmann::json pass = RenderReportJson(out).at("simd");
     const double n = pass.at("uncertain").at("recomputed").get<double>();
     const bool refined = uncertain == "auto";
     ASSERT_EQ(pass.contains("refine"), refined) << uncertain;
@@ -218,7 +220,7 @@ TEST(TestbedClosedForm, SimdChargesEveryArrayPassTheScsiLinkAndTheHostRecompute)
         {"sphereTest", 18 + n}, {"coneTest", 18 + n}, {"polygonTest", 6 + 18 + n},
         {"ray", 24 + n},        {"hit", 6},           {"shade", 6},
         {"lightSample", 12},    {"pixel", 6}};
-    const nlohmann::json& t = out.report.at("testbed");
+    const nlohmann::json t = RenderReportJson(out).at("testbed");
     ExpectEvents(t.at("host"), counts, uncertain);
     double cycles = 0, hostCycles = 0;
     for (const nlohmann::json* c :
@@ -246,7 +248,16 @@ TEST(TestbedClosedForm, SimdChargesEveryArrayPassTheScsiLinkAndTheHostRecompute)
 // polygons, for 0, 1 and 7 recomputed pixels: the modelled seconds are C/clock plus, per
 // pixel, one ray and one test of each object.
 TEST(TestbedClosedForm, TheHostRecomputeCostsOneRayAndOneTestPerObjectPerPixel) {
-  const double c = 123456, h = 20480;
+  // A pass of 10 hostPlanes (h = 20480 cycles) and 102 976 ALU steps: C = 123 456 cycles.
+  const bitserial::MachineProfile profile = bitserial::Profile("wavetracer");
+  bitserial::CycleReport pass(&profile, 1);
+  bitserial::MicroOpCounts counts;
+  counts.Add(bitserial::MicroOp::HostPlane, 10);
+  counts.Add(bitserial::MicroOp::AluStep, 102976);
+  pass.Charge("probe", counts);
+  const double c = pass.TotalCycles(), h = pass.ClassCycles(bitserial::CycleClass::Host);
+  ASSERT_EQ(h, 10 * kPlaneCycles);
+  ASSERT_EQ(c, 123456);
   for (const int spheres : {0, 1, 3})
     for (const int cones : {0, 2})
       for (const int polygons : {0, 1, 3}) {
@@ -258,14 +269,11 @@ TEST(TestbedClosedForm, TheHostRecomputeCostsOneRayAndOneTestPerObjectPerPixel) 
         add(cones, Cone{});
         add(polygons, Polygon{});
         for (const int pixels : {0, 1, 7}) {
-          nlohmann::json report = TraceStats{}.ToJson();
-          report["simd"] = {{"cycles",
-                             {{"profile", "wavetracer"},
-                              {"clockHz", kArrayClock},
-                              {"totalCycles", c},
-                              {"byClass", {{"host", h}}}}},
-                            {"uncertain", {{"recomputed", pixels}}}};
-          testbed::AddModelledTime("ufmg1992", "simd", scene, report);
+          const TraceStats none;
+          const auto modelled = testbed::ModelTime(
+              "ufmg1992", {.host = &none, .arrayCycles = &pass, .recomputedPixels = uint64_t(pixels)}, scene);
+          ASSERT_TRUE(modelled);
+          const nlohmann::json report = {{"testbed", modelled->Json()}};
           const std::string what = std::to_string(pixels) + " pixels, " + std::to_string(spheres) +
                                    " spheres, " + std::to_string(cones) + " cones, " +
                                    std::to_string(polygons) + " polygons";
@@ -313,9 +321,10 @@ TEST(TestbedModel, BadTestbedAndUnsimulatedFarmAreUserErrors) {
     EXPECT_NE(std::string(e.what()).find("simrun.sh --children K --platform " + scene), std::string::npos)
         << e.what();
   }
-  nlohmann::json report;
   try {
-    testbed::AddModelledTime("ufmg1992", "dist", ReadNffFile(scene), report);
+    const TraceStats none;
+    const testbed::FarmTimes farm;
+    testbed::ModelTime("ufmg1992", {.host = &none, .farm = &farm}, ReadNffFile(scene));
     FAIL() << "dist with --testbed outside SimGrid must be refused";
   } catch (const UserError& e) {
     EXPECT_NE(std::string(e.what()).find("zephyr-smpi"), std::string::npos) << e.what();
@@ -476,7 +485,7 @@ TEST(TestbedSimulated, SeqAndSimdOnAPlatformFile) {
     return ReadJson(report);
   };
   for (const char* method : {"seq", "simd"}) {
-    const nlohmann::json t = Render(scene, method, "ufmg1992").report.at("testbed");
+    const nlohmann::json t = RenderReportJson(Render(scene, method, "ufmg1992")).at("testbed");
     // Under SimGrid the matrix crosses the SCSI link with the network model's 5 % cross
     // traffic (docs/testbed.md, "Bytes on the Ethernet"): 1.05 times the SCSI seconds.
     const double named = t.at("modelledSeconds").get<double>() +
@@ -513,7 +522,7 @@ TEST(TestbedSimulated, SimdChargesItsRefinePassOnThePlatform) {
   o.testbed = "ufmg1992";
   o.simd.formats.fracBits = 6;
   o.simd.uncertain = simd::UncertainPolicy::kAuto;  // the command line's default
-  const nlohmann::json named = RunRender(o).report;
+  const nlohmann::json named = RenderReportJson(RunRender(o));
   ASSERT_TRUE(named.at("simd").contains("refine"));
   const nlohmann::json& t = named.at("testbed");
   const double expected =

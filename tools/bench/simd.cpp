@@ -104,10 +104,10 @@ int main(int argc, char** argv) {
       simd::PrimaryPass one, many;
       const Timing t1 = Time(scene, 1, size.runs, one);
       const Timing tAll = Time(scene, all, size.runs, many);
-      const double modelled = one.modelledSeconds;
+      const double modelled = one.array.ModelledSeconds();
       std::printf("%5dx%-4d %7d %6d %6d %12.4g %10.3f %9.3f %9.3f %10.3f %8.2f %8.2f %9.2f %6.2f %9lld\n",
                   size.width, size.height, count, one.plan.passes, one.plan.layers,
-                  one.cycles["totalCycles"].get<double>(), modelled, t1.wall, t1.cpu, tAll.wall,
+                  one.array.cycles.TotalCycles(), modelled, t1.wall, t1.cpu, tAll.wall,
                   modelled / t1.wall, modelled / tAll.wall, modelled / t1.cpu, t1.wall / tAll.wall,
                   (long long)one.recomputedPixels);
       std::fflush(stdout);
