@@ -82,7 +82,7 @@ test: setup ## Build and run every test (GoogleTest; FILTER=... to select)
 
 # Defaults for `make run`: a generated 384×384 random-sphere scene, the default method.
 METHOD  ?= $(DEFAULT_METHOD)
-# hetero (issue 6): the SIMD pass at the parent, WORKERS children shading FRAME×FRAME frames.
+# hetero: the SIMD pass at the parent, WORKERS children shading FRAME×FRAME frames.
 DEFAULT_METHOD := hetero
 WORKERS ?= 2
 FRAME   ?= 64
@@ -133,9 +133,11 @@ $(FUZZ_BIN): $(FUZZ_OBJS)
 	  $$(pkg-config --libs libhwy fmt)
 -include $(FUZZ_OBJS:.o=.d)
 
-fuzz: ## Fuzz the NFF reader, tracer, SIMD planner and output pre-flight: FUZZ_RUNS inputs (default 10^6) under ASan+UBSan
+# FUZZ_FLAGS passes libFuzzer flags: -fork=N fuzzes in N processes at once (N cores), the
+# runs counted over all of them; the run stops at the first crash either way.
+fuzz: ## Fuzz the NFF reader, tracer, SIMD planner and output pre-flight: FUZZ_RUNS inputs (default 10^6; FUZZ_FLAGS=-fork=2 for 2 cores) under ASan+UBSan
 	$(Q)$(MAKE) --no-print-directory -j$(JOBS) $(FUZZ_BIN)
-	$(Q)$(FUZZ_RUN) -runs=$(FUZZ_RUNS)
+	$(Q)$(FUZZ_RUN) -runs=$(FUZZ_RUNS) $(FUZZ_FLAGS)
 
 fuzz-smoke: # a few seconds of fuzzing, part of `make test` (skipped without clang)
 	$(Q)if command -v $(lastword $(FUZZ_CXX)) >/dev/null; then \
