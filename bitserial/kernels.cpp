@@ -18,8 +18,8 @@ namespace hn = hwy::HWY_NAMESPACE;
 using D = hn::ScalableTag<uint64_t>;
 using V = hn::Vec<D>;
 
-// A full adder. On AVX-512 it is two vpternlog (HIGHWAY.md: Highway 1.0.3 has no general
-// ternary-logic op); elsewhere the portable five-op form.
+// A full adder. On AVX-512 it is two vpternlog (Highway 1.0.3 has no general ternary-logic
+// op, so the raw intrinsic); elsewhere the portable five-op form.
 HWY_INLINE void FullAdd(V x, V y, V& carry, V& sum) {
 #if HWY_TARGET <= HWY_AVX3
   sum = V{_mm512_ternarylogic_epi64(x.raw, y.raw, carry.raw, 0x96)};
@@ -31,7 +31,8 @@ HWY_INLINE void FullAdd(V x, V y, V& carry, V& sum) {
 #endif
 }
 
-// Bitwise mux: m ? a : b, written with And/AndNot (HIGHWAY.md: no IfVecThenElse on planes).
+// Bitwise mux: m ? a : b, written with And/AndNot. Not IfVecThenElse: on AVX2/SSE4 its
+// blendv reads only each byte's top bit, so a per-bit mask gives a wrong plane.
 HWY_INLINE V Mux(V m, V a, V b) { return hn::Or(hn::And(m, a), hn::AndNot(m, b)); }
 
 // The add runs kAddStrip vectors of PEs side by side (the whole bit loop per strip, the

@@ -5,7 +5,7 @@
 // pointers, one per bit position, so alignment, sign extension and zero fill cost nothing:
 // a position outside an operand points at the shared zero plane or at the operand's sign
 // plane. Kernels are strip-mined: for each vector of PEs the whole bit loop runs with the
-// carry in a register (HIGHWAY.md: the loop is bound by loads and stores).
+// carry in a register (the loop is bound by loads and stores, not by the logic).
 //
 // Plain scalar types only: the per-target code lives in kernels.cpp (foreach_target.h) and
 // the machine picks one table once, when it is built (Kernels()).

@@ -1,6 +1,6 @@
 // bitserial/profile.h — machine profiles: the geometry and the cycle cost of every micro-op.
 //
-// Machine timing is data (STYLE.md): a profile is a named table of micro-op costs plus the
+// Machine timing is data, not code (as a memory simulator keeps its DRAM presets): a profile is a named table of micro-op costs plus the
 // machine's geometry and clock. The engine never special-cases a machine; the MPP's
 // published figures (Batcher 1980) fall out of the same schedules as the WaveTracer's, with
 // different numbers in the table. Any entry can be overridden at run time ("name=value");

@@ -12,7 +12,7 @@
 #   equivalent  listed with "equivalent": the argument why no output can change; not run,
 #               not counted, but printed with its argument (never dropped silently).
 #
-# Which tests run: the whole suite, as `make test` runs it (issue 29: a score against a
+# Which tests run: the whole suite, as `make test` runs it (a score against a
 # narrower filter overstates nothing it kills but counts survivors the rest of the suite
 # would kill). A mutant's "filter" (a GoogleTest filter, "*" for none in particular) names
 # the suites that cover its code; they run first and every run stops at its first failure,

@@ -1,8 +1,8 @@
 // hosts/cmd/command.h — the `zephyr` program's subcommands register themselves here.
 //
-// Each command lives beside the code it drives (cycles next to the cycle report, render
-// next to the tracers...) and adds itself with a file-scope CommandRegistration, so no
-// central list has to be edited when a command is added.
+// Each command is one file of hosts/cmd/ (render.cpp, plan.cpp, cycles.cpp, ...) that holds
+// its flags and adds itself with a file-scope CommandRegistration, so no central list has to
+// be edited when a command is added; the code it drives lives in the rooms below.
 #pragma once
 
 #include <functional>

@@ -1,6 +1,6 @@
 // hosts/methods/memory_budget.h — a run's memory, estimated before any work and compared
 // with what the process may have, so an image larger than memory is a clear refusal (both
-// figures and the largest image that fits), never a std::bad_alloc (issue 23; docs/errors.md,
+// figures and the largest image that fits), never a std::bad_alloc (docs/errors.md,
 // "Memory").
 //
 //   CheckMemoryFits("render --method seq", {.perPixel = 26, .pixels = w * h});

@@ -71,7 +71,7 @@ struct Affine {
   // A is zero): A / LinearScale() has entries in [-1, 1], exactly (only the exponent moves).
   double LinearScale() const;
   // det(A / LinearScale()): the determinant free of the matrix's scale, |value| <= 6, so a
-  // uniform scale of 1e-152 or 1e120 is as regular as the identity (issue 11). Near 0 (below
+  // uniform scale of 1e-152 or 1e120 is as regular as the identity. Near 0 (below
   // 1e-12) the map is singular to double precision.
   double RelativeDeterminant() const;
   // The inverse map, computed on A / LinearScale() so that no intermediate overflows or

@@ -394,7 +394,7 @@ class NffParser {
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 4; ++c) a.m[r][c] = Number("a 'transform' matrix entry (12 numbers, row by row)");
     // Judged free of the matrix's scale: a uniform 1e-152 is as regular as the identity
-    // (its plain determinant, 1e-456, underflows to 0; issue 11).
+    // (its plain determinant, 1e-456, underflows to 0).
     const double det = a.RelativeDeterminant();
     if (!(std::abs(det) > 1e-12)) {
       char what[160];

@@ -27,7 +27,7 @@ inline constexpr std::uintmax_t kMaxSceneBytes = std::uintmax_t(64) << 20;
 
 // How many error messages a parse keeps (the first, in file order) and after how many
 // errors it stops reading, as compilers do (clang's -ferror-limit): a file of 33 million
-// bad lines costs milliseconds and a few kilobytes, not minutes and gigabytes (issue 23).
+// bad lines costs milliseconds and a few kilobytes, not minutes and gigabytes.
 inline constexpr std::size_t kKeptNffErrors = 20;
 inline constexpr std::size_t kMaxNffErrors = 1000;
 

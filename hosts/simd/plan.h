@@ -38,7 +38,7 @@ const char* UncertainPolicyName(UncertainPolicy p);
 // The narrowest widths a user may ask for (--frac-bits, --dir-frac-bits, --int-bits): the
 // narrowest at which the pass's error bounds are tested (docs/simd.md, "Error bounds":
 // RecomputeRepairsEveryPixelAtLowWidths from 4 fraction bits; SimdPrimary's overflow case
-// with 2 integer bits). Narrower ones are refused by SimdOptionsFrom. Between these and the
+// with 2 integer bits). Narrower ones are refused as the flags are parsed (hosts/cmd/flags.h). Between these and the
 // planner's choice most pixels are uncertain; they are flagged, counted in the report and
 // recomputed unless --uncertain keep.
 constexpr int kMinFracBits = 4;

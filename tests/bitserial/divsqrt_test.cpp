@@ -1,4 +1,4 @@
-// Bit-serial division and square root (issue 3): restoring algorithms built from the
+// Bit-serial division and square root: restoring algorithms built from the
 // engine's kernels are bit-exact with fixed::Div / fixed::Sqrt on every PE — result bits
 // and the per-PE overflow, divideByZero and invalid flags — exhaustively for widths <= 6,
 // randomly over all 8192 PEs for widths 1..64 (and one wider), under activity masks, on

@@ -1,4 +1,4 @@
-// Kernels on data that varies across the PE array (issue 29 item 4): add, subtract,
+// Kernels on data that varies across the PE array: add, subtract,
 // multiply (multi x multi, a 1-bit multiplier, a uni constant, square, float), host
 // transfers and mesh shifts with operands whose bits differ from word to word and from PE
 // to PE in every pattern a kernel could special-case — a single PE different (at a word's

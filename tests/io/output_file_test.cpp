@@ -116,7 +116,7 @@ TEST(OutputFile, SameFileSeesThroughSpellingsAndLinks) {
   EXPECT_FALSE(SameFile(dir / "a.png", dir / "b.png"));
 }
 
-// ---- Durability as an ordering (issue 29 item 9) --------------------------------------------
+// ---- Durability as an ordering --------------------------------------------
 
 using io::CommitStep;
 

@@ -107,7 +107,7 @@ TEST(SceneNff, RejectsBadScenes) {
   EXPECT_TRUE(has(Errors(std::string(kView) + f + "p 4\n0 0 0\n1 0 0\n1 1 0.5\n0 1 0\n"), "non-planar"));
   EXPECT_TRUE(has(Errors(std::string(kView) + f + "p 2\n0 0 0\n1 0 0\n"), "integer from 3"));
   EXPECT_TRUE(has(Errors(std::string(kView) + f + "transform 1 0 0 0 2 0 0 0 0 0 0 0\ns 0 0 0 1\n"), "singular transform"));
-  // Singular or not does not depend on the matrix's scale (issue 11): tiny and huge uniform
+  // Singular or not does not depend on the matrix's scale: tiny and huge uniform
   // scales are regular, a rank-2 map is singular at any scale.
   for (const char* k : {"1e-120", "1e-152", "1e100", "1e120"}) {
     const std::string e(k);
@@ -493,7 +493,7 @@ namespace zephyr {
 namespace {
 
 // Every number of every statement, when it is not a number or not a finite one, is reported
-// at its own line and column (issue 29, item 8): each view item, the background, a light with
+// at its own line and column: each view item, the background, a light with
 // and without colour, the material, a sphere, a cone, a polygon's count and vertices, a `pp`
 // normal's components and the 12 entries of a transform.
 TEST(SceneNff, EveryNumberOfEveryStatementIsLocatedAtItsOwnColumn) {

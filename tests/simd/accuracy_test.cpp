@@ -1,6 +1,6 @@
 // `zephyr accuracy --method seq --precision float|double`: the sequential tracer's primary hits
 // against the exact 128-bit reference, so float32 and float64 are points on the same
-// speed-against-accuracy chart as the SIMD pass's fraction widths (issue 7).
+// speed-against-accuracy chart as the SIMD pass's fraction widths.
 #include <gtest/gtest.h>
 
 #include "tests/farm/mpi_launch.h"

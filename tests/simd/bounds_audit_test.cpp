@@ -1,5 +1,5 @@
-// The error bounds of the SIMD primary pass audited against the exact reference (issue 29
-// item 1; docs/simd.md, "Error bounds", the audit table). For each primitive kind — sphere,
+// The error bounds of the SIMD primary pass audited against the exact reference
+// (docs/simd.md, "Error bounds", the audit table). For each primitive kind — sphere,
 // ellipsoid, polygon, cone, cylinder — one-object scenes at several widths, and for each many
 // directions drawn to stress the bounds: grazing rays at chosen discriminants (inside and on
 // both sides of the grazing band G, just above every rung 4^j·G of a cone's ladder), rays near

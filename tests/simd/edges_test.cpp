@@ -1,4 +1,4 @@
-// The SIMD pass's shared-edge rule (docs/simd.md, "Polygons"; issue 29 item 6): on the array
+// The SIMD pass's shared-edge rule (docs/simd.md, "Polygons"): on the array
 // itself (--uncertain keep: no host recompute), a ray through an edge two polygons share is
 // inside exactly one of them, for edges along x, y, z and a diagonal, convex and concave
 // faces, folded or flat, wound either way (the cases of tests/trace/shared_edges.h): every

@@ -1,4 +1,4 @@
-// Scene faults on the SIMD pass (issue 11): a scene the array's formats cannot hold is
+// Scene faults on the SIMD pass: a scene the array's formats cannot hold is
 // planned within what the operations support or is a clear error, never an abort; a ray
 // through an edge two polygons share hits one of them on the array too; SPD lights shade
 // alike in every method.

@@ -1,4 +1,4 @@
-// `make help` lists every target a user expects, each with its one-line comment (issue 2).
+// `make help` lists every target a user expects, each with its one-line comment.
 #include <gtest/gtest.h>
 
 #include <cstdio>

@@ -1,6 +1,6 @@
 // `make charts` end to end in its QUICK mode (tools/charts.sh): the sweeps run with whatever
 // methods the zephyr program has, and every CSV and PNG the docs cite is written and holds
-// data — now with all four methods and `zephyr accuracy`, every cell measured. Keeps the chart tool chain working while the methods change (issue 7).
+// data — now with all four methods and `zephyr accuracy`, every cell measured. Keeps the chart tool chain working while the methods change.
 #include <gtest/gtest.h>
 
 #include <cstdlib>

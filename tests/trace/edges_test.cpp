@@ -1,4 +1,4 @@
-// The host tracer's shared-edge rule (docs/shading.md, "Polygons"; issue 29 item 6): a ray
+// The host tracer's shared-edge rule (docs/shading.md, "Polygons"): a ray
 // exactly through an edge two polygons share meets exactly one of them, for edges along x, y,
 // z and a diagonal, convex and concave faces, folded or flat, wound either way, in float and
 // double; rays near the edge likewise (no crack, no double hit), and rays through the edges a

@@ -1,6 +1,6 @@
 // The secondary-ray offset (docs/shading.md, "The colour at a hit"): secondary and shadow rays
 // skip relative · (gain · (|o|∞ + t) + the object's own magnitude), and each term must bound
-// the rounding of what the tracer computes (issue 29 item 7). Checked against each magnitude:
+// the rounding of what the tracer computes. Checked against each magnitude:
 // one scene (a floor, a sphere resting on it, a mirror sphere) seen near, with the eye far
 // away (t), moved far from the world origin (the ray's origin), and with far numbers in its
 // objects (a huge floor; object spaces far from the world), in float and double, where the

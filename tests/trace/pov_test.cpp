@@ -1,6 +1,6 @@
 // Our sequential tracer against an independent renderer: POV-Ray 3.7 renders the exported
-// scene, and the two images must agree (issue 4). Each threshold sits just under what the
-// scene measures today (issue 17, 2026-11-29, POV-Ray 3.7 from Debian): random spheres with
+// scene, and the two images must agree. Each threshold sits just under what the
+// scene measures today (2026-11-29, POV-Ray 3.7 from Debian): random spheres with
 // glass and mirrors 41.47 dB (edges and refraction differ slightly); the sphereflake and the
 // transformed showcase are identical pixel for pixel (inf), where one 8-bit level off in one
 // channel of one pixel would already give 92.6 dB — so a shading slip cannot hide below them.

@@ -1,8 +1,8 @@
-// bench_bitserial: host speed of the bit-serial engine (issue 3's targets) against a naive
+// bench_bitserial: host speed of the bit-serial engine against a naive
 // emulator kept only here (one byte per PE bit, plain loops, as PIMeval stores one bool per
 // bit), then host time per modelled cycle against the number of virtual-PE layers, op by op
-// and in layer blocks on 1 thread and on every core (issue 14). The single ops run on every
-// Highway target the CPU supports, in the same run (issue 23), so one machine shows AVX3
+// and in layer blocks on 1 thread and on every core. The single ops run on every
+// Highway target the CPU supports, in the same run, so one machine shows AVX3
 // beside AVX2. Prints medians of repeats; not a test. `--help` for the options.
 #include <fmt/format.h>
 

@@ -1,4 +1,4 @@
-// tools/bench/mpi.cpp — the distributed method's speed on this machine (issue 6):
+// tools/bench/mpi.cpp — the distributed method's speed on this machine:
 //   - parallel efficiency of dist with 2 children against seq, both timed in this run on
 //     the same scene: T_seq / (2 · T_dist), target ≥ 85% of linear;
 //   - the parent's overhead for 32×32 frames: its CPU time while distributing (per frame

@@ -3,7 +3,7 @@
 // (NearestSphereScalar), the engine's Highway kernel (hosts/trace/sphere_kernels.h: many spheres
 // per vector, Hearn–Baker form, float and double, bit-identical to the scalar loop), and
 // Embree 3's BVH with its built-in sphere primitive tracing the same primary rays, for 10,
-// 100 and 1000 spheres (issue 4). Prints medians of repeats.
+// 100 and 1000 spheres. Prints medians of repeats.
 #include <embree3/rtcore.h>
 
 #include <algorithm>

@@ -20,7 +20,7 @@
 # its resolution set to SIZE.
 #
 #   bash tools/charts/recompute.sh                                  # 128x128, widths 6..20
-#   SCENES=../shared/scenes bash tools/charts/recompute.sh          # + the SPD lattice
+#   SCENES=DIR bash tools/charts/recompute.sh    # + the SPD lattice (a folder of SPD .nff scenes)
 # Environment: SIZE (128), FRAC ("6 8 10 12 14 16 18 20"), SEED (1), SCENES, ZEPHYR,
 # OUT (docs/results). Writes OUT/recompute_share.csv and OUT/recompute_share.png.
 set -euo pipefail
