@@ -200,47 +200,39 @@ void CheckObjectFormats(const PrimaryPlan& plan, const Scene& scene) {
                                   f.quantity, f.format.Width(), f.format.Name(), fixed::kMaxWidth));
 }
 
-// The pass-wide table: each quantity at the widest format an object's program uses it in.
+// The pass-wide table, derived from the object programs (each reports every format it uses,
+// ObjectPlan::formats): the matrix's own rows (direction, t, object index) and, per kind and
+// quantity, the widest format any object of that kind uses it in, with that object's reason.
+// A scene of polygons has no sphere row.
 void SummaryTable(PrimaryPlan& plan, const Scene& scene, const SceneRange& range) {
-  const int F = plan.fracBits, R = IntBitsFor(range.rMax);
-  const std::string dist = fmt::format("farthest point of an array object is {:.4g} from the eye", range.farthest);
-  plan.formats = {
-      {"direction d (x,y,z)", plan.direction, "unit components in [-1,1]; fraction bits = F"},
-      {"eye-to-centre f (uni)", plan.length, dist},
-      {"tca = f·d, cross f×d", plan.length, "|f·d|, |f×d| <= |f|"},
-      {"cross, clamped", Format::Signed(R, F), fmt::format("only |f×d| <= r = {:.4g} can hit; larger saturate (a miss)", range.rMax)},
-      {"squares, their sum", Format::Unsigned(2 * R + 2, F), "three squares of the clamped cross product"},
-      {"discriminant r²−|f×d|²", Format::Signed(2 * R + 2, F), "difference of the above"},
-      {"root √disc", Format::Unsigned(R + 1, F), "half the discriminant's integer bits"},
-      {"t = tca ∓ root", plan.t, "t <= farthest (one bit of headroom)"},
-      {"object index + 1", plan.object, fmt::format("{} objects, 0 = none", scene.objects.size())},
+  plan.formats = {{"direction d (x,y,z)", plan.direction,
+                   plan.number == NumberSystem::kFloat
+                       ? "the matrix's, fraction bits = max(F, the float's precision); the pass reads them in float"
+                       : "unit components in [-1,1]; fraction bits = F"}};
+  const auto width = [](const PlannedFormat& f) { return f.floatFormat ? f.floatFormat->Width() : f.format.Width(); };
+  struct Row {
+    PlannedFormat format;
+    int users = 0;
   };
-  if (plan.number == NumberSystem::kFloat) {  // the sphere's fixed formats are not used: its float's
-    plan.formats[0].reason = "the matrix's, fraction bits = max(F, the float's precision); the pass reads them in float";
-    plan.formats.erase(plan.formats.begin() + 1, plan.formats.begin() + 7);
-    plan.formats.insert(plan.formats.begin() + 1,
-                        {"f (uni), f·d, f×d, squares, disc, √", plan.t,
-                         "--number float: every sphere's intersection in this float, t then fixed", plan.floatFormat});
+  std::vector<std::string> order;
+  std::map<std::string, Row> rows;
+  for (const ObjectPlan& o : plan.objects)
+    for (const PlannedFormat& f : o.formats) {
+      const std::string key = std::string(o.KindName()) + ": " + f.quantity;
+      auto [it, fresh] = rows.try_emplace(key, Row{f, 0});
+      if (fresh) order.push_back(key);
+      ++it->second.users;
+      if (width(f) > width(it->second.format)) it->second.format = f;
+    }
+  for (const std::string& key : order) {
+    PlannedFormat f = rows.at(key).format;
+    f.quantity = key;
+    if (rows.at(key).users > 1) f.reason += fmt::format(" (the widest of {} objects')", rows.at(key).users);
+    plan.formats.push_back(f);
   }
-  int ellipsoids = 0, polygons = 0, ellipsoidBits = 0, cones = 0, coneBits = 0;
-  for (const ObjectPlan& o : plan.objects) {
-    const ObjectBounds& b = o.bounds;
-    if (b.kind == ShapeKind::kPolygon) ++polygons;
-    if (b.kind == ShapeKind::kSphere && b.transformed) ++ellipsoids, ellipsoidBits = std::max(ellipsoidBits, b.intBits);
-    if (b.kind == ShapeKind::kCone) ++cones, coneBits = std::max(coneBits, b.intBits);
-  }
-  if (ellipsoids)
-    plan.formats.push_back({"ellipsoid d' = T⁻¹d, f·d', f×d'", Format::Signed(ellipsoidBits, F),
-                            fmt::format("{} transformed sphere(s): |f|·|d'|, |d'| <= Σ|T⁻¹ row|; t = (f·d' ∓ √disc)/|d'|² by division", ellipsoids)});
-  if (polygons)
-    plan.formats.push_back({"polygon edge/plane ĝ·d, n̂·d", Format::Signed(1, F),
-                            fmt::format("{} polygon(s): unit uni normals (T folded in on the host); t = dist/(n̂·d) by division", polygons)});
-  if (cones)
-    plan.formats.push_back({"cone A, disc, √, t, height", Format::Signed(coneBits, F),
-                            fmt::format("{} cone(s)/cylinder(s): linear forms of d (T⁻¹ folded in), squares up to "
-                                        "the widest; t = −sgn(β)·Q/A and −sgn(β)·C/Q by division where |divisor| >= "
-                                        "its threshold, else flagged unless certainly beyond the cone",
-                                        cones)});
+  plan.formats.push_back({"t (the matrix)", plan.t,
+                          fmt::format("the farthest point of an array object is {:.4g} from the eye", range.farthest)});
+  plan.formats.push_back({"object index + 1", plan.object, fmt::format("{} objects, 0 = none", scene.objects.size())});
 }
 
 // Memory per virtual PE at fraction bits F and Fd: the matrix (object, t, d, two flag bits)
@@ -448,15 +440,18 @@ std::string PrimaryPlan::Text() const {
     s += fmt::format("the array is full: {} array passes of up to {} virtual PEs ({} layers) each\n", passes,
                      pesPerPass, layersPerPass);
   for (const PlannedFormat& f : formats)
-    s += fmt::format("  {:<26} {:<8} {}\n", f.quantity, f.FormatName(), f.reason);
+    s += fmt::format("  {:<34} {:<8} {}\n", f.quantity, f.FormatName(), f.reason);
   if (number == NumberSystem::kFloat)
     s += fmt::format("--number float: the intersections in bit-serial float {} (directions, f·d, f×d, squares, "
                      "disc, √disc, t0/t1), t then in the fixed format above\n",
                      floatFormat.Name());
+  const bool quadrics = std::any_of(objects.begin(), objects.end(),
+                                    [](const ObjectPlan& o) { return o.bounds.kind != ShapeKind::kPolygon; });
   s += fmt::format("error bound on t (certain pixels): {:.3g} (the largest object's e); near tie per pair: "
-                   "|t_i - t_j| <= e_i + e_j; grazing when disc < max((r/{:g})^2, 2 x its error "
-                   "bound), per object\n",
-                   tErrorBound, 1 / grazingFraction);
+                   "|t_i - t_j| <= e_i + e_j; grazing {}\n",
+                   tErrorBound,
+                   quadrics ? fmt::format("when disc < max((r/{:g})^2, 2 x its error bound), per object", 1 / grazingFraction)
+                            : std::string("within each object's band of its edges (per object below)"));
   s += fmt::format("memory per virtual PE: ~{} bits (matrix {} bits, external) of {} internal + {} "
                    "external\n",
                    memoryBitsPerPe, matrixBitsPerPe, internalCapacity, externalCapacity);

@@ -354,6 +354,37 @@ TEST(SimdCone, PlanListsTheConeFormats) {
   EXPECT_GT(plan.tErrorBound, 0);
 }
 
+// The pass-wide table comes from the object programs: a kind's rows appear when the scene has
+// that kind, each at the widest format an object of the kind uses, and no other kind's.
+TEST(SimdPlan, TheTableHoldsTheKindsTheSceneHasAtTheirWidestFormats) {
+  Scene polygon = ConeScene(32);
+  polygon.objects.resize(1);  // the floor polygon alone
+  const PrimaryPlan one = PlanPrimaryPass(polygon, {});
+  for (const PlannedFormat& f : one.formats) {
+    EXPECT_EQ(f.quantity.find("sphere"), std::string::npos) << one.Text();
+    EXPECT_EQ(f.quantity.find("cone"), std::string::npos) << one.Text();
+    EXPECT_EQ(f.quantity.find("discriminant"), std::string::npos) << one.Text();
+  }
+  int polygonRows = 0;
+  for (const PlannedFormat& f : one.formats) polygonRows += f.quantity.rfind("polygon: ", 0) == 0;
+  EXPECT_EQ(size_t(polygonRows), one.objects[0].formats.size()) << one.Text();
+  // Spheres of several sizes: each sphere row is the widest of the spheres' own.
+  const Scene spheres = GenerateRandomSpheres({.count = 12, .seed = 2, .width = 32, .height = 32});
+  const PrimaryPlan many = PlanPrimaryPass(spheres, {});
+  bool any = false;
+  for (const PlannedFormat& row : many.formats) {
+    if (row.quantity.rfind("sphere: ", 0) != 0) continue;
+    any = true;
+    int widest = 0;
+    for (const ObjectPlan& o : many.objects)
+      for (const PlannedFormat& f : o.formats)
+        if ("sphere: " + f.quantity == row.quantity) widest = std::max(widest, f.format.Width());
+    EXPECT_EQ(row.format.Width(), widest) << row.quantity;
+  }
+  EXPECT_TRUE(any) << many.Text();
+  EXPECT_EQ(many.formats.back().quantity, "object index + 1");
+}
+
 }  // namespace
 }  // namespace zephyr::simd
 
