@@ -117,7 +117,7 @@ FUZZ_SRCS := tests/fuzz/nff_fuzz.cpp hosts/scene/nff.cpp hosts/scene/scene.cpp h
              hosts/scene/geometry.cpp hosts/trace/tracer.cpp hosts/trace/sphere_kernels.cpp \
              $(filter-out $(OPENMP_SRCS),$(wildcard fixed/*.cpp bitserial/*.cpp)) \
              hosts/trace/exact.cpp \
-             $(addprefix hosts/simd/,plan.cpp audit.cpp bounds.cpp ops.cpp sphere.cpp sphere_float.cpp ellipsoid.cpp polygon.cpp cone.cpp)
+             $(addprefix hosts/simd/,options.cpp plan.cpp audit.cpp bounds.cpp ops.cpp sphere.cpp sphere_float.cpp ellipsoid.cpp polygon.cpp cone.cpp)
 FUZZ_OBJS := $(FUZZ_SRCS:%.cpp=$(BUILD)/fuzz/obj/%.o)
 FUZZ_SAN  := -fno-sanitize-recover=all
 FUZZ_RUN   = mkdir -p $(BUILD)/fuzz/corpus && $(FUZZ_BIN) -max_len=4096 -timeout=10 \

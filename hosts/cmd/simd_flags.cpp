@@ -40,6 +40,9 @@ void SimdFlags::AddTo(CLI::App& command, const std::string& helpPrefix, bool wit
                      "array pass on them first), keep, fail"));
   added_.push_back(command.add_option("--machine", options_.profile,
                                       helpPrefix + "machine profile (wavetracer, mpp)"));
+  added_.push_back(command.add_option("--set", options_.profileOverrides,
+                                      helpPrefix + "override an entry of the machine profile, NAME=VALUE (e.g. "
+                                                   "--set clockHz=20e6; as zephyr cycles --set, docs/bitserial.md)"));
   added_.push_back(AddInteger(command, "--threads", options_.threads, 0, bitserial::kMaxThreads,
                               helpPrefix + "host threads emulating the array and recomputing uncertain "
                                            "pixels (default or 0: every core; the results do not depend on it)"));

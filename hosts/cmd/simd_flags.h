@@ -4,7 +4,7 @@
 //   SimdFlags flags;
 //   flags.AddTo(*cmd, "simd: ");            // --frac-bits --dir-frac-bits --int-bits
 //                                           // --number --float-format
-//                                           // [--uncertain] --machine --threads
+//                                           // [--uncertain] --machine --set --threads
 //   simd::SimdOptions o = flags.Options();  // in the command's callback
 #pragma once
 

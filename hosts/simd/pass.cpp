@@ -1,6 +1,7 @@
-// hosts/simd/pass.cpp — the SIMD/sequential method's primary pass on the array, the matrix
-// on the host, uncertain pixels, and host shading (docs/simd.md). Every format, bound and
-// object program comes from the plan (hosts/simd/plan.h).
+// hosts/simd/pass.cpp — the SIMD/sequential method's primary pass: the array program
+// (hosts/simd/program.h) run in its array passes, the matrix decoded on the host, uncertain
+// pixels, the refine pass, and host shading (docs/simd.md). Every format, bound and object
+// program comes from the plan (hosts/simd/plan.h).
 #include "hosts/simd/pass.h"
 
 #include <fmt/format.h>
@@ -13,8 +14,7 @@
 #include "bitserial/multi.h"
 #include "fixed/check.h"
 #include "hosts/simd/direction.h"
-#include "hosts/simd/object.h"
-#include "hosts/simd/ops.h"
+#include "hosts/simd/program.h"
 
 namespace zephyr::simd {
 
@@ -25,134 +25,6 @@ using fixed::Fixed;
 using fixed::Format;
 
 namespace {
-
-// The per-pixel matrix on the array, in external memory in this order (docs/simd.md, "The
-// matrix layout").
-struct ArrayMatrix {
-  ArrayMatrix(Machine& m, const PrimaryPlan& plan)
-      : object(m, plan.object, "matrix.object", Space::External),
-        t(m, plan.t, "matrix.t", Space::External),
-        d{{Multi(m, plan.direction, "matrix.dx", Space::External), Multi(m, plan.direction, "matrix.dy", Space::External),
-           Multi(m, plan.direction, "matrix.dz", Space::External)},
-          {}},
-        grazing(m, bitserial::BoolFormat(), "matrix.grazing", Space::External),
-        nearTie(m, bitserial::BoolFormat(), "matrix.nearTie", Space::External) {
-    // --number float: the directions in the pass's float format too (internal memory: the
-    // programs read them; the matrix keeps the fixed ones for the host).
-    if (plan.number == NumberSystem::kFloat)
-      for (int k = 0; k < 3; ++k)
-        d.floats[k] = bitserial::MultiFloat(m, plan.floatFormat, std::string("d.float.") + "xyz"[k]);
-  }
-  Multi object, t;
-  Directions d;  // d.fixed: the matrix's
-  Multi grazing, nearTie;
-};
-
-// The host computes each pixel's eye ray and loads the directions (one plane per bit) into
-// the machine's PEs (a layer block's own, from m.FirstPe(), of the array pass starting at
-// the plan's PE `first`): PE k takes pixel pixels[k], or pixel k when `pixels` is empty
-// (row-major).
-void LoadDirections(Machine& m, ArrayMatrix& a, const PrimaryRays& rays, const PrimaryPlan& plan,
-                    const std::vector<int64_t>& pixels, int64_t first) {
-  const bool floats = plan.number == NumberSystem::kFloat;
-  std::vector<int64_t> raw[3];
-  std::vector<uint64_t> bits[3];
-  for (int k = 0; k < 3; ++k) raw[k].resize(m.VirtualPes()), bits[k].resize(floats ? m.VirtualPes() : 0);
-  for (int64_t i = 0; i < m.VirtualPes(); ++i) {
-    const int64_t pe = first + m.FirstPe() + i, pixel = pixels.empty() ? pe : pixels[pe];
-    const Vec3 dir = rays.At(int(pixel % plan.width), int(pixel / plan.width)).direction;
-    for (int k = 0; k < 3; ++k) raw[k][i] = QuantiseDirection(dir[k], plan.dirFracBits);
-    if (floats)
-      for (int k = 0; k < 3; ++k) bits[k][i] = FloatOfDouble(plan.floatFormat, dir[k]);
-  }
-  for (int k = 0; k < 3; ++k) a.d.fixed[k].LoadRaw(raw[k]);
-  if (floats)
-    for (int k = 0; k < 3; ++k) a.d.floats[k].Load(bits[k]);
-}
-
-// Near ties per pair (docs/simd.md, "Uncertain pixels"): the final best k and another hit j
-// are tied when t_j − e_j <= t_k + e_k. Each PE keeps lowBest = t − e of its current best
-// and otherLow, the least t − e of every other hit so far; a displaced best's low joins
-// otherLow. bestUnsure: the current best was itself uncertain (its e does not hold);
-// tGraze: the least tLow of an uncertain candidate. bestPlane (only when some plane holds
-// several polygons): the plane class of the current best (ObjectPlan::planeClass, 0: none).
-struct Trackers {
-  Trackers(Machine& m, const Fixed& tMax, const PrimaryPlan& plan)
-      : tGraze(Broadcast(m, tMax)), otherLow(Broadcast(m, tMax)), lowBest(Broadcast(m, tMax)),
-        bestUnsure(Broadcast(m, Fixed{bitserial::BoolFormat(), 0})) {
-    if (plan.planeClasses > 0) bestPlane = Broadcast(m, Fixed{PlaneFormat(plan), 0});
-  }
-  static Format PlaneFormat(const PrimaryPlan& plan) {
-    return Format::Unsigned(std::max(1, CeilLog2(double(plan.planeClasses) + 1)), 0);
-  }
-  Multi tGraze, otherLow, lowBest, bestUnsure, bestPlane;
-};
-
-// One object's candidate folded into the best hit so far and the trackers.
-void FoldCandidate(Machine& m, const ObjectPlan& object, const PrimaryPlan& plan, ArrayMatrix& a, Trackers& k) {
-  const Format T = plan.t;
-  const Candidate c = object.program->Run(m, a.d, nullptr);
-  // t − e_i with e_i rounded up (an always-uncertain object's every hit is flagged, so its
-  // e is never relied on); saturating down only widens the test.
-  const double e = object.bounds.alwaysUncertain ? 0.0 : object.bounds.tError + plan.pass.Ulp();
-  Multi low;
-  WithExpectedSaturation(m, [&] {
-    low = Sub(c.t, c.lowMargin.Empty() ? Broadcast(m, Tight(e, plan.fracBits)) : c.lowMargin, T, kSaturate);
-  });
-  Where(c.uncertain, [&] { k.tGraze = Min(k.tGraze, c.tLow, T); });
-  const Multi closer = c.hit && (c.t < a.t);
-  // A polygon in the best's plane has the best's t bit for bit and ties with it exactly: the
-  // lower index (the best) stays first, as in the exact reference, and it is no near tie.
-  Multi other = c.hit && !closer;
-  if (object.planeClass > 0)
-    other = other && !Equal(k.bestPlane, bitserial::Uni{Fixed{k.bestPlane.Format(), fixed::BigInt(object.planeClass)}});
-  Where(other, [&] { k.otherLow = Min(k.otherLow, low, T); });
-  Where(closer, [&] {
-    if (!k.bestPlane.Empty())
-      k.bestPlane = Broadcast(m, Fixed{k.bestPlane.Format(), fixed::BigInt(object.planeClass)});
-    k.otherLow = Min(k.otherLow, k.lowBest, T);
-    k.lowBest = low;
-    k.bestUnsure = c.uncertain;
-    a.t = c.t;
-    a.object = Broadcast(m, Fixed{plan.object, fixed::BigInt(object.index + 1)});
-  });
-}
-
-// A flagged candidate or another hit matters only if it may lie in front of the final best's
-// true t <= tBest + e_best (= 2·tBest − lowBest; tMax marks "none"; the limit's exact format
-// cannot overflow). An uncertain best is grazing itself.
-void SetFlags(Machine& m, const Fixed& tMax, ArrayMatrix& a, const Trackers& k) {
-  const Multi limit = a.t + (a.t - k.lowBest), none = Broadcast(m, tMax);
-  a.grazing = k.bestUnsure || ((k.tGraze <= limit) && (k.tGraze < none));
-  a.nearTie = (k.otherLow <= limit) && (k.otherLow < none);
-}
-
-// The matrix as the host reads it (charged to the host link), and the per-PE flags, over
-// every PE of the plan (each layer block of each array pass writes its own PEs).
-struct MatrixRaw {
-  explicit MatrixRaw(int64_t pes)
-      : object(pes), t(pes), d{std::vector<int64_t>(pes), std::vector<int64_t>(pes), std::vector<int64_t>(pes)},
-        grazing(pes), nearTie(pes), overflow(pes) {}
-  // Narrow where the value is: an object index (the plan's object format is far below 32
-  // bits) and 0/1 flags; at 4096x4096 this is ~0.65 GB instead of ~0.96 GB.
-  std::vector<int32_t> object;
-  std::vector<int64_t> t, d[3];
-  std::vector<uint8_t> grazing, nearTie;
-  std::vector<uint8_t> overflow;  // overflow or divide by zero (Invalid: √ of a miss)
-};
-
-void ReadMatrix(Machine& m, const ArrayMatrix& a, MatrixRaw& r, int64_t passFirst) {
-  const int64_t first = passFirst + m.FirstPe();
-  auto read = [first](const Multi& x, auto& to) {
-    const std::vector<int64_t> raw = x.ReadRaw();
-    std::copy(raw.begin(), raw.end(), to.begin() + first);
-  };
-  read(a.object, r.object), read(a.t, r.t);
-  for (int k = 0; k < 3; ++k) read(a.d.fixed[k], r.d[k]);
-  read(a.grazing, r.grazing), read(a.nearTie, r.nearTie);
-  m.Charge("hostRead", bitserial::HostTransferCost(1));  // the overflow flags
-  for (int64_t pe = 0; pe < m.VirtualPes(); ++pe) r.overflow[first + pe] = m.Overflow(pe) || m.DivideByZero(pe);
-}
 
 // One run of the program on the array (every array pass): the matrix as read, the passes'
 // reports.
@@ -264,20 +136,6 @@ void HandleUncertain(PrimaryPass& pass, const Scene& scene, const PrimaryRays& r
 }  // namespace
 
 namespace {
-
-// The whole program on the machine's PEs (a layer block's own) of the array pass that starts
-// at the plan's PE `first`: directions, every object, flags, and (raw not null) the readout.
-void RunProgram(Machine& m, const PrimaryPlan& plan, const PrimaryRays& rays, const std::vector<int64_t>& pixels,
-                int64_t first, MatrixRaw* raw) {
-  ArrayMatrix matrix(m, plan);
-  LoadDirections(m, matrix, rays, plan, pixels, first);
-  const Fixed tMax{plan.t, plan.t.MaxRaw()};
-  matrix.t = Broadcast(m, tMax);
-  Trackers trackers(m, tMax, plan);
-  for (const ObjectPlan& object : plan.objects) FoldCandidate(m, object, plan, matrix, trackers);
-  SetFlags(m, tMax, matrix, trackers);
-  if (raw) ReadMatrix(m, matrix, *raw, first);
-}
 
 // The planner splits the passes by an estimate of the program's memory per virtual PE; where
 // a pass of several layers leaves less than twice the estimate, the program's real allocation
@@ -397,28 +255,7 @@ PrimaryPass RunPrimaryPass(const Scene& scene, const SimdOptions& options) {
 
 void ShadeRegion(const Tracer& tracer, const PrimaryMatrix& matrix, int x0, int y0, int w, int h,
                  std::vector<Vec3>& out, TraceStats& stats) {
-  ZEPHYR_CHECK(x0 >= 0 && y0 >= 0 && w >= 0 && h >= 0 && x0 + w <= matrix.width &&
-               y0 + h <= matrix.height);
-  out.resize(size_t(w) * h);
-  for (int y = 0; y < h; ++y)
-    for (int x = 0; x < w; ++x) {
-      PrimaryHit hit = matrix.hits[size_t(y0 + y) * matrix.width + x0 + x];
-      ++stats.rays[int(RayKind::kPrimary)];
-      // A fixed-point t is off by up to the plan's bound, enough to put the hit point on
-      // the wrong side of the surface so secondary rays re-hit it (docs/simd.md, "Uncertain pixels"). The host
-      // refines t against the one object the array found (one double test, not N).
-      if (hit.object >= 0) {
-        const Scene& scene = tracer.GetScene();
-        const double tMin = std::max(scene.camera.hither, 0.0);
-        ++stats.tests[int(scene.objects[hit.object].Kind())];
-        ++stats.hits;
-        if (auto t = IntersectObject(scene, hit.object, scene.camera.from, hit.direction, tMin,
-                                     tracer.Options().sphereTest))
-          hit.t = *t;
-      }
-      out[size_t(y) * w + x] = tracer.ShadeFromPrimaryHit(hit, stats);
-      ++stats.pixels;
-    }
+  ShadeFromHits(tracer, matrix.hits, matrix.width, matrix.height, x0, y0, w, h, out, stats);
 }
 
 }  // namespace zephyr::simd

@@ -519,4 +519,28 @@ void RenderRegion(const Tracer& tracer, int x0, int y0, int w, int h, std::vecto
   }
 }
 
+void ShadeFromHits(const Tracer& tracer, const std::vector<PrimaryHit>& hits, int hitsWidth, int hitsHeight,
+                   int x0, int y0, int w, int h, std::vector<Vec3>& out, TraceStats& stats) {
+  ZEPHYR_CHECK(x0 >= 0 && y0 >= 0 && w >= 0 && h >= 0 && x0 + w <= hitsWidth && y0 + h <= hitsHeight);
+  ZEPHYR_CHECK_EQ(hits.size(), size_t(hitsWidth) * hitsHeight);
+  out.resize(size_t(w) * h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      PrimaryHit hit = hits[size_t(y0 + y) * hitsWidth + x0 + x];
+      ++stats.rays[int(RayKind::kPrimary)];
+      // Refine t against the one object found (ShadeFromHits' comment).
+      if (hit.object >= 0) {
+        const Scene& scene = tracer.GetScene();
+        const double tMin = std::max(scene.camera.hither, 0.0);
+        ++stats.tests[int(scene.objects[hit.object].Kind())];
+        ++stats.hits;
+        if (auto t = IntersectObject(scene, hit.object, scene.camera.from, hit.direction, tMin,
+                                     tracer.Options().sphereTest))
+          hit.t = *t;
+      }
+      out[size_t(y) * w + x] = tracer.ShadeFromPrimaryHit(hit, stats);
+      ++stats.pixels;
+    }
+}
+
 }  // namespace zephyr

@@ -137,4 +137,14 @@ void RenderRegion(const Tracer& tracer, int x0, int y0, int w, int h, std::vecto
                   TraceStats& stats, std::vector<PrimaryHit>* primary = nullptr,
                   const std::function<void()>& onRow = {});
 
+// (c) for hits another computed (the SIMD pass's matrix: `hits` row-major, `hitsWidth` ×
+// `hitsHeight`): the w×h rectangle at (x0, y0) into out (resized to w*h, linear RGB). Each
+// hit's t, off by up to the pass's bound (enough to put the hit point on the wrong side of
+// the surface so secondary rays re-hit it; docs/simd.md, "Uncertain pixels"), is refined
+// against the one object found, in double (one test, not N), then shaded; every count goes
+// to `stats` (one primary ray per pixel). Gives for any rectangle exactly the pixels the
+// whole image gives there.
+void ShadeFromHits(const Tracer& tracer, const std::vector<PrimaryHit>& hits, int hitsWidth, int hitsHeight,
+                   int x0, int y0, int w, int h, std::vector<Vec3>& out, TraceStats& stats);
+
 }  // namespace zephyr

@@ -223,6 +223,29 @@ TEST(FlagPreflight, RenderRefusesAFlagItsMethodIgnores) {
   }
 }
 
+// --set overrides a machine profile entry on every command that takes --machine (render,
+// plan, accuracy), as `cycles --set` does; an unknown entry is refused naming it.
+TEST(FlagPreflight, SetOverridesAProfileEntryWhereverMachineIs) {
+  TempDir dir;
+  const std::string scene = testing::SmallSphereScene(dir);
+  const auto plain = RunZephyrProcess("plan " + scene);
+  const auto halved = RunZephyrProcess("plan " + scene + " --set internalBitsPerPe=1024");
+  ASSERT_EQ(plain.status, 0) << plain.output;
+  ASSERT_EQ(halved.status, 0) << halved.output;
+  EXPECT_NE(plain.output.find("of 2048 internal"), std::string::npos) << plain.output;
+  EXPECT_NE(halved.output.find("of 1024 internal"), std::string::npos) << halved.output;
+  const auto fast = RunZephyrProcess("render --no-progress --method simd " + scene + " --set clockHz=20e6 --report " +
+                                     (dir / "fast.json"));
+  ASSERT_EQ(fast.status, 0) << fast.output;
+  EXPECT_NE(fast.output.find("at 20 MHz"), std::string::npos) << fast.output;
+  for (const std::string& command : {std::string("plan "), std::string("render --method simd "),
+                                     std::string("accuracy ")}) {
+    const auto bad = RunZephyrProcess(command + scene + " --set bogusEntry=3");
+    EXPECT_NE(bad.status, 0) << command;
+    EXPECT_NE(bad.output.find("bogusEntry"), std::string::npos) << command << bad.output;
+  }
+}
+
 // The other commands' numeric flags speak the same way (no CLI11 conversion message, no
 // range printed with hundreds of digits).
 TEST(FlagPreflight, NumericFlagsOfEveryCommandSayWhatTheyExpect) {
