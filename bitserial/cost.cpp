@@ -128,21 +128,6 @@ MicroOpCounts MulPass(Operand a, int multiplierWidth, const std::vector<int>& ro
 }
 }  // namespace
 
-const char* SpaceName(Space s) { return s == Space::Internal ? "internal" : "external"; }
-
-double MicroOpCounts::Cycles(const MachineProfile& p) const {
-  double total = 0;
-  for (int i = 0; i < kMicroOpCount; ++i) total += n[i] * p.cost[i];
-  return total;
-}
-
-std::array<double, kCycleClassCount> MicroOpCounts::ByClass(const MachineProfile& p) const {
-  std::array<double, kCycleClassCount> r{};
-  for (int i = 0; i < kMicroOpCount; ++i)
-    r[static_cast<int>(ClassOf(static_cast<MicroOp>(i)))] += n[i] * p.cost[i];
-  return r;
-}
-
 fixed::Format SumFormat(const fixed::Format& a, const fixed::Format& b) {
   return {a.isSigned || b.isSigned, std::max(a.intBits, b.intBits) + 1,
           std::max(a.fracBits, b.fracBits)};

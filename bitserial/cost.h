@@ -5,30 +5,17 @@
 // forms). The engine charges these counts × the profile's costs × the number of layers;
 // `zephyr cycles` prints them. Counts depend only on formats, places and the policy
 // (and, for multiply by a uni constant, on the constant's bits), never on the data.
+// The float operations are counted the second way, as they run: bitserial/serial.h.
 #pragma once
 
 #include <array>
 #include <cstdint>
 
-#include "bitserial/profile.h"
+#include "bitserial/memory.h"  // Space
+#include "bitserial/profile.h"  // MicroOp, MicroOpCounts
 #include "fixed/format.h"
 
 namespace zephyr::bitserial {
-
-enum class Space : int { Internal, External };
-const char* SpaceName(Space s);
-
-struct MicroOpCounts {
-  std::array<int64_t, kMicroOpCount> n{};
-  void Add(MicroOp op, int64_t k = 1) { n[static_cast<int>(op)] += k; }
-  int64_t operator[](MicroOp op) const { return n[static_cast<int>(op)]; }
-  MicroOpCounts& operator+=(const MicroOpCounts& o) {
-    for (int i = 0; i < kMicroOpCount; ++i) n[i] += o.n[i];
-    return *this;
-  }
-  double Cycles(const MachineProfile& p) const;
-  std::array<double, kCycleClassCount> ByClass(const MachineProfile& p) const;
-};
 
 // An operand as the schedule sees it: its format and where it lives.
 // A uni operand (`uni`) is a host value whose bits the controller supplies with each

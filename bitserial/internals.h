@@ -1,6 +1,6 @@
 // bitserial/internals.h — what the layers of bitserial/ share beyond the public API: the
-// machine's writable per-PE flag planes and kernel-argument arrays, and the conversion
-// kernel without its charge. Not for programs (they use bitserial/multi.h).
+// machine's writable per-PE flag planes and kernel-argument arrays, the conversion kernel
+// without its charge, the mask check (multi.cpp, reductions.cpp, mesh.cpp, float.cpp). Not for programs (they use bitserial/multi.h).
 #pragma once
 
 #include <vector>
@@ -25,6 +25,9 @@ struct MachineInternals {
 // charging it: for an operation whose own schedule includes the conversion's
 // (ShiftCost(a, 0, out, p)) and charges it as one operation.
 void ConvertUncharged(const Multi& a, Multi& out, fixed::Policy p);
+
+// UserError unless `a` is a 1-bit multi (a mask); `what` names the operation.
+void CheckBool(const Multi& a, const char* what);
 
 // Sets the Invalid flag where `where` is 1 in the active PEs.
 void SetInvalid(Machine& m, const Word* where);

@@ -8,6 +8,9 @@
 
 namespace zephyr::bitserial {
 
+const char* SpaceName(Space s) { return s == Space::Internal ? "internal" : "external"; }
+
+
 PeMemory::PeMemory(int64_t internalBitsPerPe, int64_t externalBitsPerPe, int layers)
     : layers_(layers) {
   ZEPHYR_CHECK_GE(layers, 1);

@@ -13,9 +13,13 @@
 #include <string>
 #include <vector>
 
-#include "bitserial/cost.h"
 
 namespace zephyr::bitserial {
+
+// The two address spaces of a PE (internal: 2 Kbit on the WaveTracer; external: 32 KB).
+enum class Space : int { Internal, External };
+const char* SpaceName(Space s);
+
 
 struct Allocation {
   int id = -1;

@@ -169,12 +169,6 @@ void CheckSameMachine(const Multi& a, const Multi& b) {
   ZEPHYR_CHECK(&a.GetMachine() == &b.GetMachine());
 }
 
-void CheckBool(const Multi& a, const char* what) {
-  if (a.Width() != 1)
-    throw UserError(fmt::format("{} needs a 1-bit multi (a mask), got format {}", what,
-                                a.Format().Name()));
-}
-
 // Product rows (shift-and-add) then round/fit, in one kernel (the exact product stays in
 // the kernel's L1 buffer); rows given by the caller.
 void MulInto(const Multi& a, const std::vector<const Word*>& rows, const std::vector<int>& shifts,
@@ -259,6 +253,12 @@ void Transpose64(uint64_t a[64]) {
 }
 
 }  // namespace
+
+void CheckBool(const Multi& a, const char* what) {
+  if (a.Width() != 1)
+    throw UserError(fmt::format("{} needs a 1-bit multi (a mask), got format {}", what,
+                                a.Format().Name()));
+}
 
 // ---- Multi ------------------------------------------------------------------------------------
 
@@ -866,186 +866,6 @@ WhereScope::~WhereScope() {
   machine_->Charge("endWhere", ActivityCost());
   machine_->PopActivity();
   machine_->ReleasePlanes(mask_, 1);
-}
-
-// ---- reductions -----------------------------------------------------------------------------
-
-namespace {
-// A reduction combines every layer: a layer block holds only some (bitserial/blocks.h).
-void CheckWhole(const Machine& m, const char* what) {
-  if (m.IsBlock())
-    throw UserError(fmt::format("{} reduces over every virtual-PE layer; a machine holding only "
-                                "layers {}..{} of {} cannot run it (run reductions on the whole "
-                                "machine, not in layer blocks)",
-                                what, m.FirstLayer(), m.FirstLayer() + m.Layers() - 1,
-                                m.ModelledLayers()));
-}
-
-bool AnyActive(const Machine& m, const Word* plane, bool complement) {
-  const Word* act = m.Activity();
-  for (size_t w = 0; w < m.WordsPerPlane(); ++w)
-    if ((complement ? ~plane[w] : plane[w]) & act[w]) return true;
-  return false;
-}
-
-fixed::Fixed Bitwise(const Multi& a, ReduceKind kind) {
-  Machine& m = a.GetMachine();
-  CheckWhole(m, ReduceName(kind));
-  m.Charge(ReduceName(kind), ReduceCost(kind, a.AsOperand()));
-  fixed::BigInt bits = 0;
-  for (int i = 0; i < a.Width(); ++i) {
-    bool bit = false;
-    if (kind == ReduceKind::Or) bit = AnyActive(m, a.Plane(i), false);
-    if (kind == ReduceKind::And) bit = !AnyActive(m, a.Plane(i), true);
-    if (kind == ReduceKind::Xor) {
-      int64_t n = 0;
-      for (size_t w = 0; w < m.WordsPerPlane(); ++w) n += std::popcount(a.Plane(i)[w] & m.Activity()[w]);
-      bit = n & 1;
-    }
-    if (bit) boost::multiprecision::bit_set(bits, i);
-  }
-  return fixed::Fixed::FromBits(a.Format(), bits);
-}
-
-fixed::Fixed Extreme(const Multi& a, bool isMax) {
-  Machine& m = a.GetMachine();
-  CheckWhole(m, ReduceName(isMax ? ReduceKind::Max : ReduceKind::Min));
-  m.Charge(ReduceName(isMax ? ReduceKind::Max : ReduceKind::Min),
-           ReduceCost(isMax ? ReduceKind::Max : ReduceKind::Min, a.AsOperand()));
-  const Format& f = a.Format();
-  if (!AnyActive(m, m.OnesPlane(), false))
-    return fixed::Fixed{f, isMax ? f.MinRaw() : f.MaxRaw()};
-  const size_t words = m.WordsPerPlane();
-  std::vector<Word> cand(m.Activity(), m.Activity() + words);
-  fixed::BigInt bits = 0;
-  for (int i = a.Width() - 1; i >= 0; --i) {
-    const Word* plane = a.Plane(i);
-    // The bit value the extreme prefers: 1 for max, 0 for min; inverted for a sign bit.
-    bool want = isMax != (f.isSigned && i == a.Width() - 1);
-    bool found = false;
-    for (size_t w = 0; w < words && !found; ++w)
-      found = (want ? plane[w] : ~plane[w]) & cand[w];
-    bool bit = found ? want : !want;
-    for (size_t w = 0; w < words; ++w) cand[w] &= bit ? plane[w] : ~plane[w];
-    if (bit) boost::multiprecision::bit_set(bits, i);
-  }
-  return fixed::Fixed::FromBits(f, bits);
-}
-}  // namespace
-
-fixed::Fixed ReduceOr(const Multi& a) { return Bitwise(a, ReduceKind::Or); }
-fixed::Fixed ReduceAnd(const Multi& a) { return Bitwise(a, ReduceKind::And); }
-fixed::Fixed ReduceXor(const Multi& a) { return Bitwise(a, ReduceKind::Xor); }
-bool Any(const Multi& mask) {
-  CheckBool(mask, "Any");
-  return ReduceOr(mask).raw != 0;
-}
-
-fixed::Fixed ReduceSum(const Multi& a) {
-  Machine& m = a.GetMachine();
-  CheckWhole(m, "reduceSum");
-  m.Charge("reduceSum", ReduceCost(ReduceKind::Sum, a.AsOperand()));
-  fixed::BigInt sum = 0;
-  for (int i = 0; i < a.Width(); ++i) {
-    int64_t n = 0;
-    for (size_t w = 0; w < m.WordsPerPlane(); ++w) n += std::popcount(a.Plane(i)[w] & m.Activity()[w]);
-    fixed::BigInt term = fixed::BigInt(n) << i;
-    if (a.Format().isSigned && i == a.Width() - 1) sum -= term;
-    else sum += term;
-  }
-  int extra = 0;
-  while ((int64_t{1} << extra) < m.ModelledPes()) ++extra;
-  Format f{a.Format().isSigned, a.Format().intBits + extra, a.Format().fracBits};
-  return fixed::Fixed{f, sum};
-}
-
-fixed::Fixed ReduceMax(const Multi& a) { return Extreme(a, true); }
-fixed::Fixed ReduceMin(const Multi& a) { return Extreme(a, false); }
-
-// ---- mesh ---------------------------------------------------------------------------------------
-
-namespace {
-// dst[i] = src bits shifted: bit b of dst = bit b - s of src (0 outside [0, 64·words)),
-// ANDed with mask.
-void ShiftBits(const Word* src, Word* dst, int64_t words, int64_t s, const Word* mask) {
-  const int64_t bits = words * 64;
-  auto word = [&](int64_t bit) -> Word {  // 64 bits of src starting at `bit`
-    if (bit <= -64 || bit >= bits) return 0;
-    const int64_t q = bit >= 0 ? bit / 64 : -1 - ((-bit - 1) / 64);
-    const int rem = static_cast<int>(bit - q * 64);
-    const Word lo = (q >= 0 && q < words) ? src[q] : 0;
-    const Word hi = (q + 1 >= 0 && q + 1 < words) ? src[q + 1] : 0;
-    return rem == 0 ? lo : (lo >> rem) | (hi << (64 - rem));
-  };
-  for (int64_t w = 0; w < words; ++w) dst[w] = word(w * 64 - s) & mask[w];
-}
-}  // namespace
-
-Multi MeshShift(const Multi& a, int axis, int distance) {
-  Machine& m = a.GetMachine();
-  const MeshShape& shape = m.Shape();
-  if (axis < 0 || axis >= static_cast<int>(shape.extent.size()))
-    throw UserError(fmt::format("mesh shift along axis {}: the {} mesh has {} axes", axis,
-                                shape.Name(), shape.extent.size()));
-  Multi r(m, a.Format(), "meshShift", Multi::Uninitialised{});
-  m.Charge("meshShift", MeshShiftCost(a.AsOperand(), distance));
-  int64_t stride = 1;
-  for (int i = 0; i < axis; ++i) stride *= shape.extent[i];
-  const Word* edge = m.MeshEdgeMask(axis, distance);
-  const int64_t perLayer = static_cast<int64_t>(m.WordsPerLayer());
-  for (int i = 0; i < a.Width(); ++i)
-    for (int layer = 0; layer < m.Layers(); ++layer)
-      ShiftBits(a.Plane(i) + layer * perLayer, r.Plane(i) + layer * perLayer, perLayer,
-                stride * distance, edge + layer * perLayer);
-  return r;
-}
-
-std::vector<int> VirtualBlock(const Machine& m, const MeshShape& shape) {
-  const int rank = static_cast<int>(shape.extent.size());
-  const MeshShape physical = rank == 1 ? MeshShape{{m.Profile().physicalPes}} : m.Shape();
-  if (rank < 1 || rank > 3 || shape.Size() != m.ModelledPes())
-    throw UserError(fmt::format("virtual shape {}: it must have 1 to 3 extents and cover the "
-                                "machine's {} virtual PEs", shape.Name(), m.ModelledPes()));
-  if (static_cast<int>(physical.extent.size()) != rank)
-    throw UserError(fmt::format("virtual shape {} has {} axes but the physical mesh {} has {} "
-                                "(choose a machine shape of the same rank, or a 1-D shape)",
-                                shape.Name(), rank, physical.Name(), physical.extent.size()));
-  std::vector<int> block(rank);
-  for (int i = 0; i < rank; ++i) {
-    if (shape.extent[i] % physical.extent[i] != 0)
-      throw UserError(fmt::format("virtual shape {}: extent {} is not a multiple of the "
-                                  "physical mesh {}'s {} (the block mapping needs whole blocks)",
-                                  shape.Name(), shape.extent[i], physical.Name(),
-                                  physical.extent[i]));
-    block[i] = shape.extent[i] / physical.extent[i];
-  }
-  return block;
-}
-
-Multi MeshShift(const Multi& a, const MeshShape& shape, int axis, int distance) {
-  Machine& m = a.GetMachine();
-  if (m.IsBlock())
-    throw UserError("a virtual mesh shift moves data between every virtual-PE layer; a machine "
-                    "holding only a block of the layers cannot run it");
-  const std::vector<int> block = VirtualBlock(m, shape);
-  if (axis < 0 || axis >= static_cast<int>(shape.extent.size()))
-    throw UserError(fmt::format("mesh shift along axis {}: the virtual shape {} has {} axes",
-                                axis, shape.Name(), shape.extent.size()));
-  Multi r(m, a.Format(), "virtualShift", Multi::Uninitialised{});
-  m.ChargeWhole("virtualShift",
-                VirtualMeshShiftCost(a.AsOperand(), m.Layers(), block[axis], distance));
-  int64_t stride = 1;
-  for (int i = 0; i < axis; ++i) stride *= shape.extent[i];
-  const int64_t extent = shape.extent[axis];
-  const size_t words = m.WordsPerPlane();
-  std::vector<Word> edge(words, 0);  // 1 where the source coordinate is inside the shape
-  for (int64_t v = 0; v < m.VirtualPes(); ++v) {
-    const int64_t c = (v / stride) % extent - distance;
-    if (c >= 0 && c < extent) edge[v >> 6] |= Word{1} << (v & 63);
-  }
-  for (int i = 0; i < a.Width(); ++i)
-    ShiftBits(a.Plane(i), r.Plane(i), static_cast<int64_t>(words), stride * distance, edge.data());
-  return r;
 }
 
 }  // namespace zephyr::bitserial

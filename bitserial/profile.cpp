@@ -231,4 +231,17 @@ std::string MachineProfile::Table() const {
   return s;
 }
 
+double MicroOpCounts::Cycles(const MachineProfile& p) const {
+  double total = 0;
+  for (int i = 0; i < kMicroOpCount; ++i) total += n[i] * p.cost[i];
+  return total;
+}
+
+std::array<double, kCycleClassCount> MicroOpCounts::ByClass(const MachineProfile& p) const {
+  std::array<double, kCycleClassCount> r{};
+  for (int i = 0; i < kMicroOpCount; ++i)
+    r[static_cast<int>(ClassOf(static_cast<MicroOp>(i)))] += n[i] * p.cost[i];
+  return r;
+}
+
 }  // namespace zephyr::bitserial

@@ -49,6 +49,21 @@ struct MeshShape {
   std::string Name() const;  // "64x128"
 };
 
+struct MachineProfile;
+
+// Micro-op counts of a schedule (bitserial/cost.h), per layer; priced by a profile.
+struct MicroOpCounts {
+  std::array<int64_t, kMicroOpCount> n{};
+  void Add(MicroOp op, int64_t k = 1) { n[static_cast<int>(op)] += k; }
+  int64_t operator[](MicroOp op) const { return n[static_cast<int>(op)]; }
+  MicroOpCounts& operator+=(const MicroOpCounts& o) {
+    for (int i = 0; i < kMicroOpCount; ++i) n[i] += o.n[i];
+    return *this;
+  }
+  double Cycles(const MachineProfile& p) const;
+  std::array<double, kCycleClassCount> ByClass(const MachineProfile& p) const;
+};
+
 struct MachineProfile {
   std::string name;
   std::string source;           // where the numbers come from
