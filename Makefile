@@ -120,7 +120,8 @@ FUZZ_SRCS := tests/fuzz/nff_fuzz.cpp hosts/scene/nff.cpp hosts/scene/scene.cpp h
              $(addprefix hosts/simd/,options.cpp plan.cpp audit.cpp bounds.cpp ops.cpp sphere.cpp sphere_float.cpp ellipsoid.cpp polygon.cpp cone.cpp)
 FUZZ_OBJS := $(FUZZ_SRCS:%.cpp=$(BUILD)/fuzz/obj/%.o)
 FUZZ_SAN  := -fno-sanitize-recover=all
-FUZZ_RUN   = mkdir -p $(BUILD)/fuzz/corpus && $(FUZZ_BIN) -max_len=4096 -timeout=10 \
+# A crash, timeout or slow input is written under $(BUILD)/fuzz/ (never into the tree).
+FUZZ_RUN   = mkdir -p $(BUILD)/fuzz/corpus && $(FUZZ_BIN) -max_len=4096 -timeout=10 -artifact_prefix=$(BUILD)/fuzz/ \
              $(BUILD)/fuzz/corpus tests/fuzz/corpus
 $(BUILD)/fuzz/obj/%.o: %.cpp
 	$(call say,FUZZCXX,$@)
