@@ -96,6 +96,7 @@ for ((l = 0; l < lanes; ++l)); do
       git -C "$scratch/tree$l" clean -q -fd -e build ||
       { echo "mutants: cannot reset the scratch worktree $scratch/tree$l" >&2; exit 2; }
   else
+    git worktree prune  # a scratch folder deleted by hand leaves its worktree registered
     git worktree add --detach "$scratch/tree$l" HEAD >/dev/null 2>&1 ||
       { echo "mutants: cannot make a scratch worktree in $scratch" >&2; exit 2; }
   fi
