@@ -88,11 +88,11 @@ Scene GenerateRandomSpheres(const RandomSpheresOptions& o) {
     Sphere sp;
     for (int attempt = 0; attempt < 200; ++attempt) {
       sp.radius = base * rng.Uniform(0.6, 1.0);
-      sp.center = {rng.Uniform(-half + sp.radius, half - sp.radius),
+      sp.centre = {rng.Uniform(-half + sp.radius, half - sp.radius),
                    rng.Uniform(-half + sp.radius, half - sp.radius), rng.Uniform(zLo, zHi)};
       bool clear = true;
       for (const Sphere& q : placed)
-        if (Length(q.center - sp.center) < q.radius + sp.radius) { clear = false; break; }
+        if (Length(q.centre - sp.centre) < q.radius + sp.radius) { clear = false; break; }
       if (clear) break;  // after 200 tries an overlapping sphere is kept
     }
     placed.push_back(sp);

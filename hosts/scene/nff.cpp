@@ -268,7 +268,7 @@ class NffParser {
       MaterialStatement(k);
     } else if (w == "s") {
       Sphere s;
-      s.center = Triple("the sphere centre 's x y z r'");
+      s.centre = Triple("the sphere centre 's x y z r'");
       s.radius = Number("the sphere radius");
       if (!(s.radius > 0)) Fail(k, "expected a sphere radius > 0");
       AddObject(k, s);
@@ -567,7 +567,7 @@ std::string WriteNff(const Scene& s) {
       transform = o.transform;
     }
     if (auto* sp = std::get_if<Sphere>(&o.shape)) {
-      out += "s " + Nums(sp->center) + " " + Num(sp->radius) + "\n";
+      out += "s " + Nums(sp->centre) + " " + Num(sp->radius) + "\n";
     } else if (auto* cn = std::get_if<Cone>(&o.shape)) {
       out += "c\n" + Nums(cn->base) + " " + Num(cn->baseRadius) + "\n" + Nums(cn->apex) + " " +
              Num(cn->apexRadius) + "\n";

@@ -88,7 +88,7 @@ std::string ExportPov(const Scene& scene, int depth) {
   for (const Primitive& o : scene.objects) {
     std::string body;
     if (auto* s = std::get_if<Sphere>(&o.shape)) {
-      body = "sphere { " + Vec(s->center) + ", " + Num(s->radius) + "\n";
+      body = "sphere { " + Vec(s->centre) + ", " + Num(s->radius) + "\n";
     } else if (auto* cn = std::get_if<Cone>(&o.shape)) {
       if (cn->baseRadius == cn->apexRadius)
         body = "cylinder { " + Vec(cn->base) + ", " + Vec(cn->apex) + ", " + Num(cn->baseRadius) + " open\n";

@@ -46,7 +46,7 @@ double RowNorm(const Affine& a) {
 template <typename F>
 void ForEachBoundPoint(const Primitive& o, F&& f) {
   if (auto* s = std::get_if<Sphere>(&o.shape)) {
-    f(s->center, s->radius);
+    f(s->centre, s->radius);
   } else if (auto* c = std::get_if<Cone>(&o.shape)) {
     f(c->base, c->baseRadius);
     f(c->apex, c->apexRadius);

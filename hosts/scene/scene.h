@@ -51,7 +51,7 @@ struct Material {
 };
 
 struct Sphere {
-  Vec3 center;
+  Vec3 centre;  // scene units
   double radius = 1;
 };
 

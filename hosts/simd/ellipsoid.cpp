@@ -24,7 +24,7 @@ class EllipsoidProgram final : public ObjectProgram {
  public:
   EllipsoidProgram(const Primitive& p, const Vec3& eye, const PassFormats& pf)
       : pf_(pf), radius_(std::get<Sphere>(p.shape).radius), fr_(MakeObjectFrame(p, eye)) {
-    f_ = std::get<Sphere>(p.shape).center - fr_.eye;  // object space: a uni
+    f_ = std::get<Sphere>(p.shape).centre - fr_.eye;  // object space: a uni
     Bound(p, eye);
     const int F = pf.fracBits;
     for (int k = 0; k < 3; ++k) dp_[k] = Format::Signed(IntBitsFor(fr_.rowSum[k] + pf.Ulp() * 4), F);
@@ -148,7 +148,7 @@ class EllipsoidProgram final : public ObjectProgram {
     const auto [band, eDisc] =
         GrazingBand(r * r * ddMax, std::pow(r * std::sqrt(std::max(ddMin, 0.0)) / 8, 2) * pf_.BandScale(), eCross, eR2dd,
                     std::ldexp(1.0, IntBitsFor(r * std::sqrt(fr_.ddMax))), u);
-    const Vec3 centre = p.transform->ApplyPoint(std::get<Sphere>(p.shape).center);
+    const Vec3 centre = p.transform->ApplyPoint(std::get<Sphere>(p.shape).centre);
     b_.farthest = Length(centre - eye) + r * fr_.forwardNorm;
     b_.intBits = IntBitsFor(std::max(b_.farthest, (Length(f_) + r) * std::sqrt(ddMax)) + 1) + 1;
     if (!(ddMin > 0)) {
@@ -181,7 +181,7 @@ class EllipsoidProgram final : public ObjectProgram {
 ObjectExtent EllipsoidExtent(const Primitive& p, const Vec3& eye) {
   const Sphere& s = std::get<Sphere>(p.shape);
   const ObjectFrame fr = MakeObjectFrame(p, eye);
-  const Vec3 centre = p.transform->ApplyPoint(s.center);
+  const Vec3 centre = p.transform->ApplyPoint(s.centre);
   // Smallest semi-axis r·σ_min(T) >= r / ‖T⁻¹‖_F.
   return {Length(centre - eye) + s.radius * fr.forwardNorm, s.radius / InverseFrobenius(p), s.radius};
 }

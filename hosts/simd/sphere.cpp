@@ -21,7 +21,7 @@ namespace {
 class SphereProgram final : public ObjectProgram {
  public:
   SphereProgram(const Sphere& s, const Vec3& eye, const PassFormats& pf)
-      : pf_(pf), f_(s.center - eye), radius_(s.radius) {
+      : pf_(pf), f_(s.centre - eye), radius_(s.radius) {
     const int F = pf.fracBits, R = IntBitsFor(s.radius);
     clamped_ = Format::Signed(R, F), square_ = Format::Unsigned(2 * R + 2, F);
     disc_ = Format::Signed(2 * R + 2, F), root_ = Format::Unsigned(R + 1, F);
@@ -129,7 +129,7 @@ class SphereProgram final : public ObjectProgram {
 
 ObjectExtent SphereExtent(const Primitive& p, const Vec3& eye) {
   const Sphere& s = std::get<Sphere>(p.shape);
-  return {Length(s.center - eye) + s.radius, s.radius, s.radius};
+  return {Length(s.centre - eye) + s.radius, s.radius, s.radius};
 }
 
 ObjectPlan PlanSphere(const Primitive& p, const Vec3& eye, const PassFormats& pf) {

@@ -31,7 +31,7 @@ constexpr double kDoubleError = 0x1p-50;
 class FloatSphereProgram final : public ObjectProgram {
  public:
   FloatSphereProgram(const Primitive& p, const Vec3& eye, const PassFormats& pf)
-      : pf_(pf), ff_(*pf.floatFormat), f_(std::get<Sphere>(p.shape).center - eye),
+      : pf_(pf), ff_(*pf.floatFormat), f_(std::get<Sphere>(p.shape).centre - eye),
         radius_(std::get<Sphere>(p.shape).radius) {
     for (int k = 0; k < 3; ++k) fBits_[k] = FloatOfDouble(ff_, f_[k]);
     r2Bits_ = FloatOfDouble(ff_, radius_ * radius_);

@@ -112,13 +112,13 @@ std::optional<Real> ObjectHit(const Scene& scene, int index, const Vec3& origin,
   if (const Sphere* sp = std::get_if<Sphere>(&p.shape); sp && !p.transform) {
     // A clear miss in double needs no 128-bit test: the ray's closest approach to the
     // centre is farther than the radius by far more than double rounding (~1e-15 of |f|).
-    const Vec3 f = sp->center - origin;
+    const Vec3 f = sp->centre - origin;
     const double tca = Dot(f, direction) / Dot(direction, direction);
     if (Length(f - direction * tca) > sp->radius + 1e-9 * (Length(f) + sp->radius + 1)) return std::nullopt;
   }
   RealVec o = Make(origin), d = Make(direction);
   ToObject(p, o, d);
-  if (const Sphere* sp = std::get_if<Sphere>(&p.shape)) return SphereHit(Make(sp->center), Real(sp->radius), o, d, Real(tMin));
+  if (const Sphere* sp = std::get_if<Sphere>(&p.shape)) return SphereHit(Make(sp->centre), Real(sp->radius), o, d, Real(tMin));
   if (const Polygon* poly = std::get_if<Polygon>(&p.shape)) return PolygonHit(*poly, o, d, Real(tMin));
   return ConeHit(std::get<Cone>(p.shape), o, d, Real(tMin));
 }

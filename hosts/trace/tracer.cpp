@@ -193,7 +193,7 @@ Prepared<T> Prepare(const Primitive& p) {
     const double norm = LinearNormInf(*p.transform);
     Vec3 anchor;
     if (auto* s = std::get_if<Sphere>(&p.shape)) {
-      anchor = s->center;
+      anchor = s->centre;
       r.radius = T(s->radius);
       r.radius2 = T(s->radius * s->radius);
       scale = norm * s->radius;
@@ -212,10 +212,10 @@ Prepared<T> Prepare(const Primitive& p) {
     r.anchor = V(world);
     scale += MaxAbs(world);
   } else if (auto* s = std::get_if<Sphere>(&p.shape)) {
-    r.centre = V(s->center);
+    r.centre = V(s->centre);
     r.radius = T(s->radius);
     r.radius2 = T(s->radius * s->radius);
-    scale = MaxAbs(s->center) + s->radius;
+    scale = MaxAbs(s->centre) + s->radius;
   } else {
     const auto& c = std::get<Cone>(p.shape);
     const Vec3 axis = c.apex - c.base;

@@ -349,7 +349,7 @@ TEST(SceneGen, RandomSpheresAreDeterministicAndLeaveBackground) {
     mirror += m.ks >= 0.5;
     // Every sphere lies inside the central box, so the image corners are background.
     const auto& s = std::get<Sphere>(p.shape);
-    EXPECT_LE(std::abs(s.center.x) + s.radius, 2.2 + 1e-12);
+    EXPECT_LE(std::abs(s.centre.x) + s.radius, 2.2 + 1e-12);
   }
   EXPECT_GT(glass, 0);
   EXPECT_GT(mirror, 0);
@@ -368,8 +368,8 @@ TEST(SceneGen, SphereflakeHasNinePowerCounts) {
   for (size_t i = 2; i < s.objects.size(); ++i) {
     const Sphere& c = std::get<Sphere>(s.objects[i].shape);
     EXPECT_NEAR(c.radius, parent.radius / 3, 1e-15) << i;
-    EXPECT_NEAR(Length(c.center - parent.center), parent.radius + c.radius, 1e-12) << i;
-    const double elevation = std::asin((c.center.z - parent.center.z) / (parent.radius + c.radius));
+    EXPECT_NEAR(Length(c.centre - parent.centre), parent.radius + c.radius, 1e-12) << i;
+    const double elevation = std::asin((c.centre.z - parent.centre.z) / (parent.radius + c.radius));
     if (std::abs(elevation) < 1e-12) continue;
     EXPECT_NEAR(elevation * 180 / M_PI, 54.7356103172, 1e-6) << i;
     ++above;

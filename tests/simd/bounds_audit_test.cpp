@@ -87,7 +87,7 @@ ExactValues SphereExact(const Scene& scene, const Vec3& d,
   RVec f;
   Real tca, disc;
   if (!p.transform) {
-    f = R(s.center) - R(scene.camera.from);
+    f = R(s.centre) - R(scene.camera.from);
     tca = Dot(f, dd);
     const RVec c = Cross(f, dd);
     disc = r * r - Dot(c, c);
@@ -98,7 +98,7 @@ ExactValues SphereExact(const Scene& scene, const Vec3& d,
     if (abs(c.x) < range && abs(c.y) < range && abs(c.z) < range) x["disc"] = disc;
   } else {
     const ExactFrame fr = FrameOf(p, scene.camera.from);
-    f = R(s.center) - fr.eye;
+    f = R(s.centre) - fr.eye;
     const RVec dp = fr.Apply(dd);
     x["d'x"] = dp.x, x["d'y"] = dp.y, x["d'z"] = dp.z;
     tca = Dot(f, dp);
@@ -564,12 +564,12 @@ std::vector<Vec3> AuditDirections(const Case& c, const PrimaryPlan& plan, double
     const Affine inv = p.transform ? p.transform->Inverse() : Affine{};
     const Vec3 eyeObj = inv.ApplyPoint(eye);
     const auto disc = [&](const Vec3& d) {
-      const Vec3 dp = inv.ApplyVector(d), f = s->center - eyeObj, cr = Cross(f, dp);
+      const Vec3 dp = inv.ApplyVector(d), f = s->centre - eyeObj, cr = Cross(f, dp);
       return s->radius * s->radius * Dot(dp, dp) - Dot(cr, cr);
     };
     const auto point = [&](std::mt19937_64& rng) {
       const Vec3 dir = AtAngle({0, 0, 1}, std::acos(1 - 2 * u(rng)), 2 * M_PI * u(rng));
-      const Vec3 obj = s->center + dir * (s->radius * (0.2 + u(rng)));
+      const Vec3 obj = s->centre + dir * (s->radius * (0.2 + u(rng)));
       return p.transform ? p.transform->ApplyPoint(obj) : obj;
     };
     return QuadricDirections(c.scene, point, disc, g, kRays, Fd, seed);

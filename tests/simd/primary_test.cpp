@@ -126,7 +126,7 @@ TEST(SimdPrimary, PlannerFollowsTheSceneAndTheOverrides) {
   // Smaller spheres need more fraction bits; a farther scene more integer bits.
   Scene small = scene, far = scene;
   for (Primitive& p : small.objects) std::get<Sphere>(p.shape).radius /= 16;
-  for (Primitive& p : far.objects) std::get<Sphere>(p.shape).center = std::get<Sphere>(p.shape).center * 64.0;
+  for (Primitive& p : far.objects) std::get<Sphere>(p.shape).centre = std::get<Sphere>(p.shape).centre * 64.0;
   far.camera.from = far.camera.from * 64.0;
   EXPECT_EQ(PlanPrimaryPass(small, {}).fracBits, base.fracBits + 4);
   EXPECT_GE(PlanPrimaryPass(far, {}).distIntBits, base.distIntBits + 5);
@@ -170,9 +170,9 @@ TEST(SimdPrimary, UncertainPixelsAreFlaggedAndRecomputed) {
   const auto tracer = Tracer::Create(graze, TraceOptions{});
   const PrimaryRay centre = tracer->Rays().At(16, 16), side = tracer->Rays().At(16, 10);
   Sphere& s = std::get<Sphere>(graze.objects[0].shape);
-  s.center = centre.origin + centre.direction * 10.0;
+  s.centre = centre.origin + centre.direction * 10.0;
   // radius = distance from the centre to the ray through pixel (16, 10)
-  const Vec3 f = s.center - side.origin;
+  const Vec3 f = s.centre - side.origin;
   s.radius = Length(f - side.direction * Dot(f, side.direction));
   const PrimaryPass g = RunPrimaryPass(graze, keep);
   EXPECT_TRUE(g.matrix.flags[10 * 33 + 16] & kGrazing);

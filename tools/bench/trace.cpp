@@ -27,7 +27,7 @@ SphereArrays<T> Pack(const Scene& s) {
   SphereArrays<T> a;
   for (const Primitive& p : s.objects) {
     const auto& sp = std::get<Sphere>(p.shape);
-    a.Push(Vec3T<T>(sp.center), T(sp.radius * sp.radius));
+    a.Push(Vec3T<T>(sp.centre), T(sp.radius * sp.radius));
   }
   return a;
 }
@@ -113,9 +113,9 @@ void Run(int count, int size) {
                                                         4 * sizeof(float), size_t(count)));
   for (int i = 0; i < count; ++i) {
     const auto& sp = std::get<Sphere>(scene.objects[i].shape);
-    v[4 * i] = float(sp.center.x);
-    v[4 * i + 1] = float(sp.center.y);
-    v[4 * i + 2] = float(sp.center.z);
+    v[4 * i] = float(sp.centre.x);
+    v[4 * i + 1] = float(sp.centre.y);
+    v[4 * i + 2] = float(sp.centre.z);
     v[4 * i + 3] = float(sp.radius);
   }
   rtcCommitGeometry(g);
