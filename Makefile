@@ -30,7 +30,9 @@ OPT     ?= -O2
 DEPCFLAGS = $(shell pkg-config --cflags libhwy libpng ompi-c fmt 2>/dev/null)
 DEPLIBS   = $(shell pkg-config --libs libhwy libpng ompi-c fmt 2>/dev/null)
 CXXFLAGS ?= $(OPT) -g
-ALL_CXXFLAGS = -std=c++20 -Wall -Wextra -Wno-unused-parameter -I. $(DEPCFLAGS) $(CXXFLAGS)
+# The flags every build of the engine shares (the ordinary one and zephyr-smpi's).
+COMMON_CXXFLAGS = -std=c++20 -Wall -Wextra -Wno-unused-parameter -I.
+ALL_CXXFLAGS = $(COMMON_CXXFLAGS) $(DEPCFLAGS) $(CXXFLAGS)
 LDLIBS_ALL   = $(DEPLIBS) -fopenmp -lpthread
 # OpenMP (GCC's libgomp) in the files that use it: layer blocks and the host recompute run
 # on every core (bitserial/blocks.h). Other files are compiled without it.
@@ -209,7 +211,7 @@ SMPI_CC    := $(if $(shell command -v ccache 2>/dev/null),ccache )$(SMPICXX)
 SMPI_BUILD := $(BUILD)/smpi
 SMPI_OPT   ?= $(OPT)
 ZEPHYR_SMPI_BIN := $(BIN)/zephyr-smpi
-SMPI_CXXFLAGS = -std=c++20 -Wall -Wextra -Wno-unused-parameter -I. \
+SMPI_CXXFLAGS = $(COMMON_CXXFLAGS) \
   $(shell pkg-config --cflags libhwy libpng fmt 2>/dev/null) $(SMPI_OPT) \
   -DZEPHYR_SMPI -DSMPI_NO_OVERRIDE_MALLOC -include hosts/testbed/smpi_prelude.h
 SMPI_LIBS = $(shell pkg-config --libs libhwy libpng fmt 2>/dev/null) -fopenmp -lpthread
