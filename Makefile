@@ -31,7 +31,7 @@ DEPCFLAGS = $(shell pkg-config --cflags libhwy libpng ompi-c fmt 2>/dev/null)
 DEPLIBS   = $(shell pkg-config --libs libhwy libpng ompi-c fmt 2>/dev/null)
 CXXFLAGS ?= $(OPT) -g
 # The flags every build of the engine shares (the ordinary one and zephyr-smpi's).
-COMMON_CXXFLAGS = -std=c++20 -Wall -Wextra -Wno-unused-parameter -I.
+COMMON_CXXFLAGS = -std=c++20 -Wall -Wextra -I.
 ALL_CXXFLAGS = $(COMMON_CXXFLAGS) $(DEPCFLAGS) $(CXXFLAGS)
 LDLIBS_ALL   = $(DEPLIBS) -fopenmp -lpthread
 # OpenMP (GCC's libgomp) in the files that use it: layer blocks and the host recompute run

@@ -322,7 +322,7 @@ class NffParser {
   // the colour, Kd, Ks and T are fractions of light in [0, 1] (the NFF description: "usually
   // 0 <= Kd <= 1 and 0 <= Ks <= 1"; T above 1 would amplify the light through a surface);
   // Shine is an exponent >= 0; ior > 0, or 0 (SPD's value for opaque materials) when T = 0.
-  void MaterialStatement(const Token& k) {
+  void MaterialStatement(const Token& /*keyword: each value reports at its own token*/) {
     seenMaterial_ = true;  // even if malformed: do not also blame every following object
     Material m;
     constexpr double kInf = std::numeric_limits<double>::infinity();
