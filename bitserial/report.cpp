@@ -93,7 +93,6 @@ double CycleReport::LayerCycles() const { return Single().LayerCycles(); }
 // Every sum below is taken run by run in order (so a one-run report's figure is exactly that
 // run's, and a sum's is the sum of its runs' reports as each prints them).
 double CycleReport::TotalCycles() const {
-  if (runs_.size() == 1) return runs_[0].TotalCycles();
   double t = 0;
   for (const ProgramRun& r : runs_) t += r.TotalCycles();
   return t;

@@ -5,11 +5,16 @@ namespace zephyr {
 
 namespace {
 
+// One array pass's memory per virtual PE: peak and capacity, bits.
+nlohmann::json MemoryJson(const simd::ArrayPassReport& pass) {
+  return {{"internal", {{"peakBitsPerPe", pass.internalPeakBits}, {"capacityBitsPerPe", pass.internalCapacityBits}}},
+          {"external", {{"peakBitsPerPe", pass.externalPeakBits}, {"capacityBitsPerPe", pass.externalCapacityBits}}}};
+}
+
 // One array pass's cycles: its cycle report, its memory per virtual PE, its timing.
 nlohmann::json PassJson(const simd::ArrayPassReport& pass) {
   nlohmann::json j = pass.cycles.Json();
-  j["memory"] = {{"internal", {{"peakBitsPerPe", pass.internalPeakBits}, {"capacityBitsPerPe", pass.internalCapacityBits}}},
-                 {"external", {{"peakBitsPerPe", pass.externalPeakBits}, {"capacityBitsPerPe", pass.externalCapacityBits}}}};
+  j["memory"] = MemoryJson(pass);
   j["hostSeconds"] = pass.hostSeconds;
   j["realTimeFactor"] = pass.cycles.ModelledSeconds() / pass.hostSeconds;
   return j;
@@ -20,7 +25,7 @@ nlohmann::json PassJson(const simd::ArrayPassReport& pass) {
 nlohmann::json ArrayRunJson(const simd::ArrayRunReport& run) {
   if (run.passes.size() == 1) return PassJson(run.passes[0]);
   nlohmann::json total = run.cycles.Json();
-  total["memory"] = PassJson(run.passes.at(0))["memory"];  // the first pass: the largest
+  total["memory"] = MemoryJson(run.passes.at(0));  // the first pass: the largest
   total["passes"] = nlohmann::json::array();
   for (size_t k = 0; k < run.passes.size(); ++k) {
     const simd::ArrayPassReport& p = run.passes[k];

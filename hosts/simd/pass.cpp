@@ -11,7 +11,6 @@
 #include <cmath>
 
 #include "bitserial/blocks.h"
-#include "bitserial/multi.h"
 #include "fixed/check.h"
 #include "hosts/simd/direction.h"
 #include "hosts/simd/program.h"
@@ -19,10 +18,7 @@
 namespace zephyr::simd {
 
 using bitserial::Machine;
-using bitserial::Multi;
 using bitserial::Space;
-using fixed::Fixed;
-using fixed::Format;
 
 namespace {
 
