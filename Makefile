@@ -36,7 +36,7 @@ ALL_CXXFLAGS = $(COMMON_CXXFLAGS) $(DEPCFLAGS) $(CXXFLAGS)
 LDLIBS_ALL   = $(DEPLIBS) -fopenmp -lpthread
 # OpenMP (GCC's libgomp) in the files that use it: layer blocks and the host recompute run
 # on every core (bitserial/blocks.h). Other files are compiled without it.
-OPENMP_SRCS := bitserial/blocks.cpp hosts/simd/pass.cpp
+OPENMP_SRCS := $(shell grep -rl --include='*.cpp' '^ *\#pragma omp' $(or $(ROOMS),fixed bitserial hosts))
 $(OPENMP_SRCS:%.cpp=$(BUILD)/obj/%.o): ALL_CXXFLAGS += -fopenmp
 
 # Every .cpp in the library rooms is part of the engine; mains live apart.
@@ -112,14 +112,15 @@ charts: setup ## Run the experiment sweeps and draw the charts under docs/result
 FUZZ_CXX  ?= $(if $(filter ccache,$(firstword $(CXX))),ccache )clang++-14
 FUZZ_RUNS ?= 1000000
 FUZZ_BIN  := $(BUILD)/fuzz/nff_fuzz
-# The reader, the host tracer and the SIMD planner (with the arithmetic and array it
-# plans for); not the pass itself, which runs the array and is far too slow per input,
-# nor the OpenMP layer blocks (bitserial/blocks.cpp) the planner never calls.
+# The reader, the host tracer and the SIMD planner (with the arithmetic, the array and the
+# program it measures on one virtual PE); not the pass itself, which runs the program on
+# every pixel and is far too slow per input, nor the OpenMP layer blocks (bitserial/blocks.cpp)
+# the planner never calls.
 FUZZ_SRCS := tests/fuzz/nff_fuzz.cpp hosts/scene/nff.cpp hosts/scene/scene.cpp hosts/io/output_file.cpp hosts/io/test_seam.cpp \
              hosts/scene/geometry.cpp hosts/trace/tracer.cpp hosts/trace/sphere_kernels.cpp \
              $(filter-out $(OPENMP_SRCS),$(wildcard fixed/*.cpp bitserial/*.cpp)) \
              hosts/trace/exact.cpp \
-             $(addprefix hosts/simd/,options.cpp plan.cpp audit.cpp bounds.cpp ops.cpp sphere.cpp sphere_float.cpp ellipsoid.cpp polygon.cpp cone.cpp)
+             $(addprefix hosts/simd/,options.cpp plan.cpp program.cpp audit.cpp bounds.cpp ops.cpp sphere.cpp sphere_float.cpp ellipsoid.cpp polygon.cpp cone.cpp)
 FUZZ_OBJS := $(FUZZ_SRCS:%.cpp=$(BUILD)/fuzz/obj/%.o)
 FUZZ_SAN  := -fno-sanitize-recover=all
 # A crash, timeout or slow input is written under $(BUILD)/fuzz/ (never into the tree).
@@ -215,10 +216,12 @@ SMPI_CXXFLAGS = $(COMMON_CXXFLAGS) \
   $(shell pkg-config --cflags libhwy libpng fmt 2>/dev/null) $(SMPI_OPT) \
   -DZEPHYR_SMPI -DSMPI_NO_OVERRIDE_MALLOC -include hosts/testbed/smpi_prelude.h
 SMPI_LIBS = $(shell pkg-config --libs libhwy libpng fmt 2>/dev/null) -fopenmp -lpthread
-# zephyr-smpi is for `render` (and `testbed`): the other commands stay out of it.
-SMPI_SRCS := $(filter-out hosts/cmd/accuracy.cpp hosts/cmd/cycles.cpp hosts/cmd/stability.cpp \
-               hosts/cmd/mpi_check.cpp hosts/cmd/gen.cpp hosts/cmd/export_pov.cpp \
-               hosts/cmd/plan.cpp hosts/scene/gen.cpp hosts/scene/pov.cpp,$(LIB_SRCS))
+# zephyr-smpi is for `render` (and `testbed`): the other commands (every hosts/cmd file that
+# registers one) stay out of it, with the studies and generators only they use.
+SMPI_COMMANDS := hosts/cmd/render.cpp hosts/cmd/testbed.cpp
+SMPI_SRCS := $(filter-out $(filter-out $(SMPI_COMMANDS),$(shell grep -l '^CommandRegistration [a-zA-Z]' hosts/cmd/*.cpp)) \
+               hosts/scene/gen.cpp hosts/scene/pov.cpp hosts/trace/stability.cpp hosts/methods/accuracy.cpp \
+               hosts/farm/test_pattern.cpp,$(LIB_SRCS))
 SMPI_OBJS := $(SMPI_SRCS:%.cpp=$(SMPI_BUILD)/obj/%.o) $(SMPI_BUILD)/obj/hosts/cmd/main.o
 # The layer blocks use OpenMP here too (as in the ordinary build).
 $(OPENMP_SRCS:%.cpp=$(SMPI_BUILD)/obj/%.o): SMPI_CXXFLAGS += -fopenmp

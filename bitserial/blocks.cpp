@@ -19,7 +19,7 @@ int HardwareThreads() { return std::max(1, omp_get_num_procs()); }
 
 int CheckThreads(int threads) {
   if (threads < 1 || threads > kMaxThreads)
-    throw UserError(fmt::format("--threads: expected 1 to {} threads, got {}", kMaxThreads, threads));
+    throw UserError(fmt::format("host threads must be 1..{}, got {}", kMaxThreads, threads));
   return threads;
 }
 

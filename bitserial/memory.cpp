@@ -21,6 +21,10 @@ PeMemory::PeMemory(int64_t internalBitsPerPe, int64_t externalBitsPerPe, int lay
 int64_t PeMemory::Capacity(Space s) const { return capacity_[static_cast<int>(s)]; }
 int64_t PeMemory::Used(Space s) const { return used_[static_cast<int>(s)]; }
 int64_t PeMemory::PeakUsed(Space s) const { return peak_[static_cast<int>(s)]; }
+void PeMemory::ResetPeak() {
+  peak_[0] = used_[0];
+  peak_[1] = used_[1];
+}
 
 std::optional<int64_t> PeMemory::FirstFit(Space s, int64_t bits) const {
   int64_t next = 0;

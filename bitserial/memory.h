@@ -42,6 +42,9 @@ class PeMemory {
   int64_t Capacity(Space s) const;  // bits per virtual PE
   int64_t Used(Space s) const;
   int64_t PeakUsed(Space s) const;
+  // Starts the peaks again from the bits live now, so that PeakUsed() measures one part of a
+  // program alone (the planner's per-object temporaries, hosts/simd/program.h).
+  void ResetPeak();
   int Layers() const { return layers_; }
   const std::vector<Allocation>& Live() const { return live_; }
   // The printable memory map: one line per live variable, in address order.

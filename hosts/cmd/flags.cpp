@@ -49,6 +49,10 @@ T ParseWhole(const std::string& flag, const std::string& text, T lo, T hi, const
 
 }  // namespace
 
+void RefuseFlag(const std::string& flag, const std::string& expected, const std::string& text) {
+  Refuse(flag, expected, text);
+}
+
 int64_t ParseIntegerFlag(const std::string& flag, const std::string& text, int64_t lo, int64_t hi,
                          const std::string& why) {
   return ParseWhole<int64_t>(flag, text, lo, hi, why);

@@ -15,6 +15,8 @@
 #include <string>
 #include <type_traits>
 
+#include "fixed/named.h"
+
 namespace CLI {
 class App;
 class Option;
@@ -52,6 +54,24 @@ CLI::Option* AddInteger(CLI::App& app, const std::string& name, T& value, T lo, 
   const bool inRange = value >= lo && value <= hi;
   return AddParsedOption(app, name, set, "INT " + std::to_string(lo) + ".." + std::to_string(hi),
                          inRange ? std::to_string(value) : "", help);
+}
+
+// Refuses a flag's text: CLI::ValidationError, printed as "FLAG: expected EXPECTED, got 'TEXT'"
+// (the text shown as printable ASCII, at most 40 bytes).
+[[noreturn]] void RefuseFlag(const std::string& flag, const std::string& expected, const std::string& text);
+
+// A flag whose value is one of a table's names (fixed/named.h): any other text is refused as
+// the command line is parsed ("--precision: expected float or double, got 'x'"); --help
+// shows the names and the default (the value at the time of the call).
+template <class E, size_t N>
+CLI::Option* AddNamed(CLI::App& app, const std::string& name, E& value, const NamedValues<E, N>& names,
+                      const std::string& help) {
+  auto set = [&value, name, &names](const std::string& text) {
+    const std::optional<E> v = names.Find(text);
+    if (!v) RefuseFlag(name, names.List(), text);
+    value = *v;
+  };
+  return AddParsedOption(app, name, set, "NAME", names.NameOf(value), help);
 }
 
 // No upper end, for AddNumber's `hi`.

@@ -48,8 +48,6 @@ CommandRegistration reg("render", [](CLI::App& program) {
   auto* cmd = program.add_subcommand("render", "Ray-trace a scene with one of the methods");
   auto o = std::make_shared<RenderOptions>();
   auto positional = std::make_shared<std::string>();
-  auto precision = std::make_shared<std::string>("double");
-  auto sphereTest = std::make_shared<std::string>("hb");
   auto noProgress = std::make_shared<bool>(false);
   std::string methods;
   for (const auto& name : RenderMethodNames()) methods += (methods.empty() ? "" : ", ") + name;
@@ -61,9 +59,9 @@ CommandRegistration reg("render", [](CLI::App& program) {
       cmd->add_option("--report", o->report, "JSON report: time per phase, rays, tests"),
       cmd->add_option("--dump-primary", o->dumpPrimary, "CSV of primary hits: x,y,dx,dy,dz,object,t,flags")};
   AddInteger(*cmd, "--depth", o->trace.depth, 1, kMaxDepth, "Ray-tree depth limit (1 = primary rays only)");
-  cmd->add_option("--precision", *precision, "Host tracer scalar: float or double")->capture_default_str();
-  cmd->add_option("--sphere-test", *sphereTest, "Sphere test form: hb (Hearn-Baker) or naive")
-      ->capture_default_str();
+  AddNamed(*cmd, "--precision", o->trace.precision, kPrecisionNames, "Host tracer scalar: float or double");
+  AddNamed(*cmd, "--sphere-test", o->trace.sphereTest, kSphereTestNames,
+           "Sphere test form: hb (Hearn-Baker) or naive");
   cmd->add_flag("--no-progress", *noProgress, "No progress bar even on a terminal");
   auto simdFlags = std::make_shared<SimdFlags>();
   simdFlags->AddTo(*cmd, "simd: ");
@@ -78,7 +76,7 @@ CommandRegistration reg("render", [](CLI::App& program) {
   cmd->add_option("--testbed", o->testbed,
                   "Model the paper's 1992 system (ufmg1992): the report's \"testbed\" gives "
                   "modelled seconds (dist/hetero: under smpirun, docs/testbed.md)");
-  cmd->callback([o, positional, precision, sphereTest, noProgress, simdFlags, outputs, farmFlags] {
+  cmd->callback([o, positional, noProgress, simdFlags, outputs, farmFlags] {
     RenderOptions options = *o;
     for (CLI::Option* flag : outputs)  // `--out ''` is a mistake, not "no output"
       if (flag->count() > 0 && flag->as<std::string>().empty())
@@ -89,8 +87,6 @@ CommandRegistration reg("render", [](CLI::App& program) {
       options.scenePath = *positional;
     }
     if (options.scenePath.empty()) throw UserError("render: no scene (use --scene FILE)");
-    options.trace.precision = ParsePrecision(*precision);
-    options.trace.sphereTest = ParseSphereTest(*sphereTest);
     options.progress = !*noProgress && StderrIsTerminal();
     options.simd = simdFlags->Options();  // its value errors first
     // A flag the method would ignore is a mistake (as in `accuracy`), refused before any work

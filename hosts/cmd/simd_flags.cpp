@@ -24,18 +24,19 @@ void SimdFlags::AddTo(CLI::App& command, const std::string& helpPrefix, bool wit
        "fraction bits of the directions only");
   bits("--int-bits", options_.formats.intBits, simd::kMinIntBits, simd::kMaxIntBits,
        "integer bits of distances");
-  added_.push_back(command.add_option(
-      "--number", number_,
-      helpPrefix + "number system of the ray-object intersections on the array: fixed (default) or float "
+  added_.push_back(AddNamed(
+      command, "--number", options_.number, simd::kNumberSystemNames,
+      helpPrefix + "number system of the ray-object intersections on the array: fixed or float "
                    "(bit-serial floating point; spheres only, docs/simd.md)"));
   added_.push_back(command.add_option(
       "--float-format", floatFormat_,
       helpPrefix + "with --number float: the format, eXmY[ftz] as in docs/float.md (e8m23 = binary32; "
                    "default: planned per scene)"));
+  options_.uncertain = simd::UncertainPolicy::kAuto;  // the command line's default (docs/simd.md)
   if (withUncertain)
-    added_.push_back(command.add_option(
-        "--uncertain", uncertain_,
-        helpPrefix + "uncertain pixels: auto (default: refine where the first pass flags more than 1 % of "
+    added_.push_back(AddNamed(
+        command, "--uncertain", options_.uncertain, simd::kUncertainPolicyNames,
+        helpPrefix + "uncertain pixels: auto (refine where the first pass flags more than 1 % of "
                      "the pixels, else recompute), recompute (in double on the host), refine (a second, wider "
                      "array pass on them first), keep, fail"));
   added_.push_back(command.add_option("--machine", options_.profile,
@@ -50,14 +51,13 @@ void SimdFlags::AddTo(CLI::App& command, const std::string& helpPrefix, bool wit
 
 simd::SimdOptions SimdFlags::Options() const {
   simd::SimdOptions o = options_;
-  // The widths and --threads were range-checked as the command line was parsed (flags.h).
-  if (!number_.empty()) o.number = simd::ParseNumberSystem(number_);
+  // The widths, --threads, --number and --uncertain were checked as the command line was
+  // parsed (flags.h).
   if (!floatFormat_.empty()) {
     if (o.number != simd::NumberSystem::kFloat)
       throw UserError("--float-format " + floatFormat_ + " applies to --number float only");
     o.floatFormat = fixed::FloatFormat::Parse(floatFormat_);
   }
-  o.uncertain = simd::ParseUncertainPolicy(uncertain_.empty() ? "auto" : uncertain_);
   if (o.threads != 0) bitserial::CheckThreads(o.threads);  // 0: not given, every core
   simd::MachineProfileOf(o);  // an unknown --machine before any work (UserError naming the known ones)
   return o;

@@ -26,17 +26,17 @@ class SimdFlags {
   // as its flags serve several methods). --uncertain only when `withUncertain` (`plan`
   // prints formats and has no pixels to be uncertain about).
   void AddTo(CLI::App& command, const std::string& helpPrefix, bool withUncertain = true);
-  // The options the flags give (the defaults where none was given). UserError for an
-  // unknown --uncertain policy, --number or --machine, a bad --float-format or one without
-  // --number float. The widths (simd::kMinFracBits..kMaxFracBits, ...) and --threads
-  // (0..bitserial::kMaxThreads) are checked as the command line is parsed (flags.h).
+  // The options the flags give (the defaults where none was given; --uncertain auto).
+  // UserError for an unknown --machine, a bad --float-format or one without --number float.
+  // The widths (simd::kMinFracBits..kMaxFracBits, ...), --threads (0..bitserial::kMaxThreads),
+  // --number and --uncertain are checked as the command line is parsed (flags.h).
   simd::SimdOptions Options() const;
   // The names of the flags given on the command line ("--frac-bits", ...).
   std::vector<std::string> Given() const;
 
  private:
   simd::SimdOptions options_;
-  std::string uncertain_, number_, floatFormat_;
+  std::string floatFormat_;
   std::vector<CLI::Option*> added_;
 };
 

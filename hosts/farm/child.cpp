@@ -122,7 +122,7 @@ void ServeFrames(const FrameWorkFactory& factory, const std::optional<TestFault>
 MpiSession& farm::StartFarm(const std::string& method) {
   MpiSession& mpi = MpiSession::Get();
   if (mpi.Size() < 2)
-    throw UserError("--method " + method +
+    throw UserError("method '" + method + "'" +
                     " needs at least 2 MPI ranks (a parent and one "
                     "child) but runs on " +
                     std::to_string(mpi.Size()) +

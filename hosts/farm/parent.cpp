@@ -108,7 +108,7 @@ class Parent {
 
 void Parent::OpenCheckpoint() {
   if (options_.checkpointPath.empty()) {
-    if (options_.resume) throw UserError("--resume needs an output file (its checkpoint)");
+    if (options_.resume) throw UserError("resuming a farm needs an output file (its checkpoint)");
     return;
   }
   CheckpointKey key{job_.imageWidth, job_.imageHeight, job_.frameSize,

@@ -23,8 +23,8 @@ std::string SetupText(const std::string& method, const Scene& scene, const Trace
   nlohmann::json j = {{"method", method},
                       {"scene", WriteNff(scene)},
                       {"depth", trace.depth},
-                      {"precision", PrecisionName(trace.precision)},
-                      {"sphereTest", SphereTestName(trace.sphereTest)}};
+                      {"precision", kPrecisionNames.NameOf(trace.precision)},
+                      {"sphereTest", kSphereTestNames.NameOf(trace.sphereTest)}};
   j.update(more);
   return j.dump();
 }
@@ -39,8 +39,8 @@ ChildSetup ReadSetup(const std::string& text, const std::string& method) {
                       method + "'");
     s.scene = ParseNffOrThrow(s.json.at("scene").get<std::string>(), "<scene from the parent>");
     s.trace.depth = s.json.at("depth").get<int>();
-    s.trace.precision = ParsePrecision(s.json.at("precision").get<std::string>());
-    s.trace.sphereTest = ParseSphereTest(s.json.at("sphereTest").get<std::string>());
+    s.trace.precision = kPrecisionNames.Parse(s.json.at("precision").get<std::string>(), "the set-up's precision");
+    s.trace.sphereTest = kSphereTestNames.Parse(s.json.at("sphereTest").get<std::string>(), "the set-up's sphere test");
   } catch (const nlohmann::json::exception& e) {
     throw UserError(std::string("malformed set-up message: ") + e.what());
   }

@@ -71,8 +71,8 @@ nlohmann::json RenderReportJson(const RenderOutput& out) {
   r["scene"] = {{"path", out.scene.path}, {"objects", out.scene.objects}, {"lights", out.scene.lights},
                 {"width", out.scene.width}, {"height", out.scene.height}};
   r["options"] = {{"depth", out.trace.depth},
-                  {"precision", PrecisionName(out.trace.precision)},
-                  {"sphereTest", SphereTestName(out.trace.sphereTest)}};
+                  {"precision", kPrecisionNames.NameOf(out.trace.precision)},
+                  {"sphereTest", kSphereTestNames.NameOf(out.trace.sphereTest)}};
   r["phases"] = out.phases;
   if (out.hostWork) r.update(out.hostWork->ToJson());  // the counters at the top level
   if (out.simd) r["simd"] = PrimaryPassJson(*out.simd);

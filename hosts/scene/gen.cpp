@@ -73,7 +73,7 @@ void Flake(Scene& s, int material, const Vec3& centre, double radius, const Vec3
 
 Scene GenerateRandomSpheres(const RandomSpheresOptions& o) {
   if (o.count < 1 || o.count > kMaxRandomSpheres)
-    throw UserError("gen spheres: --count must be 1.." + std::to_string(kMaxRandomSpheres));
+    throw UserError("random spheres: the count must be 1.." + std::to_string(kMaxRandomSpheres) + ", got " + std::to_string(o.count));
   Scene s;
   s.source = "gen spheres --count " + std::to_string(o.count) + " --seed " + std::to_string(o.seed);
   s.camera = Camera{{0, 0, 12}, {0, 0, 0}, {0, 1, 0}, 30, 0.001, o.width, o.height};
@@ -112,7 +112,7 @@ Scene GenerateRandomSpheres(const RandomSpheresOptions& o) {
 }
 
 Scene GenerateSphereflake(int depth, int width, int height) {
-  if (depth < 0 || depth > kMaxFlakeDepth) throw UserError("gen flake: --depth must be 0..6 (depth 6 is 597,871 spheres)");
+  if (depth < 0 || depth > kMaxFlakeDepth) throw UserError("sphereflake: the depth must be 0..6 (depth 6 is 597,871 spheres), got " + std::to_string(depth));
   Scene s;
   s.source = "gen flake --depth " + std::to_string(depth);
   // SPD `balls`: view, lights, floor and materials.

@@ -183,7 +183,7 @@ ObjectExtent EllipsoidExtent(const Primitive& p, const Vec3& eye) {
   const ObjectFrame fr = MakeObjectFrame(p, eye);
   const Vec3 centre = p.transform->ApplyPoint(s.centre);
   // Smallest semi-axis r·σ_min(T) >= r / ‖T⁻¹‖_F.
-  return {Length(centre - eye) + s.radius * fr.forwardNorm, s.radius / InverseFrobenius(p), s.radius};
+  return {Length(centre - eye) + s.radius * fr.forwardNorm, s.radius / InverseFrobenius(p)};
 }
 
 ObjectPlan PlanEllipsoid(const Primitive& p, const Vec3& eye, const PassFormats& pf) {

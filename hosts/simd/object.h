@@ -64,11 +64,10 @@ ObjectPlan PlanOf(Args&&... args) {
 }
 
 // What the planner needs of an object before it chooses the formats: its farthest point from
-// the eye, its smallest feature (a sphere's radius, an ellipsoid's smallest semi-axis, a
-// polygon's shortest edge / 2, a cone's smaller of radius and height / 2) and, for spheres
-// and ellipsoids, the object-space radius (else 0).
+// the eye and its smallest feature (a sphere's radius, an ellipsoid's smallest semi-axis, a
+// polygon's shortest edge / 2, a cone's smaller of radius and height / 2); scene units.
 struct ObjectExtent {
-  double farthest = 0, feature = 1e300, radius = 0;
+  double farthest = 0, feature = 1e300;
 };
 
 // Per kind (hosts/simd/<kind>.cpp): the extent, and the plan at the pass's formats.

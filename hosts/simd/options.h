@@ -10,6 +10,7 @@
 
 #include "bitserial/profile.h"
 #include "fixed/float.h"
+#include "fixed/named.h"
 
 namespace zephyr::simd {
 
@@ -20,9 +21,12 @@ namespace zephyr::simd {
 // default, docs/simd.md "Refine pass": the refine pass costs ~a fifth of the first pass's
 // cycles whatever it refines, and below that share recompute already meets the 1 % budget).
 enum class UncertainPolicy { kRecompute, kKeep, kFail, kRefine, kAuto };
-UncertainPolicy ParseUncertainPolicy(const std::string& name);  // recompute|refine|keep|fail|auto
+inline constexpr NamedValues<UncertainPolicy, 5> kUncertainPolicyNames{{{{UncertainPolicy::kAuto, "auto"},
+                                                                        {UncertainPolicy::kRecompute, "recompute"},
+                                                                        {UncertainPolicy::kRefine, "refine"},
+                                                                        {UncertainPolicy::kKeep, "keep"},
+                                                                        {UncertainPolicy::kFail, "fail"}}}};
 constexpr double kAutoRefineShare = 0.01;  // the host's budget of pixels (docs/simd.md, "Refine pass")
-const char* UncertainPolicyName(UncertainPolicy p);
 
 // The narrowest widths a user may ask for (--frac-bits, --dir-frac-bits, --int-bits): the
 // narrowest at which the pass's error bounds are tested (docs/simd.md, "Error bounds":
@@ -49,8 +53,8 @@ struct FormatOverrides {
 // floating point (bitserial/float.h) in one format for the whole pass (docs/simd.md,
 // "Floating point on the array"). The matrix and the closest-hit fold stay fixed point.
 enum class NumberSystem { kFixed, kFloat };
-NumberSystem ParseNumberSystem(const std::string& name);  // fixed|float; UserError otherwise
-const char* NumberSystemName(NumberSystem n);
+inline constexpr NamedValues<NumberSystem, 2> kNumberSystemNames{{{{NumberSystem::kFixed, "fixed"},
+                                                                  {NumberSystem::kFloat, "float"}}}};
 
 struct SimdOptions {
   std::string profile = "wavetracer";

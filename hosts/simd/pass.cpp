@@ -107,7 +107,7 @@ void HandleUncertain(PrimaryPass& pass, const Scene& scene, const PrimaryRays& r
   const auto isUncertain = [](uint32_t f) { return (f & kUncertainFlags) != 0; };
   const int64_t uncertain = std::count_if(out.flags.begin(), out.flags.end(), isUncertain);
   if (policy == UncertainPolicy::kFail && uncertain > 0)
-    throw UserError(fmt::format("--uncertain fail: {} uncertain pixel(s): {} overflow, {} grazing, {} near tie",
+    throw UserError(fmt::format("the uncertain-pixel policy is fail, and the pass has {} uncertain pixel(s): {} overflow, {} grazing, {} near tie",
                                 uncertain, pass.uncertain.overflow, pass.uncertain.grazing, pass.uncertain.nearTie));
   if (policy == UncertainPolicy::kKeep || policy == UncertainPolicy::kFail || uncertain == 0) return;
   TraceOptions trace;
@@ -127,39 +127,6 @@ void HandleUncertain(PrimaryPass& pass, const Scene& scene, const PrimaryRays& r
     out.flags[pe] |= kRecomputed;
   }
   pass.recomputedPixels += n;
-}
-
-}  // namespace
-
-namespace {
-
-// The planner splits the passes by an estimate of the program's memory per virtual PE; where
-// a pass of several layers leaves less than twice the estimate, the program's real allocation
-// (the same on every PE and every run) is checked on one layer of a pass-sized machine, and
-// when it does not fit the passes are split again by what the program allocates on a
-// machine of one layer (plan.memoryBitsPerPe becomes that; docs/simd.md, "Several array
-// passes"). `unit`: the PEs a pass holds whole (a row; 1 for a refine pass).
-void FitPasses(PrimaryPlan& plan, const bitserial::MachineProfile& profile, const PrimaryRays& rays,
-               const std::vector<int64_t>& pixels, int64_t unit) {
-  const auto fits = [&] {
-    if (plan.layersPerPass == 1 || 2 * plan.memoryBitsPerPe <= plan.internalCapacity + plan.externalCapacity)
-      return true;  // one layer: the run itself reports what does not fit
-    try {
-      Machine m(profile, plan.pesPerPass, 0, bitserial::LayerBlock{0, 1});
-      RunProgram(m, plan, rays, pixels, 0, nullptr);
-      return true;
-    } catch (const UserError&) {
-      return false;
-    }
-  };
-  if (fits()) return;
-  Machine one(profile, std::min<int64_t>(plan.virtualPes, profile.physicalPes));
-  RunProgram(one, plan, rays, pixels, 0, nullptr);
-  plan.memoryBitsPerPe = std::max(plan.memoryBitsPerPe,
-                                  one.Memory().PeakUsed(Space::Internal) + one.Memory().PeakUsed(Space::External));
-  for (SplitPasses(plan, profile, unit, plan.memoryBitsPerPe); !fits();
-       SplitPasses(plan, profile, unit, plan.memoryBitsPerPe))
-    plan.memoryBitsPerPe += plan.memoryBitsPerPe / 16;
 }
 
 // The program over the plan's PEs (pixel pixels[k] in PE k; every pixel when empty), in the
@@ -199,8 +166,7 @@ void Refine(PrimaryPass& pass, const Scene& scene, const SimdOptions& options, c
   for (int64_t pe = 0; pe < int64_t(out.flags.size()); ++pe)
     if (out.flags[pe] & kUncertainFlags) pixels.push_back(pe);
   if (pixels.empty()) return;
-  PrimaryPlan plan = PlanRefinePass(scene, options, pass.plan, int64_t(pixels.size()), kRefineExtraBits);
-  FitPasses(plan, MachineProfileOf(options), rays, pixels, 1);
+  const PrimaryPlan plan = PlanRefinePass(scene, options, pass.plan, int64_t(pixels.size()), kRefineExtraBits);
   const ArrayRun run = RunArray(plan, options, rays, pixels);
   int64_t still = 0, overflow = 0, grazing = 0, tie = 0;
   for (size_t k = 0; k < pixels.size(); ++k) {
@@ -232,7 +198,6 @@ PrimaryPass RunPrimaryPass(const Scene& scene, const SimdOptions& options) {
   PrimaryPass pass;
   pass.plan = PlanPrimaryPass(scene, options);
   const PrimaryRays rays(scene.camera);
-  FitPasses(pass.plan, MachineProfileOf(options), rays, {}, pass.plan.width);
   ArrayRun run = RunArray(pass.plan, options, rays, {});
   pass.array = std::move(run.report);
   const auto hostStart = std::chrono::steady_clock::now();

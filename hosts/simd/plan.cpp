@@ -7,11 +7,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <map>
 #include <tuple>
 
 #include "fixed/check.h"
 #include "hosts/simd/object.h"
+#include "hosts/simd/program.h"
 #include "hosts/trace/exact.h"
 
 namespace zephyr::simd {
@@ -77,7 +79,7 @@ ObjectPlan PlanObject(const Scene& scene, int index, const PassFormats& pf, cons
   if (pf.floatFormat) {
     // --number float has a program for spheres only (docs/simd.md, "Floating point on the array").
     if (p.Kind() != ShapeKind::kSphere || p.transform)
-      throw UserError(fmt::format("{}: --number float supports spheres only; this object is a {} "
+      throw UserError(fmt::format("{}: the float number system supports spheres only; this object is a {} "
                                   "(use --number fixed)",
                                   p.where.ToString(), p.transform && p.Kind() == ShapeKind::kSphere
                                                           ? "transformed sphere (an ellipsoid)"
@@ -96,10 +98,9 @@ ObjectPlan PlanObject(const Scene& scene, int index, const PassFormats& pf, cons
   return plan;
 }
 
-// The scene's range: the farthest point of an object from the eye, the smallest feature and
-// the largest sphere radius (at least 1).
+// The scene's range: the farthest point of an object from the eye and the smallest feature.
 struct SceneRange {
-  double farthest = 1, rMin = 1e300, rMax = 1;
+  double farthest = 1, rMin = 1e300;
   const Primitive* farthestObject = nullptr;  // for messages
 };
 
@@ -109,7 +110,6 @@ SceneRange RangeOf(const Scene& scene) {
     const ObjectExtent e = ExtentOf(p, scene.camera.from);
     if (!(e.farthest <= r.farthest)) r.farthestObject = &p;
     r.farthest = std::max(r.farthest, e.farthest);
-    if (p.Kind() == ShapeKind::kSphere) r.rMax = std::max(r.rMax, e.radius);
     r.rMin = std::min(r.rMin, e.feature);
   }
   if (scene.objects.empty() || !(r.rMin > 0) || r.rMin > 1e299) r.rMin = 1;
@@ -132,20 +132,21 @@ void ChooseWidths(PrimaryPlan& plan, const SceneRange& range, const FormatOverri
       ? fmt::format("{}: the {} {:.4g} from the eye; ", range.farthestObject->where.ToString(),
                     ShapeKindName(range.farthestObject->Kind()), range.farthest)
       : std::string();
-  // A width the user gave is named as the flag it came from (not as the scene's fault).
-  for (const auto& [flag, given, limit] : {std::tuple{"--frac-bits", o.fracBits, kMaxFracBits},
-                                           std::tuple{"--dir-frac-bits", o.dirFracBits, kMaxDirFracBits},
-                                           std::tuple{"--int-bits", o.intBits, kMaxIntBits}})
+  // A width the user gave is named as the one asked for (not as the scene's fault; the
+  // command line refuses these as it is parsed, naming the flag).
+  for (const auto& [what, given, limit] : {std::tuple{"fraction bits", o.fracBits, kMaxFracBits},
+                                           std::tuple{"direction fraction bits", o.dirFracBits, kMaxDirFracBits},
+                                           std::tuple{"integer bits", o.intBits, kMaxIntBits}})
     if (given > limit)
-      throw UserError(fmt::format("{} {}: more than the {} bits the primary pass supports (docs/simd.md)",
-                                  flag, given, limit));
+      throw UserError(fmt::format("{} {} asked for: more than the {} bits the primary pass supports (docs/simd.md)",
+                                  given, what, limit));
   if (plan.fracBits > kMaxFracBits || plan.dirFracBits > kMaxDirFracBits || plan.distIntBits > kMaxIntBits)
     throw UserError(fmt::format("{}formats too wide for the primary pass: {} integer bits, {} fraction "
                                 "bits, {} direction fraction bits (limits 40, 56, 60)",
                                 where, plan.distIntBits, plan.fracBits, plan.dirFracBits));
   if (1 + plan.distIntBits + plan.fracBits > kMaxMatrixWordBits)
     throw UserError(fmt::format("{}t would be s{}.{}, {} bits, more than the {} bits the host reads per "
-                                "pixel; use fewer --frac-bits or --int-bits",
+                                "pixel; use fewer fraction or integer bits",
                                 where, plan.distIntBits, plan.fracBits, 1 + plan.distIntBits + plan.fracBits,
                                 kMaxMatrixWordBits));
 }
@@ -203,47 +204,44 @@ void SummaryTable(PrimaryPlan& plan, const Scene& scene, const SceneRange& range
   plan.formats.push_back({"object index + 1", plan.object, fmt::format("{} objects, 0 = none", scene.objects.size())});
 }
 
-// Memory per virtual PE at fraction bits F and Fd: the matrix (object, t, d, two flag bits)
-// plus the temporaries of one sphere test (tca, 3 cross, 3 clamped, 3 squares, sum, disc,
-// root, t0, t1, t and the 1-bit masks), the near-tie and grazing trackers.
-int64_t FootprintBits(const PrimaryPlan& plan, int R, int F, int Fd) {
-  const int L = plan.distIntBits, wt = 1 + L + F, ws = 2 * R + 3 + F;
-  const int64_t matrix = plan.objectBits + wt + 3 * (2 + Fd) + 2;
-  return matrix + 2 * wt + 6 * wt + 3 * (R + 1 + F) + 5 * ws + 4 * wt + 8;
+// The PE memory of one layer of `profile`'s `layers`-layer machine, as one PE's own (a
+// virtual PE of it has exactly that: bitserial/memory.h).
+bitserial::MachineProfile OneLayerOf(bitserial::MachineProfile profile, int64_t layers) {
+  profile.internalBitsPerPe /= layers;
+  profile.externalBitsPerPe /= layers;
+  return profile;
 }
 
-// The memory check and the array passes. With n layers each virtual PE has
-// floor(internal / n) + floor(external / n) bits (bitserial/memory.h); when the image's
-// layers leave too few, the image runs in several array passes (docs/simd.md, "Several
-// array passes"), each over as few whole units of `unit` PEs (rows of the image; single PEs
-// of a refine pass) as balance the passes, with as many layers as still fit. UserError only
-// when a single layer cannot hold the program (naming the widest formats and the fraction
-// bits that would fit), or a single unit needs more layers than fit.
-void CheckMemory(PrimaryPlan& plan, const SceneRange& range, const bitserial::MachineProfile& profile,
-                 int64_t unit) {
-  const int R = IntBitsFor(range.rMax);
-  plan.matrixBitsPerPe = plan.objectBits + plan.t.Width() + 3 * plan.direction.Width() + 2;
-  plan.memoryBitsPerPe = FootprintBits(plan, R, plan.fracBits, plan.dirFracBits);
-  const auto capacity = [&](int64_t layers) {
-    return profile.internalBitsPerPe / layers + profile.externalBitsPerPe / layers;
+// A PE of `profile` with no limit to its external memory: the program's allocation measured
+// there when one layer of the profile cannot hold it (so that the message can say how much it
+// needs).
+bitserial::MachineProfile Roomy(bitserial::MachineProfile profile) {
+  profile.externalBitsPerPe = int64_t(1) << 40;
+  return profile;
+}
+
+// The array passes, from what the program allocates (plan.memoryBitsPerPe, measured). With n
+// layers each virtual PE has floor(internal / n) + floor(external / n) bits
+// (bitserial/memory.h); when the image's layers leave too few, the image runs in several
+// array passes (docs/simd.md, "Several array passes"), each over as few whole units of `unit`
+// PEs (rows of the image; single PEs of a refine pass) as balance the passes, with as many
+// layers as still hold the program. The split by the sum is checked by running the program on
+// one PE of a pass's capacities (first fit may find no place for a variable the sum has room
+// for); where it does not fit, the passes split again with a sixteenth more. UserError (from
+// SplitPasses) when a single unit needs more layers than fit.
+void FitPasses(PrimaryPlan& plan, const Scene& scene, const bitserial::MachineProfile& profile, int64_t unit) {
+  const auto fits = [&] {
+    if (plan.layersPerPass == 1) return true;  // measured on one layer
+    try {
+      MeasureProgram(plan, scene.camera, OneLayerOf(profile, plan.layersPerPass));
+      return true;
+    } catch (const UserError&) {
+      return false;
+    }
   };
-  // --number float: the float directions and about 17 float temporaries of the sphere.
-  if (plan.number == NumberSystem::kFloat) plan.memoryBitsPerPe += 20 * plan.floatFormat.Width();
-  const int64_t need = plan.memoryBitsPerPe;
-  if (need > capacity(1)) {
-    int fits = -1;
-    for (int F = plan.fracBits - 1; F >= kMinFracBits && fits < 0; --F)
-      if (FootprintBits(plan, R, F, std::min(F, plan.dirFracBits)) <= capacity(1)) fits = F;
-    throw UserError(fmt::format(
-        "the primary pass does not fit one layer of the {} array: it needs about {} bits per virtual PE "
-        "(its widest formats: t and lengths {}, {} bits each; squares and discriminants u{}.{}, {} bits; "
-        "directions {}) but a PE has {} internal + {} external bits; {}",
-        profile.name, need, plan.t.Name(), plan.t.Width(), 2 * R + 2, plan.fracBits, 2 * R + 3 + plan.fracBits,
-        plan.direction.Name(), profile.internalBitsPerPe, profile.externalBitsPerPe,
-        fits >= 0 ? fmt::format("--frac-bits {} would fit", fits)
-                  : fmt::format("no width down to {} fraction bits fits (fewer --int-bits?)", kMinFracBits)));
-  }
-  SplitPasses(plan, profile, unit, need);
+  int64_t need = plan.memoryBitsPerPe;
+  for (SplitPasses(plan, profile, unit, need); !fits(); SplitPasses(plan, profile, unit, need))
+    need += std::max<int64_t>(1, need / 16);
 }
 
 }  // namespace
@@ -261,11 +259,10 @@ fixed::FloatFormat PlanFloatFormat(const PrimaryPlan& plan, const SceneRange& ra
   return {e, m, profile.floatSubnormals};
 }
 
-// A plan over `virtualPes` PEs, split into passes of whole units of `unit` PEs when the
-// array is full, whose bounds' nominal sizes refer to `nominalUlp` (0: its own).
-PrimaryPlan PlanFor(const Scene& scene, const SimdOptions& options, int64_t virtualPes, int64_t unit,
-                    double nominalUlp) {
-  const bitserial::MachineProfile profile = MachineProfileOf(options);
+// The formats and object programs of a plan over `virtualPes` PEs whose bounds' nominal
+// sizes refer to `nominalUlp` (0: its own); no memory yet.
+PrimaryPlan PlanFormats(const Scene& scene, const SimdOptions& options, const bitserial::MachineProfile& profile,
+                        int64_t virtualPes, double nominalUlp) {
   const Camera& cam = scene.camera;
   PrimaryPlan plan;
   plan.width = cam.width, plan.height = cam.height;
@@ -313,7 +310,71 @@ PrimaryPlan PlanFor(const Scene& scene, const SimdOptions& options, int64_t virt
   }
   SummaryTable(plan, scene, range);
   CheckObjectFormats(plan, scene);
-  CheckMemory(plan, range, profile, unit);
+  plan.matrixBitsPerPe = plan.objectBits + plan.t.Width() + 3 * plan.direction.Width() + 2;
+  return plan;
+}
+
+// Why a program one layer cannot hold is refused: what it needs, the part that needs most,
+// and the fraction bits that would fit (`fitsAt(F)`: the plan at F fraction bits fits).
+std::string NotOneLayer(const PrimaryPlan& plan, const Scene& scene, const ProgramMemory& memory,
+                        const bitserial::MachineProfile& profile, const std::string& full,
+                        const std::function<bool(int)>& fitsAt) {
+  const auto widest = std::max_element(memory.objectBits.begin(), memory.objectBits.end());
+  std::string most;
+  if (widest != memory.objectBits.end()) {
+    const ObjectPlan& o = plan.objects[size_t(widest - memory.objectBits.begin())];
+    most = fmt::format(", and at most {} more for one object's program (the {} at {})", *widest, o.KindName(),
+                       scene.objects[o.index].where.ToString());
+  }
+  // The widest F in [kMinFracBits, F - 1] that fits (fewer bits never need more memory).
+  int lo = kMinFracBits - 1, hi = plan.fracBits;  // fitsAt(lo) or lo is below the range; !fitsAt(hi)
+  while (hi - lo > 1) {
+    const int mid = (lo + hi) / 2;
+    (fitsAt(mid) ? lo : hi) = mid;
+  }
+  return fmt::format(
+      "the primary pass does not fit one layer of the {} array: it needs {} bits per virtual PE (the matrix, "
+      "directions and trackers {} bits, t and lengths {}{}) but a PE has {} internal + {} external bits ({}); {}",
+      profile.name, memory.peakBits, memory.baseBits, plan.t.Name(), most, profile.internalBitsPerPe,
+      profile.externalBitsPerPe, full,
+      lo >= kMinFracBits ? fmt::format("{} fraction bits would fit", lo)
+                         : fmt::format("no width down to {} fraction bits fits", kMinFracBits));
+}
+
+// A plan over `virtualPes` PEs, split into passes of whole units of `unit` PEs when the
+// array is full, whose bounds' nominal sizes refer to `nominalUlp` (0: its own). Its memory
+// is what its program allocates (MeasureProgram), each object's temporaries with it.
+PrimaryPlan PlanFor(const Scene& scene, const SimdOptions& options, int64_t virtualPes, int64_t unit,
+                    double nominalUlp) {
+  const bitserial::MachineProfile profile = MachineProfileOf(options);
+  PrimaryPlan plan = PlanFormats(scene, options, profile, virtualPes, nominalUlp);
+  // On one layer of the machine, every variable where the pass places it (the matrix in
+  // external memory): the program fits one layer exactly when this run does.
+  ProgramMemory memory;
+  std::string full;  // why one layer cannot hold it
+  try {
+    memory = MeasureProgram(plan, scene.camera, profile);
+  } catch (const UserError& e) {
+    full = e.what();
+    memory = MeasureProgram(plan, scene.camera, Roomy(profile));
+  }
+  for (size_t i = 0; i < plan.objects.size(); ++i) plan.objects[i].temporaryBits = memory.objectBits[i];
+  plan.memoryBitsPerPe = memory.peakBits;
+  if (!full.empty()) {
+    const auto fitsAt = [&](int fracBits) {
+      SimdOptions narrower = options;
+      narrower.formats.fracBits = fracBits;
+      narrower.formats.dirFracBits = std::min(fracBits, plan.dirFracBits);
+      try {
+        MeasureProgram(PlanFormats(scene, narrower, profile, virtualPes, nominalUlp), scene.camera, profile);
+        return true;
+      } catch (const UserError&) {
+        return false;
+      }
+    };
+    throw UserError(NotOneLayer(plan, scene, memory, profile, full, fitsAt));
+  }
+  FitPasses(plan, scene, profile, unit);
   return plan;
 }
 
@@ -379,7 +440,7 @@ nlohmann::json PrimaryPlan::Json() const {
                       {"matrixBitsPerPe", matrixBitsPerPe}, {"internalCapacity", internalCapacity},
                       {"externalCapacity", externalCapacity},
                       {"alwaysUncertainObjects", alwaysUncertainObjects},
-                      {"number", NumberSystemName(number)}};
+                      {"number", kNumberSystemNames.NameOf(number)}};
   if (number == NumberSystem::kFloat) j["floatFormat"] = floatFormat.Name();
   for (const PlannedFormat& f : formats)
     j["formats"].push_back({{"quantity", f.quantity}, {"format", f.FormatName()}, {"reason", f.reason}});
@@ -393,7 +454,8 @@ nlohmann::json PrimaryPlan::ObjectsJson() const {
     auto finite = [](double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json("inf"); };
     nlohmann::json j = {{"index", o.index}, {"kind", o.KindName()}, {"farthest", b.farthest},
                         {"tError", finite(b.tError)}, {"slack", finite(b.slack)},
-                        {"grazeBand", b.grazeBand}, {"alwaysUncertain", b.alwaysUncertain}};
+                        {"grazeBand", b.grazeBand}, {"alwaysUncertain", b.alwaysUncertain},
+                        {"temporaryBits", o.temporaryBits}};
     for (const PlannedFormat& f : o.formats)
       j["formats"].push_back({{"quantity", f.quantity}, {"format", f.FormatName()}, {"reason", f.reason}});
     all.push_back(j);
@@ -410,7 +472,7 @@ std::string PrimaryPlan::Text() const {
   for (const PlannedFormat& f : formats)
     s += fmt::format("  {:<34} {:<8} {}\n", f.quantity, f.FormatName(), f.reason);
   if (number == NumberSystem::kFloat)
-    s += fmt::format("--number float: the intersections in bit-serial float {} (directions, f·d, f×d, squares, "
+    s += fmt::format("number system float: the intersections in bit-serial float {} (directions, f·d, f×d, squares, "
                      "disc, √disc, t0/t1), t then in the fixed format above\n",
                      floatFormat.Name());
   const bool quadrics = std::any_of(objects.begin(), objects.end(),
@@ -420,7 +482,7 @@ std::string PrimaryPlan::Text() const {
                    tErrorBound,
                    quadrics ? fmt::format("when disc < max((r/{:g})^2, 2 x its error bound), per object", 1 / grazingFraction)
                             : std::string("within each object's band of its edges (per object below)"));
-  s += fmt::format("memory per virtual PE: ~{} bits (matrix {} bits, external) of {} internal + {} "
+  s += fmt::format("memory per virtual PE: {} bits at the peak (matrix {} bits, external) of {} internal + {} "
                    "external\n",
                    memoryBitsPerPe, matrixBitsPerPe, internalCapacity, externalCapacity);
   if (alwaysUncertainObjects > 0)
@@ -432,6 +494,7 @@ std::string PrimaryPlan::Text() const {
   struct Group {
     std::vector<int> indices;
     double tError = 0, band = 0;
+    int64_t temporaryBits = 0;
     const ObjectPlan* first = nullptr;
   };
   std::map<std::string, Group> groups;
@@ -444,6 +507,7 @@ std::string PrimaryPlan::Text() const {
     it->second.indices.push_back(o.index);
     it->second.tError = std::max(it->second.tError, o.bounds.tError);
     it->second.band = std::max(it->second.band, o.bounds.grazeBand);
+    it->second.temporaryBits = std::max(it->second.temporaryBits, o.temporaryBits);
   }
   s += fmt::format("per object ({} object(s), {} group(s) of equal formats):\n", objects.size(), order.size());
   for (const std::string& key : order) {
@@ -456,9 +520,9 @@ std::string PrimaryPlan::Text() const {
                            e == k ? fmt::format("{}", g.indices[k]) : fmt::format("{}-{}", g.indices[k], g.indices[e]));
       k = e;
     }
-    s += fmt::format("  {} x{} (objects {}): t error <= {:.3g}, grazing band {:.3g}{}\n", g.first->KindName(),
-                     g.indices.size(), which, g.tError, g.band,
-                     std::isfinite(g.tError) ? "" : " (always uncertain)");
+    s += fmt::format("  {} x{} (objects {}): t error <= {:.3g}, grazing band {:.3g}{}, temporaries {} bits\n",
+                     g.first->KindName(), g.indices.size(), which, g.tError, g.band,
+                     std::isfinite(g.tError) ? "" : " (always uncertain)", g.temporaryBits);
     for (const PlannedFormat& f : g.first->formats)
       s += fmt::format("    {:<26} {:<8} {}\n", f.quantity, f.FormatName(), f.reason);
   }

@@ -65,6 +65,9 @@ struct ObjectPlan {
   // is bit for bit the same, and a tie between them is decided by the lowest index, as the
   // exact reference does); 0 for every other object.
   int planeClass = 0;
+  // The most its program (candidate and fold) holds at once above what lives through the
+  // whole pass, in bits per virtual PE: measured by the planner (hosts/simd/program.h).
+  int64_t temporaryBits = 0;
   const char* KindName() const;          // sphere, ellipsoid, polygon, cone
 };
 
@@ -92,7 +95,7 @@ struct PrimaryPlan {
   // (the per-object formats are in `objects`).
   std::vector<PlannedFormat> formats;
   std::vector<ObjectPlan> objects;  // one per scene object, in scene order
-  int64_t memoryBitsPerPe = 0;  // peak estimate per virtual PE
+  int64_t memoryBitsPerPe = 0;  // the program's peak per virtual PE (measured on one PE)
   int64_t matrixBitsPerPe = 0;  // the per-pixel matrix in external memory
   int64_t internalCapacity = 0, externalCapacity = 0;  // bits per virtual PE (in a pass)
   int alwaysUncertainObjects = 0;  // objects whose bounds degenerate at these widths (every
@@ -107,15 +110,15 @@ struct PrimaryPlan {
 
 // Throws UserError when one layer of the machine cannot hold the program at these formats
 // (or one row of the image does not fit a pass), or the requested widths are beyond the
-// pass's limits. An image whose layers do not fit at once is planned in several passes.
+// pass's limits. An image whose layers do not fit at once is planned in several passes, by
+// what the program allocates (run once on one virtual PE; memoryBitsPerPe).
 PrimaryPlan PlanPrimaryPass(const Scene& scene, const SimdOptions& options);
 
 // Splits the plan's PEs into array passes of whole units of `unit` PEs (the image's rows; 1
 // for a refine pass) with as many layers each as leave every virtual PE `needBits` bits of
 // memory, the units spread evenly (sets passes, pesPerPass, layersPerPass, layers and the
 // capacities). UserError if one unit needs more layers than that. The planner calls it with
-// its estimate of the pass's memory; the pass again with the memory its program really
-// allocates when that is more (docs/simd.md, "Several array passes").
+// what the program allocates (docs/simd.md, "Several array passes").
 void SplitPasses(PrimaryPlan& plan, const bitserial::MachineProfile& profile, int64_t unit, int64_t needBits);
 
 // The plan of a refine pass (docs/simd.md, "Refine pass"): `pixels` virtual PEs (the first

@@ -133,18 +133,45 @@ void ReadMatrix(Machine& m, const ArrayMatrix& a, MatrixRaw& r, int64_t passFirs
   for (int64_t pe = 0; pe < m.VirtualPes(); ++pe) r.overflow[first + pe] = m.Overflow(pe) || m.DivideByZero(pe);
 }
 
-}  // namespace
+// The bits live and the most live at once since the last ResetPeak (both spaces).
+int64_t LiveBits(Machine& m) { return m.Memory().Used(Space::Internal) + m.Memory().Used(Space::External); }
+int64_t PeakBits(Machine& m) { return m.Memory().PeakUsed(Space::Internal) + m.Memory().PeakUsed(Space::External); }
 
-void RunProgram(Machine& m, const PrimaryPlan& plan, const PrimaryRays& rays, const std::vector<int64_t>& pixels,
-                int64_t first, MatrixRaw* raw) {
+// The program; with `memory`, what each part allocates (the peaks restart at each object).
+void Run(Machine& m, const PrimaryPlan& plan, const PrimaryRays& rays, const std::vector<int64_t>& pixels,
+         int64_t first, MatrixRaw* raw, ProgramMemory* memory) {
   ArrayMatrix matrix(m, plan);
   LoadDirections(m, matrix, rays, plan, pixels, first);
   const Fixed tMax{plan.t, plan.t.MaxRaw()};
   matrix.t = Broadcast(m, tMax);
   Trackers trackers(m, tMax, plan);
-  for (const ObjectPlan& object : plan.objects) FoldCandidate(m, object, plan, matrix, trackers);
+  if (memory) memory->baseBits = LiveBits(m), memory->peakBits = PeakBits(m);
+  for (const ObjectPlan& object : plan.objects) {
+    if (memory) m.Memory().ResetPeak();
+    FoldCandidate(m, object, plan, matrix, trackers);
+    if (memory) {
+      memory->objectBits.push_back(PeakBits(m) - memory->baseBits);
+      memory->peakBits = std::max(memory->peakBits, PeakBits(m));
+    }
+  }
+  if (memory) m.Memory().ResetPeak();
   SetFlags(m, tMax, matrix, trackers);
+  if (memory) memory->peakBits = std::max(memory->peakBits, PeakBits(m));
   if (raw) ReadMatrix(m, matrix, *raw, first);
+}
+
+}  // namespace
+
+void RunProgram(Machine& m, const PrimaryPlan& plan, const PrimaryRays& rays, const std::vector<int64_t>& pixels,
+                int64_t first, MatrixRaw* raw) {
+  Run(m, plan, rays, pixels, first, raw, nullptr);
+}
+
+ProgramMemory MeasureProgram(const PrimaryPlan& plan, const Camera& camera, const bitserial::MachineProfile& profile) {
+  Machine m(profile, 1);
+  ProgramMemory memory;
+  Run(m, plan, PrimaryRays(camera), {}, 0, nullptr, &memory);
+  return memory;
 }
 
 }  // namespace zephyr::simd

@@ -34,4 +34,18 @@ struct MatrixRaw {
 void RunProgram(bitserial::Machine& m, const PrimaryPlan& plan, const PrimaryRays& rays,
                 const std::vector<int64_t>& pixels, int64_t first, MatrixRaw* raw);
 
+// What the program allocates per virtual PE, in bits. Allocation is first fit in program
+// order and depends on no PE's values (bitserial/memory.h), so it is the same on every PE,
+// layer block and array pass of the same capacities: one virtual PE measures it.
+struct ProgramMemory {
+  int64_t peakBits = 0;  // the most live at once: internal + external
+  int64_t baseBits = 0;  // live from the directions to the readout: matrix, float directions, trackers
+  // Per object (plan order): the most its candidate and fold hold above the base at once.
+  std::vector<int64_t> objectBits;
+};
+
+// The program run on one virtual PE of `profile` (its PE memory as one layer's), with no
+// readout: UserError (PE memory full) when the program does not fit those capacities.
+ProgramMemory MeasureProgram(const PrimaryPlan& plan, const Camera& camera, const bitserial::MachineProfile& profile);
+
 }  // namespace zephyr::simd

@@ -129,7 +129,7 @@ class SphereProgram final : public ObjectProgram {
 
 ObjectExtent SphereExtent(const Primitive& p, const Vec3& eye) {
   const Sphere& s = std::get<Sphere>(p.shape);
-  return {Length(s.centre - eye) + s.radius, s.radius, s.radius};
+  return {Length(s.centre - eye) + s.radius, s.radius};
 }
 
 ObjectPlan PlanSphere(const Primitive& p, const Vec3& eye, const PassFormats& pf) {

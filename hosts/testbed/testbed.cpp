@@ -69,10 +69,10 @@ const Testbed& TestbedNamed(const std::string& name) {
     std::string known;
     for (const auto& n : TestbedNames()) known += (known.empty() ? "" : ", ") + n;
     if (std::filesystem::is_regular_file(name))
-      throw UserError("--testbed " + name + ": a platform file is simulated — run the render under "
+      throw UserError("testbed '" + name + "': a platform file is simulated — run the render under "
                       "`tools/testbed/simrun.sh --children K --platform " + name +
                       " -- render ...` (K = 0 for seq and simd; docs/testbed.md)");
-    throw UserError("--testbed: unknown testbed '" + name + "' (known: " + known + ")");
+    throw UserError("unknown testbed '" + name + "' (known: " + known + ")");
   }
   return it->second;
 }
@@ -88,16 +88,16 @@ void CheckModelledTimeRequest(const std::string& testbedName, const std::string&
   if (testbedName.empty()) return;
   if (farmed) {
     if (!Simulated())
-      throw UserError("--testbed with --method " + method +
-                      " runs on a simulated network: build/bin/zephyr-smpi under smpirun "
+      throw UserError("a testbed's time of method '" + method +
+                      "' runs on a simulated network: build/bin/zephyr-smpi under smpirun "
                       "(`make smpi`; docs/testbed.md)");
     return;
   }
   if (Simulated()) return;  // the platform file names the hosts
   const Testbed& bed = TestbedNamed(testbedName);
   if (usesArray && arrayProfile != bed.arrayProfile)
-    throw UserError("--testbed " + bed.name + ": its array is '" + bed.arrayProfile +
-                    "', but --machine chose '" + arrayProfile + "'");
+    throw UserError("testbed '" + bed.name + "': its array is '" + bed.arrayProfile +
+                    "', but the machine profile is '" + arrayProfile + "'");
 }
 
 namespace {
@@ -105,7 +105,7 @@ namespace {
 // A farmed render under simulation: SimGrid's clock, the parent's split, the children's.
 ModelledTime FarmTime(const std::string& testbedName, const FarmTimes& farm) {
   if (!Simulated())
-    throw UserError("--testbed with a farmed method runs on a simulated network: build/bin/zephyr-smpi "
+    throw UserError("a testbed's time of a farmed method runs on a simulated network: build/bin/zephyr-smpi "
                     "under smpirun (`make smpi`; docs/testbed.md)");
   ModelledTime t;
   t.testbed = testbedName;
@@ -133,7 +133,7 @@ std::optional<ModelledTime> ModelTime(const std::string& testbedName, const Coun
                                       const Scene& scene) {
   if (testbedName.empty()) return std::nullopt;
   if (work.farm) return FarmTime(testbedName, *work.farm);
-  if (!work.host) throw UserError("--testbed: the method counts no host work to model");
+  if (!work.host) throw UserError("testbed '" + testbedName + "': the method counts no host work to model");
   TraceStats stats = *work.host;
   ModelledTime t;
   t.testbed = testbedName;
@@ -162,8 +162,8 @@ std::optional<ModelledTime> ModelTime(const std::string& testbedName, const Coun
   if (work.arrayCycles) {
     const std::string& profile = work.arrayCycles->Profile().name;
     if (profile != bed.arrayProfile)
-      throw UserError("--testbed " + bed.name + ": its array is '" + bed.arrayProfile + "', but --machine chose '" +
-                      profile + "'");
+      throw UserError("testbed '" + bed.name + "': its array is '" + bed.arrayProfile +
+                      "', but the machine profile is '" + profile + "'");
     // The host recomputes each uncertain pixel against every object, in double.
     stats.Add(RecomputeWork(work.recomputedPixels, scene));
     t.array = ModelledTime::ArrayShare{profile, SplitArrayCycles(*work.arrayCycles, work.refineCycles)};
@@ -264,7 +264,7 @@ nlohmann::json CalibrateThisHost(const nlohmann::json& r, const std::string& fil
 
 std::string PlatformXml(const Testbed& bed, int children, double hostOps) {
   if (children < 1 || children > kMaxPlatformChildren)
-    throw UserError("--children: expected 1.." + std::to_string(kMaxPlatformChildren) + ", got " +
+    throw UserError("a platform's children must be 1.." + std::to_string(kMaxPlatformChildren) + ", got " +
                     std::to_string(children));
   const HostProfile& parent = HostProfileNamed(bed.parentProfile);
   const HostProfile& child = HostProfileNamed(bed.childProfile);

@@ -11,19 +11,6 @@
 
 namespace zephyr {
 
-Precision ParsePrecision(const std::string& name) {
-  if (name == "float") return Precision::kFloat;
-  if (name == "double") return Precision::kDouble;
-  throw UserError("--precision: expected 'float' or 'double', got '" + name + "'");
-}
-SphereTest ParseSphereTest(const std::string& name) {
-  if (name == "hb" || name == "hearn-baker") return SphereTest::kHearnBaker;
-  if (name == "naive") return SphereTest::kNaive;
-  throw UserError("--sphere-test: expected 'hb' (Hearn-Baker) or 'naive', got '" + name + "'");
-}
-const char* PrecisionName(Precision p) { return p == Precision::kFloat ? "float" : "double"; }
-const char* SphereTestName(SphereTest s) { return s == SphereTest::kHearnBaker ? "hb" : "naive"; }
-
 PrimaryRays::PrimaryRays(const Camera& c) : eye_(c.from) {
   // Scaled before normalising, so an `up` of 1e300 or 1e-300 neither overflows nor
   // underflows (the reader has rejected a zero or parallel one).
@@ -477,7 +464,7 @@ class TracerT final : public Tracer {
 
 std::unique_ptr<Tracer> Tracer::Create(const Scene& scene, const TraceOptions& options) {
   if (options.depth < 1 || options.depth > kMaxDepth)
-    throw UserError("--depth: expected 1.." + std::to_string(kMaxDepth) + ", got " + std::to_string(options.depth));
+    throw UserError("the ray-tree depth must be 1.." + std::to_string(kMaxDepth) + ", got " + std::to_string(options.depth));
   // The reader has held the scene to double's limit; float's is lower (docs/scene-format.md).
   const bool isFloat = options.precision == Precision::kFloat;
   const double limit = isFloat ? kMagnitudeLimitFloat : kMagnitudeLimitDouble;

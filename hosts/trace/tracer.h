@@ -20,6 +20,7 @@
 
 #include <nlohmann/json_fwd.hpp>
 
+#include "fixed/named.h"
 #include "hosts/scene/scene.h"
 #include "hosts/trace/intersect.h"
 
@@ -37,11 +38,13 @@ struct TraceOptions {
   SphereTest sphereTest = SphereTest::kHearnBaker;
 };
 
-// Parses "float"/"double" and "hb"/"naive" (UserError otherwise).
-Precision ParsePrecision(const std::string& name);
-SphereTest ParseSphereTest(const std::string& name);
-const char* PrecisionName(Precision p);
-const char* SphereTestName(SphereTest s);
+// The names of the host tracer's scalar (--precision) and sphere test (--sphere-test;
+// "hearn-baker" is another name for hb).
+inline constexpr NamedValues<Precision, 2> kPrecisionNames{{{{Precision::kFloat, "float"},
+                                                            {Precision::kDouble, "double"}}}};
+inline constexpr NamedValues<SphereTest, 3> kSphereTestNames{{{{SphereTest::kHearnBaker, "hb"},
+                                                              {SphereTest::kNaive, "naive"},
+                                                              {SphereTest::kHearnBaker, "hearn-baker"}}}};
 
 struct PrimaryRay {
   Vec3 origin;     // the eye

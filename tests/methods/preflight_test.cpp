@@ -180,14 +180,15 @@ TEST(FlagPreflight, EveryBadFlagIsRefusedBeforeTheSceneIsRead) {
   // mpirun but outside SimGrid, and simd on another machine than the testbed's array.
   const auto farmed = RunMpi(2, "render --no-progress --method dist " + missing + " --testbed ufmg1992");
   EXPECT_NE(farmed.status, 0);
-  EXPECT_NE(farmed.output.find("--testbed with --method dist runs on a simulated network"), std::string::npos)
+  EXPECT_NE(farmed.output.find("a testbed's time of method 'dist' runs on a simulated network"), std::string::npos)
       << farmed.output;
   EXPECT_EQ(farmed.output.find("no-such-scene"), std::string::npos) << farmed.output;
   const std::string scene = testing::SmallSphereScene(dir);
   const auto mismatch = RunZephyrProcess("render --no-progress --method simd " + scene +
                                          " --testbed ufmg1992 --machine mpp");
   EXPECT_NE(mismatch.status, 0);
-  EXPECT_NE(mismatch.output.find("its array is 'wavetracer', but --machine chose 'mpp'"), std::string::npos)
+  EXPECT_NE(mismatch.output.find("testbed 'ufmg1992': its array is 'wavetracer', but the machine profile is 'mpp'"),
+            std::string::npos)
       << mismatch.output;
   EXPECT_EQ(mismatch.output.find("cycle report"), std::string::npos) << mismatch.output;
 }

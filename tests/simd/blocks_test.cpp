@@ -97,11 +97,11 @@ TEST(SimdBlocks, RecomputeAndRefineSameOnAnyThreadCount) {
     o.threads = 1;
     const PrimaryPass one = RunPrimaryPass(scene, o);
     ASSERT_GT(policy == UncertainPolicy::kRefine ? one.RefinedPixels() : one.recomputedPixels, 0)
-        << UncertainPolicyName(policy);
+        << kUncertainPolicyNames.NameOf(policy);
     for (int threads : {2, 4}) {
       o.threads = threads;
       ExpectSamePass(one, RunPrimaryPass(scene, o),
-                     std::string(UncertainPolicyName(policy)) + ", " + std::to_string(threads) + " threads");
+                     std::string(kUncertainPolicyNames.NameOf(policy)) + ", " + std::to_string(threads) + " threads");
     }
   }
 }

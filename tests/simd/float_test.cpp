@@ -131,7 +131,7 @@ TEST(SimdFloat, OtherPrimitivesAndTooNarrowFormatsAreRefused) {
   } catch (const UserError& e) {
     const std::string what = e.what();
     EXPECT_NE(what.find("cone.nff:12"), std::string::npos) << what;
-    EXPECT_NE(what.find("--number float supports spheres only; this object is a cone"), std::string::npos) << what;
+    EXPECT_NE(what.find("the float number system supports spheres only; this object is a cone"), std::string::npos) << what;
   }
   const Scene polygon = ParseNffOrThrow(head + "p 3\n-1 -1 0\n1 -1 0\n0 1 0\n", "poly.nff");
   EXPECT_THROW(RunPrimaryPass(polygon, FloatOptions("", UncertainPolicy::kRecompute)), UserError);

@@ -96,25 +96,40 @@ TEST(SimdPrimary, ShadeRegionIsBitIdenticalToTheFullImage) {
 }
 
 TEST(SimdPrimary, SceneThatCannotFitIsAClearError) {
-  // One layer of the MPP (1024 bits per PE, no external memory) cannot hold the pass at 40
-  // fraction bits; the message names the widest formats and what would fit.
+  // PEs of 1024 internal and 128 external bits cannot hold the pass at 40 fraction bits (the
+  // matrix, in external memory, would need ~180): the planner refuses it with what the program
+  // needs, why it does not fit, and a width that does fit — and the pass runs at that width.
   Scene scene = GenerateRandomSpheres({.count = 8, .seed = 1, .width = 64, .height = 64});
   SimdOptions o;
-  o.profile = "mpp";
+  o.uncertain = UncertainPolicy::kKeep;
+  o.profileOverrides = {"internalBitsPerPe=1024", "externalBitsPerPe=128"};
   o.formats.fracBits = 40;
   try {
     PlanPrimaryPass(scene, o);
-    FAIL() << "40 fraction bits should not fit one layer of the MPP";
+    FAIL() << "40 fraction bits should not fit one layer of 1024 + 128 bits";
   } catch (const UserError& e) {
     const std::string what = e.what();
     EXPECT_NE(what.find("does not fit one layer"), std::string::npos) << what;
     EXPECT_NE(what.find("t and lengths s"), std::string::npos) << what;
-    const size_t at = what.find("--frac-bits ");
+    EXPECT_NE(what.find("PE memory full: multi 'matrix."), std::string::npos) << what;
+    const size_t at = what.find(" fraction bits would fit");
     ASSERT_NE(at, std::string::npos) << what;
-    // The width it names does fit.
-    o.formats.fracBits = std::stoi(what.substr(at + 12));
+    o.formats.fracBits = std::stoi(what.substr(what.rfind(' ', at - 1) + 1));
     EXPECT_LT(o.formats.fracBits, 40);
-    EXPECT_EQ(PlanPrimaryPass(scene, o).passes, 1);
+    EXPECT_EQ(RunPrimaryPass(scene, o).plan.passes, 1);  // the width it names runs
+    ++o.formats.fracBits;  // and is the widest that does
+    EXPECT_THROW(PlanPrimaryPass(scene, o), UserError);
+  }
+  // The MPP's PEs have no external memory for the matrix: no width fits, and the planner says
+  // so (it once passed such a plan, and the pass failed as it allocated the matrix).
+  SimdOptions mpp;
+  mpp.profile = "mpp";
+  try {
+    PlanPrimaryPass(scene, mpp);
+    FAIL() << "the MPP has no external memory for the matrix";
+  } catch (const UserError& e) {
+    EXPECT_NE(std::string(e.what()).find("no width down to 4 fraction bits fits"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("external memory has 0 of 0 bits free"), std::string::npos) << e.what();
   }
 }
 
@@ -451,12 +466,13 @@ TEST(SimdRefine, AutoRefinesOnlyAboveTheHostBudget) {
   }
 }
 
-TEST(SimdRefine, PolicyNameParses) {
-  EXPECT_EQ(ParseUncertainPolicy("refine"), UncertainPolicy::kRefine);
-  EXPECT_STREQ(UncertainPolicyName(UncertainPolicy::kRefine), "refine");
-  EXPECT_EQ(ParseUncertainPolicy("auto"), UncertainPolicy::kAuto);
-  EXPECT_STREQ(UncertainPolicyName(UncertainPolicy::kAuto), "auto");
-  EXPECT_THROW(ParseUncertainPolicy("refin"), UserError);
+TEST(SimdRefine, EveryPolicyAndNumberSystemHasOneNameThatParsesBack) {
+  for (const auto& e : kUncertainPolicyNames.entries)
+    EXPECT_EQ(kUncertainPolicyNames.Find(kUncertainPolicyNames.NameOf(e.value)), e.value) << e.name;
+  for (const auto& e : kNumberSystemNames.entries)
+    EXPECT_EQ(kNumberSystemNames.Find(kNumberSystemNames.NameOf(e.value)), e.value) << e.name;
+  EXPECT_EQ(kUncertainPolicyNames.List(), "auto, recompute, refine, keep or fail");  // --help's order
+  EXPECT_FALSE(kUncertainPolicyNames.Find("refin").has_value());
 }
 
 }  // namespace

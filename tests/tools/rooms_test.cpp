@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <initializer_list>
 #include <map>
 #include <regex>
 #include <set>
@@ -100,25 +101,56 @@ std::string CodeOf(const std::string& path) {
   return code;
 }
 
+// The .h and .cpp files under `folders`, at any depth.
+std::vector<std::string> SourcesUnder(std::initializer_list<const char*> folders) {
+  std::vector<std::string> paths;
+  for (const char* folder : folders)
+    for (const auto& entry : std::filesystem::recursive_directory_iterator(folder)) {
+      const std::string path = entry.path().generic_string();
+      if (entry.is_regular_file() && (path.find(".cpp") != std::string::npos || path.find(".h") != std::string::npos))
+        paths.push_back(path);
+    }
+  return paths;
+}
+
+// Every file of `folders` whose code (comments removed, literals kept) matches `pattern`
+// fails the test, with what matched and `why`; returns how many files were read.
+int ExpectNoMatch(std::initializer_list<const char*> folders, const std::regex& pattern, const std::string& why) {
+  const std::vector<std::string> paths = SourcesUnder(folders);
+  for (const std::string& path : paths) {
+    const std::string code = CodeOf(path);
+    std::smatch m;
+    EXPECT_FALSE(std::regex_search(code, m, pattern)) << path << ": '" << m.str() << "' (" << why << ")";
+  }
+  return int(paths.size());
+}
+
 // "The testbed knows no method" (docs/architecture.md): it takes counted work, so no code of
 // hosts/testbed branches on a method or names one, but for `testbed calibrate`, which reads
 // the report of a seq render.
 TEST(Rooms, TheTestbedBranchesOnNoMethod) {
   const std::regex branch(R"re(\bmethod\s*[!=]=|[!=]=\s*method\b|"(simd|dist|hetero)")re");
-  int files = 0;
-  for (const auto& entry : std::filesystem::directory_iterator("hosts/testbed")) {
-    const std::string path = entry.path().generic_string();
-    if (!entry.is_regular_file() || (path.find(".cpp") == std::string::npos && path.find(".h") == std::string::npos))
-      continue;
-    ++files;
-    const std::string code = CodeOf(path);
-    std::smatch m;
-    EXPECT_FALSE(std::regex_search(code, m, branch)) << path << ": '" << m.str() << "' (the testbed prices counted work)";
-  }
+  const int files = ExpectNoMatch({"hosts/testbed"}, branch, "the testbed prices counted work");
   EXPECT_GE(files, 4);
   // The check itself: it finds the branch the testbed had before it took counted work.
   const std::string before = "if (method == \"hetero\") x();";
   EXPECT_TRUE(std::regex_search(before, branch));
+}
+
+// Only the command line (and the methods, whose RenderOptions mirror render's flags one to
+// one) names a flag in an error: a lower room's error names the value ("host threads must be
+// 1..1024, got 0"); advice on what to type ("(use --number fixed)") may name one.
+TEST(Rooms, NoRoomBelowTheMethodsMakesAFlagsError) {
+  // A message that starts with a flag, or a flag followed by a colon ("--depth: ...").
+  const std::regex flagError(R"re("--[a-z]|--[a-z][a-z-]*:)re");
+  const int files = ExpectNoMatch({"fixed", "bitserial", "hosts/io", "hosts/scene", "hosts/trace", "hosts/simd",
+                                   "hosts/farm", "hosts/testbed"},
+                                  flagError, "a lower room names the value; hosts/cmd names the flag");
+  EXPECT_GE(files, 60);
+  // The check itself: it finds the errors these rooms had before.
+  EXPECT_TRUE(std::regex_search(std::string(R"x(throw UserError("--threads: expected 1 to 8"))x"), flagError));
+  EXPECT_TRUE(std::regex_search(std::string(R"x(fmt::format("{} --frac-bits: more than"))x"), flagError));
+  EXPECT_FALSE(std::regex_search(std::string(R"x(" (use --number fixed)")x"), flagError));
 }
 
 }  // namespace

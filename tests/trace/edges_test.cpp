@@ -23,7 +23,7 @@ TEST(TraceSharedEdges, ARayThroughAnEdgeOnEveryAxisMeetsExactlyOneFace) {
     TraceOptions options;
     options.precision = precision;
     for (const testing::SharedEdgeCase& c : cases) {
-      const std::string what = std::string(PrecisionName(precision)) + ", " + c.name;
+      const std::string what = std::string(kPrecisionNames.NameOf(precision)) + ", " + c.name;
       const auto a = Tracer::Create(c.a, options), b = Tracer::Create(c.b, options);
       const PrimaryRays& rays = a->Rays();
       const int w = c.a.camera.width;

@@ -263,7 +263,7 @@ TEST(TraceOffset, ContactShadowAndReflectionsAreTheSameWhicheverMagnitudeDominat
                         std::abs(c.y - q.colour.y) <= tolerance &&
                         std::abs(c.z - q.colour.z) <= tolerance;
         if (!ok && wrong++ < 5)
-          ADD_FAILURE() << PrecisionName(precision) << ", " << at.name << ": object " << q.object
+          ADD_FAILURE() << kPrecisionNames.NameOf(precision) << ", " << at.name << ": object " << q.object
                         << " at " << q.point.x << " " << q.point.y << " " << q.point.z
                         << (q.shadowed ? " (in shadow)" : "") << ": " << c.x << " " << c.y << " "
                         << c.z << ", by hand " << q.colour.x << " " << q.colour.y << " "
@@ -271,7 +271,7 @@ TEST(TraceOffset, ContactShadowAndReflectionsAreTheSameWhicheverMagnitudeDominat
         lost +=
             !ok && !q.shadowed && c.x + c.y + c.z < 0.5 * (q.colour.x + q.colour.y + q.colour.z);
       }
-      EXPECT_EQ(wrong, 0) << PrecisionName(precision) << ", " << at.name << ": " << lost
+      EXPECT_EQ(wrong, 0) << kPrecisionNames.NameOf(precision) << ", " << at.name << ": " << lost
                           << " of them darker than by hand (a surface shadowing itself) of "
                           << probes.size();
     }
@@ -386,7 +386,7 @@ TEST(TraceOffset, NoKindShadowsItselfWhereverItsOwnNumbersAre) {
     for (const Case& c : cases) {
       const Scene s = ParseNffOrThrow(c.nff, "kind.nff");
       const Lit n = CountSelfShadow(s, precision, c.normal);
-      const std::string what = std::string(PrecisionName(precision)) + ", " + c.name;
+      const std::string what = std::string(kPrecisionNames.NameOf(precision)) + ", " + c.name;
       EXPECT_GE(n.lit, c.minimumLit) << what;
       EXPECT_EQ(n.selfShadowed, 0) << what << ": of " << n.lit << " pixels facing the light";
       EXPECT_EQ(n.litAway, 0) << what << ": of " << n.dark << " pixels facing away";

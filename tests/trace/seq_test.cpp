@@ -259,9 +259,9 @@ TEST(TraceShade, AMirroringTransformKeepsAPolygonsFront) {
       ASSERT_EQ(hit.object, 0);
       tracer->ShadeFromPrimaryHit(hit, stats);
       EXPECT_EQ(stats.rays[int(RayKind::kRefracted)], 1u)
-          << "x scaled by " << mirror << ", " << PrecisionName(p);
+          << "x scaled by " << mirror << ", " << kPrecisionNames.NameOf(p);
       EXPECT_EQ(stats.rays[int(RayKind::kReflected)], 0u)
-          << "x scaled by " << mirror << ", " << PrecisionName(p);
+          << "x scaled by " << mirror << ", " << kPrecisionNames.NameOf(p);
     }
   }
 }
@@ -291,8 +291,8 @@ TEST(TraceShade, ContactShadowDoesNotDependOnTheFloorsSize) {
       const Vec3 c = tracer->TracePixel(35, 38, stats, &hit);
       ASSERT_EQ(hit.object, 0) << half;
       const double tol = p == Precision::kFloat ? 1e-6 : 1e-12;
-      EXPECT_NEAR(c.x, 0.32, tol) << PrecisionName(p) << " floor ±" << half;
-      EXPECT_NEAR(c.y, 0.32, tol) << PrecisionName(p) << " floor ±" << half;
+      EXPECT_NEAR(c.x, 0.32, tol) << kPrecisionNames.NameOf(p) << " floor ±" << half;
+      EXPECT_NEAR(c.y, 0.32, tol) << kPrecisionNames.NameOf(p) << " floor ±" << half;
     }
   }
 }
@@ -313,7 +313,7 @@ TEST(TraceShade, AFarObjectOutOfViewLeavesTheImageAlone) {
     TraceStats stats;
     RenderRegion(*Tracer::Create(near, o), 0, 0, 64, 64, a.pixels, stats);
     RenderRegion(*Tracer::Create(far, o), 0, 0, 64, 64, b.pixels, stats);
-    EXPECT_EQ(a.pixels, b.pixels) << PrecisionName(p);
+    EXPECT_EQ(a.pixels, b.pixels) << kPrecisionNames.NameOf(p);
   }
 }
 
@@ -333,7 +333,7 @@ TEST(TraceIntersect, ARayThroughASharedEdgeHitsOneOfTheFaces) {
       const PrimaryRay ray = tracer->Rays().At(x, 32);
       ASSERT_EQ(ray.direction.y, 0);  // exactly through the ridge
       if (std::abs(ray.direction.x / ray.direction.z) * 5 >= 3) continue;  // beyond the roof's ends
-      EXPECT_GE(tracer->FirstHit(ray, stats).object, 0) << PrecisionName(p) << " x=" << x;
+      EXPECT_GE(tracer->FirstHit(ray, stats).object, 0) << kPrecisionNames.NameOf(p) << " x=" << x;
     }
   }
   // The whole kind: rays through many points of shared edges (and near them) hit exactly
