@@ -168,7 +168,13 @@ void RunProgram(Machine& m, const PrimaryPlan& plan, const PrimaryRays& rays, co
 }
 
 ProgramMemory MeasureProgram(const PrimaryPlan& plan, const Camera& camera, const bitserial::MachineProfile& profile) {
-  Machine m(profile, 1);
+  // The smallest array the kernels run (512 PEs: one vector of the widest target,
+  // bitserial/profile.cpp) with the profile's PE memory: the allocation is the same, and each
+  // operation costs the host 8 words per bit-plane instead of a whole layer's.
+  bitserial::MachineProfile one = profile;
+  one.physicalPes = 512;
+  one.shapes = {bitserial::MeshShape{{64, 8}}};
+  Machine m(one, 1);
   ProgramMemory memory;
   Run(m, plan, PrimaryRays(camera), {}, 0, nullptr, &memory);
   return memory;

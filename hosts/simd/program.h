@@ -44,7 +44,7 @@ struct ProgramMemory {
   std::vector<int64_t> objectBits;
 };
 
-// The program run on one virtual PE of `profile` (its PE memory as one layer's), with no
+// The program run on one virtual PE with `profile`'s PE memory (as one layer's), with no
 // readout: UserError (PE memory full) when the program does not fit those capacities.
 ProgramMemory MeasureProgram(const PrimaryPlan& plan, const Camera& camera, const bitserial::MachineProfile& profile);
 
