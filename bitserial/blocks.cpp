@@ -31,10 +31,11 @@ BlockedRun RunLayerBlocks(const MachineProfile& profile, int64_t virtualPes,
   if (options.blockLayers < 0)
     throw UserError(fmt::format("layer blocks of {} layers", options.blockLayers));
   const int layers = static_cast<int>((pes + profile.physicalPes - 1) / profile.physicalPes);
-  const int per = std::min(layers, options.blockLayers > 0 ? options.blockLayers : DefaultBlockLayers());
+  const int per =
+      std::min(layers, options.blockLayers > 0 ? options.blockLayers : DefaultBlockLayers());
   const int blocks = (layers + per - 1) / per;
-  const int threads = std::min(blocks, options.threads > 0 ? CheckThreads(options.threads)
-                                                           : HardwareThreads());
+  const int threads =
+      std::min(blocks, options.threads > 0 ? CheckThreads(options.threads) : HardwareThreads());
 
   // Block 0 keeps its report and memory; every other block's report is compared with it.
   std::vector<std::optional<CycleReport>> reports(blocks);

@@ -49,7 +49,7 @@ struct BlockedRun {
   CycleReport report;  // the whole machine's (every block's, identical)
   PeMemory memory;     // the PE memory map and peaks (the same in every block)
   int blocks = 0;
-  int threads = 0;     // threads used
+  int threads = 0;  // threads used
 };
 
 // Runs program(block) for every block of options.blockLayers layers of a machine of

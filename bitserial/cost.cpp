@@ -8,8 +8,12 @@
 namespace zephyr::bitserial {
 
 namespace {
-MicroOp Read(Space s) { return s == Space::Internal ? MicroOp::ReadInternal : MicroOp::ReadExternal; }
-MicroOp Write(Space s) { return s == Space::Internal ? MicroOp::WriteInternal : MicroOp::WriteExternal; }
+MicroOp Read(Space s) {
+  return s == Space::Internal ? MicroOp::ReadInternal : MicroOp::ReadExternal;
+}
+MicroOp Write(Space s) {
+  return s == Space::Internal ? MicroOp::WriteInternal : MicroOp::WriteExternal;
+}
 // k reads of operand o's bits: PE memory, or free for a uni (the controller supplies them).
 void AddRead(MicroOpCounts& c, const Operand& o, int64_t k = 1) {
   if (!o.uni) c.Add(Read(o.space), k);
@@ -31,8 +35,8 @@ struct Placed {
 // write; if the result cannot overflow there are none, else at least one.
 // Nearest (when bits are dropped) adds a rounding pass over the output, Saturate a select
 // pass when overflow is possible.
-MicroOpCounts AlignedPass(const std::vector<Placed>& ops, const fixed::Format& exact,
-                          Operand out, fixed::Policy policy) {
+MicroOpCounts AlignedPass(const std::vector<Placed>& ops, const fixed::Format& exact, Operand out,
+                          fixed::Policy policy) {
   MicroOpCounts c;
   const int w = exact.Width();
   const int wo = out.format.Width();
@@ -71,13 +75,15 @@ MicroOpCounts AlignedPass(const std::vector<Placed>& ops, const fixed::Format& e
   return c;
 }
 
-int Offset(const fixed::Format& exact, const fixed::Format& f) { return exact.fracBits - f.fracBits; }
+int Offset(const fixed::Format& exact, const fixed::Format& f) {
+  return exact.fracBits - f.fracBits;
+}
 
 // Shift-and-add multiply (docs/bitserial.md, "The schedules", Multiply). `rows` lists the
 // multiplier bit positions that get an add pass; `readRows` says whether the multiplier bit
 // comes from PE memory (multi) or from the controller (uni).
-MicroOpCounts MulPass(Operand a, int multiplierWidth, const std::vector<int>& rows,
-                      bool readRows, Space rowSpace, const fixed::Format& exact, Operand out,
+MicroOpCounts MulPass(Operand a, int multiplierWidth, const std::vector<int>& rows, bool readRows,
+                      Space rowSpace, const fixed::Format& exact, Operand out,
                       fixed::Policy policy) {
   MicroOpCounts c;
   const int wa = a.format.Width();
@@ -106,7 +112,8 @@ MicroOpCounts MulPass(Operand a, int multiplierWidth, const std::vector<int>& ro
   if (top > w) c.Add(Write(out.space), top - std::max(w, lo));  // sign extension of the product
   if (lo < 0) c.Add(Write(out.space), std::min(-lo, wo));
   const bool rounds = policy.rounding == fixed::Rounding::Nearest && lo > 0;
-  const bool canOverflow = w + (rounds ? 1 : 0) - lo > wo || (exact.isSigned && !out.format.isSigned);
+  const bool canOverflow =
+      w + (rounds ? 1 : 0) - lo > wo || (exact.isSigned && !out.format.isSigned);
   if (canOverflow) {
     const int extra = std::max(w - top, 1);
     c.Add(MicroOp::AccumulatorRead, extra);
@@ -188,7 +195,10 @@ MicroOpCounts ShiftCost(Operand a, int k, Operand out, fixed::Policy p) {
   // fraction or integer bit counts are folded into the placement of the operand.
   int frac = a.format.fracBits - k;
   int off = 0;
-  if (frac < 0) { off = -frac; frac = 0; }
+  if (frac < 0) {
+    off = -frac;
+    frac = 0;
+  }
   e.fracBits = frac;
   e.intBits = std::max(0, a.format.Width() + off - frac - (a.format.isSigned ? 1 : 0));
   return AlignedPass({{a, off}}, e, out, p);
@@ -235,8 +245,8 @@ MicroOpCounts MinMaxCost(Operand a, Operand b, Operand out, fixed::Policy p) {
 MicroOpCounts MulCost(Operand a, Operand b, Operand out, fixed::Policy p) {
   std::vector<int> rows;
   for (int j = 0; j < b.format.Width(); ++j) rows.push_back(j);
-  return MulPass(a, b.format.Width(), rows, true, b.space, ProductFormat(a.format, b.format),
-                 out, p);
+  return MulPass(a, b.format.Width(), rows, true, b.space, ProductFormat(a.format, b.format), out,
+                 p);
 }
 
 MicroOpCounts MulUniCost(Operand a, const fixed::Fixed& k, Operand out, fixed::Policy p) {
@@ -321,8 +331,8 @@ MicroOpCounts DivCost(Operand a, Operand b, Operand out, fixed::Policy p) {
       c.Add(MicroOp::AluStep);
       if (q < d) c.Add(MicroOp::AccumulatorWrite);  // the difference; bit d is its sign
     }
-    c.Add(MicroOp::FlagOp);       // latch the sign: the quotient bit is the write mask
-    c.Add(MicroOp::WriteInternal);  // the quotient bit
+    c.Add(MicroOp::FlagOp);               // latch the sign: the quotient bit is the write mask
+    c.Add(MicroOp::WriteInternal);        // the quotient bit
     c.Add(MicroOp::AccumulatorRead, d);   // restore: the difference replaces the
     c.Add(MicroOp::AccumulatorWrite, d);  // remainder where the quotient bit is 1
   }
@@ -359,7 +369,7 @@ MicroOpCounts SqrtCost(Operand a, Operand out, fixed::Policy p) {
   MicroOpCounts c;
   for (int j = 0; j < nr; ++j) {  // j root bits decided; this step finds bit i
     const int i = nr - 1 - j;
-    const int n = j + 3;                      // positions of R' - (4Y + 1), sign on top
+    const int n = j + 3;                           // positions of R' - (4Y + 1), sign on top
     const int remainderBits = j == 0 ? 0 : j + 1;  // R <= 2Y < 2^(j+1)
     c.Add(MicroOp::FlagOp);
     for (int q = 0; q < n; ++q) {
@@ -425,8 +435,8 @@ MicroOpCounts HostTransferCost(int width) {
 }
 
 const char* ReduceName(ReduceKind k) {
-  static const char* names[] = {"reduceOr", "reduceAnd", "reduceXor", "reduceSum",
-                                "reduceMax", "reduceMin"};
+  static const char* names[] = {"reduceOr",  "reduceAnd", "reduceXor",
+                                "reduceSum", "reduceMax", "reduceMin"};
   return names[static_cast<int>(k)];
 }
 

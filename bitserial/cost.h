@@ -11,7 +11,7 @@
 #include <array>
 #include <cstdint>
 
-#include "bitserial/memory.h"  // Space
+#include "bitserial/memory.h"   // Space
 #include "bitserial/profile.h"  // MicroOp, MicroOpCounts
 #include "fixed/format.h"
 
@@ -53,13 +53,13 @@ MicroOpCounts MulUniCost(Operand a, const fixed::Fixed& c, Operand out, fixed::P
 // (shift = fb + fo - fa, one more for Nearest), sign-corrected to the floor of the signed
 // quotient, then rounded (Nearest: the extra bit) and fitted like every other result.
 struct DivShape {
-  int shift;          // the quotient's scale (see above)
-  int dividendBits;   // m: planes of |a|·2^max(shift, 0) (the low max(shift, 0) are zero)
-  int divisorZeros;   // max(-shift, 0): zero low planes of the scaled divisor
-  int divisorBits;    // d = width of b + divisorZeros (the partial remainder has d bits)
-  int skipped;        // leading quotient bits known to be zero: min(divisorZeros, m)
-  int steps;          // quotient bits computed, one subtract-and-restore each: m - skipped
-  bool canBeNegative; // a or b signed: the magnitude quotient needs the floor correction
+  int shift;               // the quotient's scale (see above)
+  int dividendBits;        // m: planes of |a|·2^max(shift, 0) (the low max(shift, 0) are zero)
+  int divisorZeros;        // max(-shift, 0): zero low planes of the scaled divisor
+  int divisorBits;         // d = width of b + divisorZeros (the partial remainder has d bits)
+  int skipped;             // leading quotient bits known to be zero: min(divisorZeros, m)
+  int steps;               // quotient bits computed, one subtract-and-restore each: m - skipped
+  bool canBeNegative;      // a or b signed: the magnitude quotient needs the floor correction
   fixed::Format quotient;  // the exact floor quotient (fo + Nearest fraction bits)
 };
 DivShape DivideShape(const fixed::Format& a, const fixed::Format& b, const fixed::Format& out,
@@ -75,9 +75,9 @@ MicroOpCounts DivCost(Operand a, Operand b, Operand out, fixed::Policy p);
 // Sqrt always rounds down (fixed::Sqrt); only p.overflow matters.
 MicroOpCounts SqrtCost(Operand a, Operand out, fixed::Policy p);
 MicroOpCounts LogicCost(Operand a, bool binary, Space outSpace);  // 1-bit and/or/xor/not
-MicroOpCounts CopyCost(Operand a, Operand out);  // masked assignment
-MicroOpCounts BroadcastCost(Operand out);        // a uni value into every PE
-MicroOpCounts HostTransferCost(int width);       // planes between host and array
+MicroOpCounts CopyCost(Operand a, Operand out);                   // masked assignment
+MicroOpCounts BroadcastCost(Operand out);                         // a uni value into every PE
+MicroOpCounts HostTransferCost(int width);                        // planes between host and array
 enum class ReduceKind { Or, And, Xor, Sum, Max, Min };
 const char* ReduceName(ReduceKind k);
 MicroOpCounts ReduceCost(ReduceKind kind, Operand a);

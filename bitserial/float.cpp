@@ -93,9 +93,9 @@ Planes SquareRoot(Serial& s, const Planes& radicand, const OutPlanes& root) {
 
 // An operand split into its fields, with its class flags.
 struct Unpacked {
-  Planes frac;     // fracBits planes (flush-to-zero formats: 0 where the exponent field is 0)
-  Planes exp;      // the effective biased exponent: a subnormal's field 0 reads as 1
-  Planes sig;      // frac and the hidden bit on top: the significand, precision planes
+  Planes frac;  // fracBits planes (flush-to-zero formats: 0 where the exponent field is 0)
+  Planes exp;   // the effective biased exponent: a subnormal's field 0 reads as 1
+  Planes sig;   // frac and the hidden bit on top: the significand, precision planes
   const Word* sign;
   const Word* hidden;
   const Word* maxField;
@@ -132,10 +132,10 @@ void Classify(Serial& s, const FloatFormat& f, Unpacked& u, const Word* fracAny)
 
 // The special results, decided from the operands' classes.
 struct Specials {
-  const Word* zero;     // the result is ±0 (sign: the `sign` given to RoundPack)
-  const Word* inf;      // the result is an infinity of sign infSign (from an operand)
+  const Word* zero;  // the result is ±0 (sign: the `sign` given to RoundPack)
+  const Word* inf;   // the result is an infinity of sign infSign (from an operand)
   const Word* infSign;
-  const Word* nan;      // the canonical NaN
+  const Word* nan;  // the canonical NaN
 };
 
 // The exponent working width: a sign and the magnitude of every value the exponent
@@ -177,8 +177,8 @@ void RoundPack(Serial& s, const FloatFormat& f, const Word* sign, const Planes& 
   Planes cBits = s.Const(c, x);
   for (auto& b : cBits) b = b == s.Ones() ? s.Not(tiny) : s.Zero();
   Planes xrGated = f.subnormals ? s.Routed(tiny, xr, {}) : xr;
-  s.Add(Concat({{up}, Slice(In(v), lsb, lsb + m), xrGated}),
-        Concat({{up}, s.Zeros(m), cBits}), sum, false, false);
+  s.Add(Concat({{up}, Slice(In(v), lsb, lsb + m), xrGated}), Concat({{up}, s.Zeros(m), cBits}), sum,
+        false, false);
   const Planes field = Slice(In(packed), m, m + x);
   // field >= maxField (the sign of field - maxField, compared as the packing pass
   // produces the field), ignoring a zero result.
@@ -229,7 +229,8 @@ MultiFloat AddSub(const MultiFloat& a, const MultiFloat& b, bool subtract) {
   OutPlanes d = s.New(e + 1, Loc::Internal);
   s.Add(Concat({A.exp, {s.Zero()}}), Concat({B.exp, {s.Zero()}}), d, true, true);
   const Word* swap = d[e];
-  const Word* signL = s.Logic(LogicOp::Xor, A.sign, s.And(swap, s.Xor(A.sign, B.sign)), Loc::Internal);
+  const Word* signL =
+      s.Logic(LogicOp::Xor, A.sign, s.And(swap, s.Xor(A.sign, B.sign)), Loc::Internal);
   // The larger-exponent significand to memory, the other into the accumulator above
   // guard, round and sticky; the same pass latches each operand's "fraction not zero".
   OutPlanes big = s.New(p, Loc::Internal);
@@ -240,7 +241,8 @@ MultiFloat AddSub(const MultiFloat& a, const MultiFloat& b, bool subtract) {
   const int stages = CeilLog2(n);
   // Shift by |d|: by d where d >= 0, else by -d = ~d + 1 (stage masks d_k ^ swap, and
   // one more stage of 1 under swap).
-  for (int k = 0; k < std::min(stages, e); ++k) s.ShiftRightSticky(small, s.Xor(d[k], swap), 1 << k);
+  for (int k = 0; k < std::min(stages, e); ++k)
+    s.ShiftRightSticky(small, s.Xor(d[k], swap), 1 << k);
   s.ShiftRightSticky(small, swap, 1);
   if (e > stages) {
     s.ChargeReads(Slice(In(d), stages, e));
@@ -255,16 +257,16 @@ MultiFloat AddSub(const MultiFloat& a, const MultiFloat& b, bool subtract) {
   OutPlanes sum = s.New(n + 1, Loc::Acc);
   OutPlanes sumOut = {nullptr};
   sumOut.insert(sumOut.end(), sum.begin(), sum.end());
-  s.Add(Concat({{sub}, s.Zeros(3), In(big), {s.Zero()}}), Concat({{sub}, In(small), {sub}}),
-        sumOut, false, false);
+  s.Add(Concat({{sub}, s.Zeros(3), In(big), {s.Zero()}}), Concat({{sub}, In(small), {sub}}), sumOut,
+        false, false);
   // Equal exponents can leave small > big: negate (exactly) and flip the sign.
   const Word* neg = s.And(sub, sum[n]);
   s.NegateWhere(In(sum), neg, sum);
   const Word* signR = s.Xor(signL, neg);
   const Word* zero = s.NoneOf(In(sum));
   // Exact zero: +0 for a difference, the operands' sign for a sum (-0 + -0 = -0).
-  const Word* sign = s.Logic(LogicOp::Or, s.AndNot(signR, zero), s.And(zero, s.AndNot(signL, sub)),
-                             Loc::Internal);
+  const Word* sign =
+      s.Logic(LogicOp::Or, s.AndNot(signR, zero), s.And(zero, s.AndNot(signL, sub)), Loc::Internal);
   const int nstages = CeilLog2(n + 1);
   const Planes u = s.Normalise(sum, nstages);
   // The top position's field: xl + 1 - shift = xl + u + 2 - 2^nstages, with xl (the
@@ -273,8 +275,8 @@ MultiFloat AddSub(const MultiFloat& a, const MultiFloat& b, bool subtract) {
   const int x = ExpWidth((1 << e) + (1 << nstages), c);
   OutPlanes xr = s.New(x, Loc::Internal);
   s.ChargeReads(Concat({A.exp, B.exp}));
-  s.Add(Concat({s.Routed(swap, B.exp, A.exp), s.Zeros(x - e)}),
-        Concat({u, s.Zeros(x - nstages)}), xr, false, false);
+  s.Add(Concat({s.Routed(swap, B.exp, A.exp), s.Zeros(x - e)}), Concat({u, s.Zeros(x - nstages)}),
+        xr, false, false);
   const Word* bothNan = s.Or(A.nan, B.nan);
   const Word* infMinusInf = s.And(s.And(A.inf, B.inf), sub);
   Specials sp{zero, s.Or(A.inf, B.inf), s.Or(s.And(A.inf, A.sign), s.AndNot(B.sign, A.inf)),
@@ -369,7 +371,8 @@ namespace {
 // A significand with its leading one moved to the top: subnormal formats normalise a copy
 // in log2(p) stages (u: the stages not taken, so the shift is 2^stages - 1 - u); flush-to-
 // zero formats already have it there (u empty).
-std::pair<Planes, Planes> NormalisedSig(Serial& s, const FloatFormat& f, const Planes& sig, Loc loc) {
+std::pair<Planes, Planes> NormalisedSig(Serial& s, const FloatFormat& f, const Planes& sig,
+                                        Loc loc) {
   if (!f.subnormals) return {sig, {}};
   OutPlanes v = s.New(static_cast<int>(sig.size()), loc);
   s.Copy(sig, v);
@@ -452,11 +455,13 @@ Multi Compare(const MultiFloat& a, const MultiFloat& b, CompareKind kind, const 
   const Word* greater = s.Not(s.Or(o.less, o.equal));
   // -0 == +0: two zeros are equal whatever their signs.
   const Word* eq = s.Or(bothZero, s.And(sameSign, o.equal));
-  const Word* lt = s.AndNot(
-      s.Or(s.AndNot(o.signA, o.signB),
-           s.And(sameSign, s.Or(s.And(o.signA, greater), s.AndNot(o.less, o.signA)))),
-      bothZero);
-  const Word* result = kind == CompareKind::Less ? lt : kind == CompareKind::Equal ? eq : s.Or(lt, eq);
+  const Word* lt =
+      s.AndNot(s.Or(s.AndNot(o.signA, o.signB),
+                    s.And(sameSign, s.Or(s.And(o.signA, greater), s.AndNot(o.less, o.signA)))),
+               bothZero);
+  const Word* result = kind == CompareKind::Less    ? lt
+                       : kind == CompareKind::Equal ? eq
+                                                    : s.Or(lt, eq);
   Multi r(mach, BoolFormat(), name, Multi::Uninitialised{});
   s.Place(r);
   s.Logic(LogicOp::AndNot, result, nan, Loc::Internal, r.Plane(0));  // false if either is NaN
@@ -684,13 +689,9 @@ MultiFloat Constant(Machine& m, const UniFloat& u) {
 }
 }  // namespace
 
-#define ZEPHYR_FLOAT_UNI(Result, Op)                                                     \
-  Result Op(const MultiFloat& a, const UniFloat& b) {                                    \
-    return Op(a, Constant(a.GetMachine(), b));                                           \
-  }                                                                                      \
-  Result Op(const UniFloat& a, const MultiFloat& b) {                                    \
-    return Op(Constant(b.GetMachine(), a), b);                                           \
-  }
+#define ZEPHYR_FLOAT_UNI(Result, Op)                                                               \
+  Result Op(const MultiFloat& a, const UniFloat& b) { return Op(a, Constant(a.GetMachine(), b)); } \
+  Result Op(const UniFloat& a, const MultiFloat& b) { return Op(Constant(b.GetMachine(), a), b); }
 ZEPHYR_FLOAT_UNI(MultiFloat, Add)
 ZEPHYR_FLOAT_UNI(MultiFloat, Sub)
 ZEPHYR_FLOAT_UNI(MultiFloat, Mul)
@@ -703,14 +704,14 @@ ZEPHYR_FLOAT_UNI(Multi, Equal)
 #undef ZEPHYR_FLOAT_UNI
 
 const std::vector<std::string>& FloatOpNames() {
-  static const std::vector<std::string> names = {"fadd", "fsub", "fmul", "fdiv", "fsqrt", "fmin",
-                                                 "fmax", "fcompare", "ftofixed", "ffromfixed"};
+  static const std::vector<std::string> names = {"fadd",     "fsub",      "fmul", "fdiv",
+                                                 "fsqrt",    "fmin",      "fmax", "fcompare",
+                                                 "ftofixed", "ffromfixed"};
   return names;
 }
 
-double FloatOpCycles(const MachineProfile& profile, const std::string& op,
-                     const FloatFormat& f, Space space, fixed::Format fixedSide,
-                     fixed::Policy policy) {
+double FloatOpCycles(const MachineProfile& profile, const std::string& op, const FloatFormat& f,
+                     Space space, fixed::Format fixedSide, fixed::Policy policy) {
   return FloatOpReport(profile, op, f, space, fixedSide, policy).OpCycles(op);
 }
 
@@ -721,19 +722,29 @@ CycleReport FloatOpReport(const MachineProfile& profile, const std::string& op,
   MultiFloat a(m, f, "a", space), b(m, f, "b", space);
   Multi x(m, fixedSide, "x", space);
   m.Report().Clear();
-  if (op == "fadd") Add(a, b);
-  else if (op == "fsub") Sub(a, b);
-  else if (op == "fmul") Mul(a, b);
-  else if (op == "fdiv") Div(a, b);
-  else if (op == "fsqrt") Sqrt(a);
-  else if (op == "fmin") Min(a, b);
-  else if (op == "fmax") Max(a, b);
-  else if (op == "fcompare") Less(a, b);
-  else if (op == "ftofixed") ToFixed(a, fixedSide, policy);
-  else if (op == "ffromfixed") ToFloat(x, f);
+  if (op == "fadd")
+    Add(a, b);
+  else if (op == "fsub")
+    Sub(a, b);
+  else if (op == "fmul")
+    Mul(a, b);
+  else if (op == "fdiv")
+    Div(a, b);
+  else if (op == "fsqrt")
+    Sqrt(a);
+  else if (op == "fmin")
+    Min(a, b);
+  else if (op == "fmax")
+    Max(a, b);
+  else if (op == "fcompare")
+    Less(a, b);
+  else if (op == "ftofixed")
+    ToFixed(a, fixedSide, policy);
+  else if (op == "ffromfixed")
+    ToFloat(x, f);
   else
-    throw UserError(fmt::format("unknown float operation '{}' ({})", op,
-                                fmt::join(FloatOpNames(), ", ")));
+    throw UserError(
+        fmt::format("unknown float operation '{}' ({})", op, fmt::join(FloatOpNames(), ", ")));
   return m.Report();
 }
 

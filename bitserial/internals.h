@@ -1,6 +1,7 @@
 // bitserial/internals.h — what the layers of bitserial/ share beyond the public API: the
 // machine's writable per-PE flag planes and kernel-argument arrays, the conversion kernel
-// without its charge, the mask check (multi.cpp, reductions.cpp, mesh.cpp, float.cpp). Not for programs (they use bitserial/multi.h).
+// without its charge, the mask check (multi.cpp, reductions.cpp, mesh.cpp, float.cpp). Not for
+// programs (they use bitserial/multi.h).
 #pragma once
 
 #include <vector>

@@ -1,15 +1,15 @@
 // bitserial/kernels.cpp — compiled once per Highway target (foreach_target.h).
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "bitserial/kernels.cpp"
-#include "hwy/foreach_target.h"  // IWYU pragma: keep
-#include "hwy/highway.h"
-
 #include "bitserial/kernels.h"
-#include "hwy/aligned_allocator.h"
 
 #include <algorithm>
 #include <cstring>
 #include <vector>
+
+#include "hwy/aligned_allocator.h"
+#include "hwy/foreach_target.h"  // IWYU pragma: keep
+#include "hwy/highway.h"
 
 HWY_BEFORE_NAMESPACE();
 namespace zephyr::bitserial::HWY_NAMESPACE {
@@ -115,8 +115,10 @@ void AddRange(const AddArgs& g, size_t begin, size_t end) {
 
 void Add(const AddArgs& g, size_t words) {
   const bool ovf = g.ovf != nullptr;
-  if (g.invertB) ovf ? AddRange<true, true>(g, 0, words) : AddRange<true, false>(g, 0, words);
-  else ovf ? AddRange<false, true>(g, 0, words) : AddRange<false, false>(g, 0, words);
+  if (g.invertB)
+    ovf ? AddRange<true, true>(g, 0, words) : AddRange<true, false>(g, 0, words);
+  else
+    ovf ? AddRange<false, true>(g, 0, words) : AddRange<false, false>(g, 0, words);
 }
 
 // Per-thread scratch, reused, grown on demand, never shared: kSlot 0 holds one strip of a
@@ -183,7 +185,8 @@ void RoundFit(const RoundFitArgs& g, size_t words) {
   V* sums = FitBuffer(static_cast<size_t>(g.wo));
   for (size_t w = 0; w < words; w += lanes) {
     const V carry = g.roundBit ? hn::Load(d, g.roundBit + w) : hn::Zero(d);
-    RoundFitStrip(g, w, carry, [&](int i) { return hn::Load(d, g.src[i] + w); }, sums);
+    RoundFitStrip(
+        g, w, carry, [&](int i) { return hn::Load(d, g.src[i] + w); }, sums);
   }
 }
 
@@ -195,7 +198,6 @@ HWY_INLINE V AndXor(V a, V m, V inv) {
   return hn::Xor(hn::And(a, m), inv);
 #endif
 }
-
 
 // G rows of the product added into acc[lo..end) column by column: the G carries stay in
 // registers, so each full adder costs one L1 load and no store. Row r's bit at column i is
@@ -252,14 +254,22 @@ template <bool kOnes>
 void MulRowsAny(int g, const V* const* src, const V* mr, const V* const* inv, int lo, int mid,
                 int end, int p, V* acc) {
   switch (g) {
-    case 1: return MulRows<1, kOnes>(src, mr, inv, lo, mid, end, p, acc);
-    case 2: return MulRows<2, kOnes>(src, mr, inv, lo, mid, end, p, acc);
-    case 3: return MulRows<3, kOnes>(src, mr, inv, lo, mid, end, p, acc);
-    case 4: return MulRows<4, kOnes>(src, mr, inv, lo, mid, end, p, acc);
-    case 5: return MulRows<5, kOnes>(src, mr, inv, lo, mid, end, p, acc);
-    case 6: return MulRows<6, kOnes>(src, mr, inv, lo, mid, end, p, acc);
-    case 7: return MulRows<7, kOnes>(src, mr, inv, lo, mid, end, p, acc);
-    default: return MulRows<8, kOnes>(src, mr, inv, lo, mid, end, p, acc);
+    case 1:
+      return MulRows<1, kOnes>(src, mr, inv, lo, mid, end, p, acc);
+    case 2:
+      return MulRows<2, kOnes>(src, mr, inv, lo, mid, end, p, acc);
+    case 3:
+      return MulRows<3, kOnes>(src, mr, inv, lo, mid, end, p, acc);
+    case 4:
+      return MulRows<4, kOnes>(src, mr, inv, lo, mid, end, p, acc);
+    case 5:
+      return MulRows<5, kOnes>(src, mr, inv, lo, mid, end, p, acc);
+    case 6:
+      return MulRows<6, kOnes>(src, mr, inv, lo, mid, end, p, acc);
+    case 7:
+      return MulRows<7, kOnes>(src, mr, inv, lo, mid, end, p, acc);
+    default:
+      return MulRows<8, kOnes>(src, mr, inv, lo, mid, end, p, acc);
   }
 }
 
@@ -425,23 +435,24 @@ void Mul(const MulArgs& g, size_t words) {
                          groupEnd[gi], p, acc);
       } else {
         for (int r = r0; r < r0 + cnt; ++r) m[r] = hn::Load(d, g.row[rowIndex[r]] + w);
-        MulRowsAny<false>(cnt, src.data() + r0, m + r0, inv.data() + r0, groupLo[gi],
-                          groupMid[gi], groupEnd[gi], p, acc);
+        MulRowsAny<false>(cnt, src.data() + r0, m + r0, inv.data() + r0, groupLo[gi], groupMid[gi],
+                          groupEnd[gi], p, acc);
       }
     }
     if (g.fit) {  // round and fit straight from the L1 column buffer
       const V top = productSigned ? acc[p - 1] : hn::Zero(d);
       for (int i = 0; i < above; ++i) acc[p + i] = top;
       const V carry = g.fitNearest && fitLo > 0 ? acc[fitLo - 1] : hn::Zero(d);
-      RoundFitStrip(*g.fit, w, carry, [&](int i) { return acc[fitLo + i]; }, sums);
+      RoundFitStrip(
+          *g.fit, w, carry, [&](int i) { return acc[fitLo + i]; }, sums);
     } else {
       for (int i = 0; i < p; ++i) hn::Store(acc[i], d, g.out[i] + w);
     }
   }
 }
 
-void Select(const Word* mask, const Word* const* a, const Word* const* b, Word* const* out,
-            int n, size_t words) {
+void Select(const Word* mask, const Word* const* a, const Word* const* b, Word* const* out, int n,
+            size_t words) {
   const D d;
   const size_t lanes = hn::Lanes(d);
   for (size_t w = 0; w < words; w += lanes) {
@@ -470,11 +481,21 @@ void Logic(LogicOp op, const Word* a, const Word* b, Word* out, size_t words) {
     const V y = b ? hn::Load(d, b + w) : hn::Zero(d);
     V r;
     switch (op) {
-      case LogicOp::And: r = hn::And(x, y); break;
-      case LogicOp::Or: r = hn::Or(x, y); break;
-      case LogicOp::Xor: r = hn::Xor(x, y); break;
-      case LogicOp::AndNot: r = hn::AndNot(y, x); break;
-      default: r = hn::Not(x); break;
+      case LogicOp::And:
+        r = hn::And(x, y);
+        break;
+      case LogicOp::Or:
+        r = hn::Or(x, y);
+        break;
+      case LogicOp::Xor:
+        r = hn::Xor(x, y);
+        break;
+      case LogicOp::AndNot:
+        r = hn::AndNot(y, x);
+        break;
+      default:
+        r = hn::Not(x);
+        break;
     }
     hn::Store(r, d, out + w);
   }
@@ -543,8 +564,8 @@ void Sqrt(const SqrtArgs& g, size_t words) {
 }
 
 const PlaneKernels* GetTable() {
-  static const PlaneKernels table = {hwy::TargetName(HWY_TARGET), &Add, &RoundFit, &Mul,
-                                     &Select, &Equal, &Logic, &Divide, &Sqrt};
+  static const PlaneKernels table = {
+      hwy::TargetName(HWY_TARGET), &Add, &RoundFit, &Mul, &Select, &Equal, &Logic, &Divide, &Sqrt};
   return &table;
 }
 

@@ -86,9 +86,9 @@ struct DivideArgs {
   const Word* const* divisor;   // d + 1 entries
   int d;
   int steps;
-  int skipped;                  // <= d
-  Word* const* quotient;        // steps entries
-  Word* const* remainder;       // d entries, or null
+  int skipped;             // <= d
+  Word* const* quotient;   // steps entries
+  Word* const* remainder;  // d entries, or null
 };
 
 // Restoring square root, strip-mined likewise: for root bit i = rootBits-1 .. 0, R' = 4R +
@@ -97,7 +97,7 @@ struct DivideArgs {
 struct SqrtArgs {
   const Word* const* radicand;  // 2 * rootBits entries
   int rootBits;
-  Word* const* root;            // rootBits entries
+  Word* const* root;  // rootBits entries
 };
 
 enum class LogicOp : int { And, Or, Xor, AndNot /* a & ~b */, Not /* ~a */ };
@@ -108,8 +108,8 @@ struct PlaneKernels {
   void (*roundFit)(const RoundFitArgs& args, size_t words);
   void (*mul)(const MulArgs& args, size_t words);
   // out[i] = mask ? a[i] : b[i] for i < n (a bitwise select, never IfVecThenElse).
-  void (*select)(const Word* mask, const Word* const* a, const Word* const* b,
-                 Word* const* out, int n, size_t words);
+  void (*select)(const Word* mask, const Word* const* a, const Word* const* b, Word* const* out,
+                 int n, size_t words);
   // *out = 1 where a[i] == b[i] for every i < n.
   void (*equal)(const Word* const* a, const Word* const* b, int n, Word* out, size_t words);
   void (*logic)(LogicOp op, const Word* a, const Word* b, Word* out, size_t words);

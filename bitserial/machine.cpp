@@ -20,8 +20,8 @@ LayerBlock CheckBlock(LayerBlock b, int layers) {
   if (b.count == 0 && b.first == 0) return {0, layers};
   if (b.count == 0) b.count = layers - b.first;
   if (b.first < 0 || b.count < 1 || b.first + b.count > layers)
-    throw UserError(fmt::format("layer block {}..{} is outside the machine's {} layer(s)",
-                                b.first, b.first + b.count - 1, layers));
+    throw UserError(fmt::format("layer block {}..{} is outside the machine's {} layer(s)", b.first,
+                                b.first + b.count - 1, layers));
   return b;
 }
 }  // namespace
@@ -33,7 +33,8 @@ Machine::Machine(MachineProfile profile, int64_t virtualPes, int shapeIndex, Lay
       firstLayer_(CheckBlock(block, modelledLayers_).first),
       layers_(CheckBlock(block, modelledLayers_).count),
       firstPe_(int64_t{firstLayer_} * profile_.physicalPes),
-      virtualPes_(std::min<int64_t>(modelledPes_ - firstPe_, int64_t{layers_} * profile_.physicalPes)),
+      virtualPes_(
+          std::min<int64_t>(modelledPes_ - firstPe_, int64_t{layers_} * profile_.physicalPes)),
       wordsPerLayer_(profile_.physicalPes / 64),
       words_(layers_ * wordsPerLayer_),
       memory_(profile_.internalBitsPerPe, profile_.externalBitsPerPe, modelledLayers_),
@@ -63,7 +64,9 @@ Machine::Machine(MachineProfile profile, int64_t virtualPes, int shapeIndex, Lay
 
 Machine::~Machine() = default;
 
-std::vector<Word> Machine::SaveOverflow() const { return std::vector<Word>(overflow_, overflow_ + words_); }
+std::vector<Word> Machine::SaveOverflow() const {
+  return std::vector<Word>(overflow_, overflow_ + words_);
+}
 
 void Machine::RestoreOverflow(const std::vector<Word>& saved) {
   ZEPHYR_CHECK(saved.size() == words_);

@@ -75,7 +75,9 @@ class Machine {
   // Charges one operation (counts are per layer; the report multiplies by the layers).
   void Charge(const std::string& op, const MicroOpCounts& counts) { report_.Charge(op, counts); }
   // Charges counts summed over every layer (an operation whose layers differ).
-  void ChargeWhole(const std::string& op, const MicroOpCounts& total) { report_.ChargeWhole(op, total); }
+  void ChargeWhole(const std::string& op, const MicroOpCounts& total) {
+    report_.ChargeWhole(op, total);
+  }
 
   // The current activity plane: existing virtual PEs inside every enclosing where.
   const Word* Activity() const { return activity_.back(); }

@@ -10,7 +10,6 @@ namespace zephyr::bitserial {
 
 const char* SpaceName(Space s) { return s == Space::Internal ? "internal" : "external"; }
 
-
 PeMemory::PeMemory(int64_t internalBitsPerPe, int64_t externalBitsPerPe, int layers)
     : layers_(layers) {
   ZEPHYR_CHECK_GE(layers, 1);
@@ -48,8 +47,8 @@ Allocation PeMemory::Allocate(const std::string& name, int64_t bits, std::option
   }
   if (!at) {
     auto left = [&](Space x) {
-      return fmt::format("{} memory has {} of {} bits free", SpaceName(x),
-                         Capacity(x) - Used(x), Capacity(x));
+      return fmt::format("{} memory has {} of {} bits free", SpaceName(x), Capacity(x) - Used(x),
+                         Capacity(x));
     };
     std::string where = space ? left(*space) : left(Space::Internal) + ", " + left(Space::External);
     throw UserError(fmt::format(
@@ -58,9 +57,10 @@ Allocation PeMemory::Allocate(const std::string& name, int64_t bits, std::option
         name, bits, where, layers_, layers_ == 1 ? "" : "s"));
   }
   Allocation a{nextId_++, name, s, *at, bits};
-  auto pos = std::lower_bound(live_.begin(), live_.end(), a, [](const Allocation& x, const Allocation& y) {
-    return std::tie(x.space, x.address) < std::tie(y.space, y.address);
-  });
+  auto pos =
+      std::lower_bound(live_.begin(), live_.end(), a, [](const Allocation& x, const Allocation& y) {
+        return std::tie(x.space, x.address) < std::tie(y.space, y.address);
+      });
   live_.insert(pos, a);
   int i = static_cast<int>(s);
   used_[i] += bits;
@@ -69,18 +69,20 @@ Allocation PeMemory::Allocate(const std::string& name, int64_t bits, std::option
 }
 
 void PeMemory::Free(int id) {
-  auto it = std::find_if(live_.begin(), live_.end(), [&](const Allocation& a) { return a.id == id; });
+  auto it =
+      std::find_if(live_.begin(), live_.end(), [&](const Allocation& a) { return a.id == id; });
   ZEPHYR_CHECK(it != live_.end());
   used_[static_cast<int>(it->space)] -= it->bits;
   live_.erase(it);
 }
 
 std::string PeMemory::Map() const {
-  std::string s = fmt::format("PE memory map ({} virtual-PE layer{}; addresses in bits per virtual PE)\n",
-                              layers_, layers_ == 1 ? "" : "s");
+  std::string s =
+      fmt::format("PE memory map ({} virtual-PE layer{}; addresses in bits per virtual PE)\n",
+                  layers_, layers_ == 1 ? "" : "s");
   for (Space sp : {Space::Internal, Space::External}) {
-    s += fmt::format("  {}: {} of {} bits used (peak {})\n", SpaceName(sp), Used(sp),
-                     Capacity(sp), PeakUsed(sp));
+    s += fmt::format("  {}: {} of {} bits used (peak {})\n", SpaceName(sp), Used(sp), Capacity(sp),
+                     PeakUsed(sp));
     for (const Allocation& a : live_)
       if (a.space == sp)
         s += fmt::format("    {:>7}..{:<7} {:>5} bits  {}\n", a.address, a.address + a.bits - 1,

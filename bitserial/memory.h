@@ -2,10 +2,10 @@
 //
 // Every multi variable has a width and an address (in bits) in the internal (2048 bits per
 // PE on the WaveTracer) or the external (32 KB per PE) memory. With n virtual-PE layers
-// each virtual PE owns 1/n of each physical PE's memory (paper §5.1, docs/background.md: "the controller splits
-// each PE's memory into n equal parts"), so addresses here are per virtual PE and the
-// capacity is floor(physical capacity / n). Allocation is first fit in address order, so
-// the same program always gets the same layout.
+// each virtual PE owns 1/n of each physical PE's memory (paper §5.1, docs/background.md: "the
+// controller splits each PE's memory into n equal parts"), so addresses here are per virtual PE and
+// the capacity is floor(physical capacity / n). Allocation is first fit in address order, so the
+// same program always gets the same layout.
 #pragma once
 
 #include <cstdint>
@@ -13,13 +13,11 @@
 #include <string>
 #include <vector>
 
-
 namespace zephyr::bitserial {
 
 // The two address spaces of a PE (internal: 2 Kbit on the WaveTracer; external: 32 KB).
 enum class Space : int { Internal, External };
 const char* SpaceName(Space s);
-
 
 struct Allocation {
   int id = -1;

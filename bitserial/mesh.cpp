@@ -1,8 +1,6 @@
 // bitserial/mesh.cpp — moves across the PE mesh (bitserial/multi.h): MeshShift on the
 // machine's shape and across the virtual mesh of the layers, charged by the schedule
 // (cost.h) of each move.
-#include "bitserial/multi.h"
-
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -10,6 +8,7 @@
 #include <cstring>
 
 #include "bitserial/internals.h"
+#include "bitserial/multi.h"
 #include "fixed/check.h"
 
 namespace zephyr::bitserial {
@@ -59,19 +58,22 @@ std::vector<int> VirtualBlock(const Machine& m, const MeshShape& shape) {
   const int rank = static_cast<int>(shape.extent.size());
   const MeshShape physical = rank == 1 ? MeshShape{{m.Profile().physicalPes}} : m.Shape();
   if (rank < 1 || rank > 3 || shape.Size() != m.ModelledPes())
-    throw UserError(fmt::format("virtual shape {}: it must have 1 to 3 extents and cover the "
-                                "machine's {} virtual PEs", shape.Name(), m.ModelledPes()));
+    throw UserError(
+        fmt::format("virtual shape {}: it must have 1 to 3 extents and cover the "
+                    "machine's {} virtual PEs",
+                    shape.Name(), m.ModelledPes()));
   if (static_cast<int>(physical.extent.size()) != rank)
-    throw UserError(fmt::format("virtual shape {} has {} axes but the physical mesh {} has {} "
-                                "(choose a machine shape of the same rank, or a 1-D shape)",
-                                shape.Name(), rank, physical.Name(), physical.extent.size()));
+    throw UserError(
+        fmt::format("virtual shape {} has {} axes but the physical mesh {} has {} "
+                    "(choose a machine shape of the same rank, or a 1-D shape)",
+                    shape.Name(), rank, physical.Name(), physical.extent.size()));
   std::vector<int> block(rank);
   for (int i = 0; i < rank; ++i) {
     if (shape.extent[i] % physical.extent[i] != 0)
-      throw UserError(fmt::format("virtual shape {}: extent {} is not a multiple of the "
-                                  "physical mesh {}'s {} (the block mapping needs whole blocks)",
-                                  shape.Name(), shape.extent[i], physical.Name(),
-                                  physical.extent[i]));
+      throw UserError(
+          fmt::format("virtual shape {}: extent {} is not a multiple of the "
+                      "physical mesh {}'s {} (the block mapping needs whole blocks)",
+                      shape.Name(), shape.extent[i], physical.Name(), physical.extent[i]));
     block[i] = shape.extent[i] / physical.extent[i];
   }
   return block;
@@ -80,12 +82,13 @@ std::vector<int> VirtualBlock(const Machine& m, const MeshShape& shape) {
 Multi MeshShift(const Multi& a, const MeshShape& shape, int axis, int distance) {
   Machine& m = a.GetMachine();
   if (m.IsBlock())
-    throw UserError("a virtual mesh shift moves data between every virtual-PE layer; a machine "
-                    "holding only a block of the layers cannot run it");
+    throw UserError(
+        "a virtual mesh shift moves data between every virtual-PE layer; a machine "
+        "holding only a block of the layers cannot run it");
   const std::vector<int> block = VirtualBlock(m, shape);
   if (axis < 0 || axis >= static_cast<int>(shape.extent.size()))
-    throw UserError(fmt::format("mesh shift along axis {}: the virtual shape {} has {} axes",
-                                axis, shape.Name(), shape.extent.size()));
+    throw UserError(fmt::format("mesh shift along axis {}: the virtual shape {} has {} axes", axis,
+                                shape.Name(), shape.extent.size()));
   Multi r(m, a.Format(), "virtualShift", Multi::Uninitialised{});
   m.ChargeWhole("virtualShift",
                 VirtualMeshShiftCost(a.AsOperand(), m.Layers(), block[axis], distance));

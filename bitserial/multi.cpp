@@ -79,7 +79,8 @@ void RoundFitInto(Machine& m, const Word* base, int w, bool isSigned, int frac, 
 // a + b or a - b (subtract), exactly, then rounded and fitted.
 void AddInto(const Multi& a, const Multi& b, bool subtract, Multi& out, Policy policy) {
   Machine& m = a.GetMachine();
-  const Format e = subtract ? DiffFormat(a.Format(), b.Format()) : SumFormat(a.Format(), b.Format());
+  const Format e =
+      subtract ? DiffFormat(a.Format(), b.Format()) : SumFormat(a.Format(), b.Format());
   const int w = e.Width();
   const int wo = out.Width();
   const int lo = e.fracBits - out.Format().fracBits;
@@ -98,8 +99,16 @@ void AddInto(const Multi& a, const Multi& b, bool subtract, Multi& out, Policy p
       po.push_back(p < wo ? out.Plane(p) : nullptr);
     }
     const bool outSigned = out.Format().isSigned;
-    AddArgs args{pa.data(), pb.data(), po.data(), n, subtract, subtract,
-                 outSigned ? wo - 1 : wo, outSigned, MachineInternals::Overflow(m), m.Activity()};
+    AddArgs args{pa.data(),
+                 pb.data(),
+                 po.data(),
+                 n,
+                 subtract,
+                 subtract,
+                 outSigned ? wo - 1 : wo,
+                 outSigned,
+                 MachineInternals::Overflow(m),
+                 m.Activity()};
     m.Kernels().add(args, m.WordsPerPlane());
     return;
   }
@@ -193,9 +202,18 @@ void MulInto(const Multi& a, const std::vector<const Word*>& rows, const std::ve
                          policy.overflow == fixed::OverflowPolicy::Saturate,
                          MachineInternals::Overflow(m),
                          m.Activity()};
-  MulArgs args{pa.data(), w, rows.data(), shifts.data(), subs.data(),
-               static_cast<int>(rows.size()), nullptr, &fit, lo, product.isSigned,
-               policy.rounding == fixed::Rounding::Nearest, a.Width(),
+  MulArgs args{pa.data(),
+               w,
+               rows.data(),
+               shifts.data(),
+               subs.data(),
+               static_cast<int>(rows.size()),
+               nullptr,
+               &fit,
+               lo,
+               product.isSigned,
+               policy.rounding == fixed::Rounding::Nearest,
+               a.Width(),
                a.Format().isSigned};
   m.Kernels().mul(args, m.WordsPerPlane());
 }
@@ -243,8 +261,8 @@ void MulByMulti(const Multi& a, const Multi& b, Multi& out, Policy p) {
 
 void CheckBool(const Multi& a, const char* what) {
   if (a.Width() != 1)
-    throw UserError(fmt::format("{} needs a 1-bit multi (a mask), got format {}", what,
-                                a.Format().Name()));
+    throw UserError(
+        fmt::format("{} needs a 1-bit multi (a mask), got format {}", what, a.Format().Name()));
 }
 
 // ---- Multi ------------------------------------------------------------------------------------
@@ -406,14 +424,20 @@ static Multi MinMax(const Multi& a, const Multi& b, Format out, Policy p, bool i
   LessPlane(a, b, lt.p);
   const Format u = UnionFormat(a.Format(), b.Format());
   Scratch exact(m, u.Width());
-  if (isMax) SelectExact(lt.p, b, a, u, exact.p);
-  else SelectExact(lt.p, a, b, u, exact.p);
+  if (isMax)
+    SelectExact(lt.p, b, a, u, exact.p);
+  else
+    SelectExact(lt.p, a, b, u, exact.p);
   RoundFitInto(m, exact.p, u.Width(), u.isSigned, u.fracBits, r, p);
   return r;
 }
 
-Multi Min(const Multi& a, const Multi& b, Format out, Policy p) { return MinMax(a, b, out, p, false); }
-Multi Max(const Multi& a, const Multi& b, Format out, Policy p) { return MinMax(a, b, out, p, true); }
+Multi Min(const Multi& a, const Multi& b, Format out, Policy p) {
+  return MinMax(a, b, out, p, false);
+}
+Multi Max(const Multi& a, const Multi& b, Format out, Policy p) {
+  return MinMax(a, b, out, p, true);
+}
 
 Multi Mul(const Multi& a, const Multi& b, Format out, Policy p) {
   CheckSameMachine(a, b);
@@ -545,8 +569,13 @@ Multi Div(const Multi& a, const Multi& b, Format out, Policy p) {
     pDivisor[s.divisorZeros + q] = fb.isSigned ? magB.Plane(q) : b.Plane(q);
   for (int i = 0; i < s.steps; ++i) pOut.push_back(quo.Plane(i));
   for (int q = 0; q < d; ++q) pOut.push_back(remPlanes.Plane(q));
-  const DivideArgs divide{pDividend.data(), pDivisor.data(), d, s.steps, s.skipped,
-                          pOut.data(), s.canBeNegative ? pOut.data() + s.steps : nullptr};
+  const DivideArgs divide{pDividend.data(),
+                          pDivisor.data(),
+                          d,
+                          s.steps,
+                          s.skipped,
+                          pOut.data(),
+                          s.canBeNegative ? pOut.data() + s.steps : nullptr};
   k.divide(divide, words);
   PlaneList rem(d);
   for (int q = 0; q < d; ++q) rem[q] = remPlanes.Plane(q);
@@ -594,7 +623,8 @@ Multi Div(const Multi& a, const Multi& b, Format out, Policy p) {
   for (int i = 0; i < wo; ++i) ro[i] = r.Plane(i);
   k.select(zeroDivisor, ends.data(), ro.data(), ro.data(), wo, words);
   k.logic(LogicOp::And, zeroDivisor, m.Activity(), keep, words);
-  k.logic(LogicOp::Or, MachineInternals::DivideByZero(m), keep, MachineInternals::DivideByZero(m), words);
+  k.logic(LogicOp::Or, MachineInternals::DivideByZero(m), keep, MachineInternals::DivideByZero(m),
+          words);
   return r;
 }
 
@@ -630,7 +660,8 @@ Multi Sqrt(const Multi& a, Format out, Policy p) {
                  keep.p);
   }
   if (fa.isSigned) {  // a < 0: 0 and the invalid flag
-    for (int i = 0; i < r.Width(); ++i) k.logic(LogicOp::AndNot, r.Plane(i), neg, r.Plane(i), words);
+    for (int i = 0; i < r.Width(); ++i)
+      k.logic(LogicOp::AndNot, r.Plane(i), neg, r.Plane(i), words);
     k.logic(LogicOp::And, neg, m.Activity(), keep.p, words);
     k.logic(LogicOp::Or, MachineInternals::Invalid(m), keep.p, MachineInternals::Invalid(m), words);
   }
@@ -648,8 +679,8 @@ Multi Shift(const Multi& a, int k, Format out, Policy p) {
 Multi Convert(const Multi& a, Format out, Policy p) { return Shift(a, 0, out, p); }
 
 void ConvertUncharged(const Multi& a, Multi& out, Policy p) {
-  RoundFitInto(a.GetMachine(), a.Plane(0), a.Width(), a.Format().isSigned, a.Format().fracBits,
-               out, p);
+  RoundFitInto(a.GetMachine(), a.Plane(0), a.Width(), a.Format().isSigned, a.Format().fracBits, out,
+               p);
 }
 
 void SetInvalid(Machine& m, const Word* where) {
@@ -721,16 +752,24 @@ Multi Equal(const Multi& a, const Multi& b) {
   return r;
 }
 
-Multi Less(const Multi& a, const Uni& b) { return Less(a, Multi::Constant(a.GetMachine(), b.value)); }
-Multi Less(const Uni& a, const Multi& b) { return Less(Multi::Constant(b.GetMachine(), a.value), b); }
+Multi Less(const Multi& a, const Uni& b) {
+  return Less(a, Multi::Constant(a.GetMachine(), b.value));
+}
+Multi Less(const Uni& a, const Multi& b) {
+  return Less(Multi::Constant(b.GetMachine(), a.value), b);
+}
 Multi LessEqual(const Multi& a, const Uni& b) {
   return LessEqual(a, Multi::Constant(a.GetMachine(), b.value));
 }
 Multi LessEqual(const Uni& a, const Multi& b) {
   return LessEqual(Multi::Constant(b.GetMachine(), a.value), b);
 }
-Multi Equal(const Multi& a, const Uni& b) { return Equal(a, Multi::Constant(a.GetMachine(), b.value)); }
-Multi Equal(const Uni& a, const Multi& b) { return Equal(Multi::Constant(b.GetMachine(), a.value), b); }
+Multi Equal(const Multi& a, const Uni& b) {
+  return Equal(a, Multi::Constant(a.GetMachine(), b.value));
+}
+Multi Equal(const Uni& a, const Multi& b) {
+  return Equal(Multi::Constant(b.GetMachine(), a.value), b);
+}
 
 static Multi LogicOf(LogicOp op, const Multi& a, const Multi* b, const char* name) {
   CheckBool(a, name);
@@ -747,14 +786,22 @@ Multi Or(const Multi& a, const Multi& b) { return LogicOf(LogicOp::Or, a, &b, "o
 Multi Xor(const Multi& a, const Multi& b) { return LogicOf(LogicOp::Xor, a, &b, "xor"); }
 Multi Not(const Multi& a) { return LogicOf(LogicOp::Not, a, nullptr, "not"); }
 
-Multi operator+(const Multi& a, const Multi& b) { return Add(a, b, SumFormat(a.Format(), b.Format())); }
-Multi operator-(const Multi& a, const Multi& b) { return Sub(a, b, DiffFormat(a.Format(), b.Format())); }
+Multi operator+(const Multi& a, const Multi& b) {
+  return Add(a, b, SumFormat(a.Format(), b.Format()));
+}
+Multi operator-(const Multi& a, const Multi& b) {
+  return Sub(a, b, DiffFormat(a.Format(), b.Format()));
+}
 Multi operator*(const Multi& a, const Multi& b) {
   return Mul(a, b, ProductFormat(a.Format(), b.Format()));
 }
 Multi operator-(const Multi& a) { return Neg(a, NegFormat(a.Format())); }
-Multi operator+(const Multi& a, const Uni& b) { return Add(a, b, SumFormat(a.Format(), b.value.format)); }
-Multi operator-(const Multi& a, const Uni& b) { return Sub(a, b, DiffFormat(a.Format(), b.value.format)); }
+Multi operator+(const Multi& a, const Uni& b) {
+  return Add(a, b, SumFormat(a.Format(), b.value.format));
+}
+Multi operator-(const Multi& a, const Uni& b) {
+  return Sub(a, b, DiffFormat(a.Format(), b.value.format));
+}
 Multi operator*(const Multi& a, const Uni& b) {
   return Mul(a, b, ProductFormat(a.Format(), b.value.format));
 }

@@ -73,9 +73,7 @@ class Multi {
   std::vector<int64_t> ReadRaw() const;  // widths <= 64
   // One PE's value, for tests and debugging (not charged).
   fixed::Fixed At(int64_t pe) const;
-  bool BitAt(int i, int64_t pe) const {
-    return (Plane(i)[pe >> 6] >> (pe & 63)) & 1;
-  }
+  bool BitAt(int i, int64_t pe) const { return (Plane(i)[pe >> 6] >> (pe & 63)) & 1; }
 
  private:
   void Release();

@@ -1,9 +1,8 @@
 #include "bitserial/profile.h"
 
-#include <cmath>
-
 #include <fmt/format.h>
 
+#include <cmath>
 #include <cstdlib>
 
 #include "fixed/check.h"
@@ -12,9 +11,9 @@ namespace zephyr::bitserial {
 
 namespace {
 constexpr const char* kMicroOpNames[kMicroOpCount] = {
-    "readInternal", "writeInternal", "readExternal", "writeExternal", "aluStep", "flagOp",
-    "accumulatorRead", "accumulatorWrite", "activitySet", "meshHop", "reduceBit",
-    "broadcastBit", "hostPlane"};
+    "readInternal", "writeInternal",   "readExternal",     "writeExternal", "aluStep",
+    "flagOp",       "accumulatorRead", "accumulatorWrite", "activitySet",   "meshHop",
+    "reduceBit",    "broadcastBit",    "hostPlane"};
 constexpr const char* kClassNames[kCycleClassCount] = {
     "alu", "internalMemory", "externalMemory", "communication", "reduction", "host"};
 
@@ -22,34 +21,47 @@ using Table = std::map<std::string, std::pair<double, std::string>>;
 
 // ---- WaveTracer Zephyr -----------------------------------------------------------------
 // Facts: paper §5.1 (8192 PEs, 64x128 or 16x32x16, ~2 Kbit internal + 32 KB external per
-// PE). Nothing about its timing survives in any source we found (docs/background.md, "The machine"), so every cost
-// below is an ASSUMPTION, each with the reason for its value.
+// PE). Nothing about its timing survives in any source we found (docs/background.md, "The
+// machine"), so every cost below is an ASSUMPTION, each with the reason for its value.
 Table WaveTracerTable() {
   return {
-      {"clockHz", {10e6, "assumed: an era-typical 10 MHz, as the Goodyear MPP (docs/background.md)"}},
+      {"clockHz",
+       {10e6, "assumed: an era-typical 10 MHz, as the Goodyear MPP (docs/background.md)"}},
       {"physicalPes", {8192, "paper §5.1: two boards of 4096 one-bit PEs"}},
       {"internalBitsPerPe", {2048, "paper §5.1: about 2 Kbit of internal memory per PE"}},
       {"externalBitsPerPe", {32 * 1024 * 8, "paper §5.1: 32 KB of external memory per PE"}},
       {"readInternal", {1, "assumed: one on-chip memory access per cycle, as on the MPP"}},
       {"writeInternal", {1, "assumed: as readInternal"}},
-      {"readExternal", {2, "assumed: off-chip memory behind the PE chips, taken as twice an "
-                           "on-chip access"}},
+      {"readExternal",
+       {2,
+        "assumed: off-chip memory behind the PE chips, taken as twice an "
+        "on-chip access"}},
       {"writeExternal", {2, "assumed: as readExternal"}},
-      {"aluStep", {1, "assumed: a PE does either a memory access or a logic step in a cycle "
-                      "(conservative; the MPP overlaps them)"}},
+      {"aluStep",
+       {1,
+        "assumed: a PE does either a memory access or a logic step in a cycle "
+        "(conservative; the MPP overlaps them)"}},
       {"flagOp", {1, "assumed: one cycle to clear/set/latch a PE flag, as on the MPP"}},
-      {"accumulatorRead", {1, "assumed: no shift register is documented for the Zephyr, so "
-                              "the partial product lives in internal memory"}},
+      {"accumulatorRead",
+       {1,
+        "assumed: no shift register is documented for the Zephyr, so "
+        "the partial product lives in internal memory"}},
       {"accumulatorWrite", {1, "assumed: as accumulatorRead"}},
       {"activitySet", {1, "assumed: one cycle to load the activity flag, as a flagOp"}},
       {"meshHop", {1, "assumed: nearest-neighbour wires move one bit per cycle, as on the MPP"}},
-      {"reduceBit", {13, "assumed: a global OR/count tree over 8192 PEs, one cycle per "
-                         "level, log2(8192) = 13 levels"}},
+      {"reduceBit",
+       {13,
+        "assumed: a global OR/count tree over 8192 PEs, one cycle per "
+        "level, log2(8192) = 13 levels"}},
       {"broadcastBit", {1, "assumed: the controller puts a host bit on the instruction bus"}},
-      {"floatSubnormals", {1, "assumed: IEEE 754 gradual underflow (the paper does not say "
-                              "how MultiC's multi float underflowed)"}},
-      {"hostPlane", {2048, "assumed: SCSI at 5 MB/s moves one 1 KB bit-plane in 204.8 us = "
-                           "2048 cycles at 10 MHz"}},
+      {"floatSubnormals",
+       {1,
+        "assumed: IEEE 754 gradual underflow (the paper does not say "
+        "how MultiC's multi float underflowed)"}},
+      {"hostPlane",
+       {2048,
+        "assumed: SCSI at 5 MB/s moves one 1 KB bit-plane in 204.8 us = "
+        "2048 cycles at 10 MHz"}},
   };
 }
 
@@ -71,23 +83,29 @@ Table MppTable() {
       {"writeExternal", {1, "unused: the MPP has no external PE memory (capacity 0)"}},
       {"aluStep", {0, "Batcher 1980: the full adder works in the cycle of the memory access"}},
       {"flagOp", {1, "Batcher 1980: clearing/loading the C or G register takes a cycle"}},
-      {"accumulatorRead", {0, "Batcher 1980: the partial product circulates in the PE's "
-                              "shift register, in the same cycle"}},
+      {"accumulatorRead",
+       {0,
+        "Batcher 1980: the partial product circulates in the PE's "
+        "shift register, in the same cycle"}},
       {"accumulatorWrite", {0, "Batcher 1980: as accumulatorRead"}},
       {"activitySet", {1, "Batcher 1980: loading the G (mask) register takes a cycle"}},
       {"meshHop", {1, "Batcher 1980: a bit-plane moves one PE per cycle on the mesh"}},
       {"reduceBit", {1, "assumed: the sum-OR tree is pipelined, one plane per cycle"}},
       {"broadcastBit", {1, "assumed: one cycle on the control unit's broadcast path"}},
-      {"floatSubnormals", {0, "assumed: the MPP (1980) predates IEEE 754 (1985) and its "
-                              "gradual underflow; machines of its time flushed to zero"}},
-      {"hostPlane", {128, "Batcher 1980: planes enter and leave through the 128-bit-wide S "
-                          "register columns, 128 bits per cycle"}},
+      {"floatSubnormals",
+       {0,
+        "assumed: the MPP (1980) predates IEEE 754 (1985) and its "
+        "gradual underflow; machines of its time flushed to zero"}},
+      {"hostPlane",
+       {128,
+        "Batcher 1980: planes enter and leave through the 128-bit-wide S "
+        "register columns, 128 bits per cycle"}},
   };
 }
 
 const std::map<std::string, Table (*)()>& Registry() {
-  static const std::map<std::string, Table (*)()> registry = {
-      {"mpp", &MppTable}, {"wavetracer", &WaveTracerTable}};
+  static const std::map<std::string, Table (*)()> registry = {{"mpp", &MppTable},
+                                                              {"wavetracer", &WaveTracerTable}};
   return registry;
 }
 
@@ -105,15 +123,22 @@ const char* CycleClassName(CycleClass c) { return kClassNames[static_cast<int>(c
 
 CycleClass ClassOf(MicroOp op) {
   switch (op) {
-    case MicroOp::ReadInternal: case MicroOp::WriteInternal:
-    case MicroOp::AccumulatorRead: case MicroOp::AccumulatorWrite:
+    case MicroOp::ReadInternal:
+    case MicroOp::WriteInternal:
+    case MicroOp::AccumulatorRead:
+    case MicroOp::AccumulatorWrite:
       return CycleClass::InternalMemory;
-    case MicroOp::ReadExternal: case MicroOp::WriteExternal:
+    case MicroOp::ReadExternal:
+    case MicroOp::WriteExternal:
       return CycleClass::ExternalMemory;
-    case MicroOp::MeshHop: return CycleClass::Communication;
-    case MicroOp::ReduceBit: return CycleClass::Reduction;
-    case MicroOp::HostPlane: return CycleClass::Host;
-    default: return CycleClass::Alu;
+    case MicroOp::MeshHop:
+      return CycleClass::Communication;
+    case MicroOp::ReduceBit:
+      return CycleClass::Reduction;
+    case MicroOp::HostPlane:
+      return CycleClass::Host;
+    default:
+      return CycleClass::Alu;
   }
 }
 
@@ -143,8 +168,7 @@ MachineProfile ProfileFromTable(const std::string& name, const Table& entries) {
   p.physicalPes = static_cast<int>(take("physicalPes", nullptr));
   p.internalBitsPerPe = static_cast<int64_t>(take("internalBitsPerPe", nullptr));
   p.externalBitsPerPe = static_cast<int64_t>(take("externalBitsPerPe", nullptr));
-  for (int i = 0; i < kMicroOpCount; ++i)
-    p.cost[i] = take(kMicroOpNames[i], &p.note[i]);
+  for (int i = 0; i < kMicroOpCount; ++i) p.cost[i] = take(kMicroOpNames[i], &p.note[i]);
   p.floatSubnormals = take("floatSubnormals", &p.floatNote) != 0;
   for (auto& [key, value] : entries) {
     bool known = key == "clockHz" || key == "physicalPes" || key == "internalBitsPerPe" ||
@@ -157,12 +181,18 @@ MachineProfile ProfileFromTable(const std::string& name, const Table& entries) {
   // AVX-512), so a layer is a whole number of them (docs/bitserial.md; another multiple of 64
   // crashed the AVX2 and AVX-512 kernels on the first add).
   if (p.physicalPes <= 0 || p.physicalPes % 512 != 0)
-    throw UserError(fmt::format("machine profile '{}': physicalPes must be a positive "
-                                "multiple of 512, got {}", name, p.physicalPes));
-  if (p.clockHz <= 0) throw UserError(fmt::format("machine profile '{}': clockHz must be > 0", name));
-  if (name == "mpp") p.shapes = {MeshShape{{128, 128}}};
-  else if (p.physicalPes == 8192) p.shapes = {MeshShape{{64, 128}}, MeshShape{{16, 32, 16}}};
-  else p.shapes = {MeshShape{{64, p.physicalPes / 64}}};
+    throw UserError(
+        fmt::format("machine profile '{}': physicalPes must be a positive "
+                    "multiple of 512, got {}",
+                    name, p.physicalPes));
+  if (p.clockHz <= 0)
+    throw UserError(fmt::format("machine profile '{}': clockHz must be > 0", name));
+  if (name == "mpp")
+    p.shapes = {MeshShape{{128, 128}}};
+  else if (p.physicalPes == 8192)
+    p.shapes = {MeshShape{{64, 128}}, MeshShape{{16, 32, 16}}};
+  else
+    p.shapes = {MeshShape{{64, p.physicalPes / 64}}};
   p.source = name == "mpp" ? "Batcher, Design of a Massively Parallel Processor, IEEE Trans. "
                              "Computers C-29(9), 1980"
                            : "paper §5.1 for the geometry; costs assumed (docs/background.md)";
@@ -192,7 +222,9 @@ void MachineProfile::Override(const std::string& assignment) {
   std::string key = assignment.substr(0, eq);
   double v = ParseNumber(assignment.substr(eq + 1), "profile override '" + assignment + "'");
   if (key == "clockHz") {
-    if (!(v > 0)) throw UserError(fmt::format("profile override '{}': expected a clock above 0 Hz", assignment));
+    if (!(v > 0))
+      throw UserError(
+          fmt::format("profile override '{}': expected a clock above 0 Hz", assignment));
     clockHz = v;
     return;
   }
@@ -200,8 +232,8 @@ void MachineProfile::Override(const std::string& assignment) {
     // A whole number of bits, at most 2^40 per PE (far beyond any machine; the cast to
     // int64_t stays defined).
     if (v != std::floor(v) || v > 0x1p40)
-      throw UserError(fmt::format("profile override '{}': expected a whole number of bits from 0 to 2^40",
-                                  assignment));
+      throw UserError(fmt::format(
+          "profile override '{}': expected a whole number of bits from 0 to 2^40", assignment));
     (key == "internalBitsPerPe" ? internalBitsPerPe : externalBitsPerPe) = static_cast<int64_t>(v);
     return;
   }
@@ -216,15 +248,18 @@ void MachineProfile::Override(const std::string& assignment) {
       note[i] = "overridden at run time";
       return;
     }
-  throw UserError(fmt::format("profile override '{}': unknown entry '{}' (micro-ops: "
-                              "readInternal ... hostPlane; or clockHz, internalBitsPerPe, "
-                              "externalBitsPerPe, floatSubnormals)", assignment, key));
+  throw UserError(
+      fmt::format("profile override '{}': unknown entry '{}' (micro-ops: "
+                  "readInternal ... hostPlane; or clockHz, internalBitsPerPe, "
+                  "externalBitsPerPe, floatSubnormals)",
+                  assignment, key));
 }
 
 std::string MachineProfile::Table() const {
-  std::string s = fmt::format("profile {} — {}\n  clock {:g} Hz, {} PEs, internal {} bits/PE, "
-                              "external {} bits/PE\n", name, source, clockHz, physicalPes,
-                              internalBitsPerPe, externalBitsPerPe);
+  std::string s = fmt::format(
+      "profile {} — {}\n  clock {:g} Hz, {} PEs, internal {} bits/PE, "
+      "external {} bits/PE\n",
+      name, source, clockHz, physicalPes, internalBitsPerPe, externalBitsPerPe);
   for (int i = 0; i < kMicroOpCount; ++i)
     s += fmt::format("  {:<17} {:>6g}  {}\n", kMicroOpNames[i], cost[i], note[i]);
   s += fmt::format("  {:<17} {:>6d}  {}\n", "floatSubnormals", floatSubnormals ? 1 : 0, floatNote);

@@ -1,10 +1,10 @@
 // bitserial/profile.h — machine profiles: the geometry and the cycle cost of every micro-op.
 //
-// Machine timing is data, not code (as a memory simulator keeps its DRAM presets): a profile is a named table of micro-op costs plus the
-// machine's geometry and clock. The engine never special-cases a machine; the MPP's
-// published figures (Batcher 1980) fall out of the same schedules as the WaveTracer's, with
-// different numbers in the table. Any entry can be overridden at run time ("name=value");
-// a profile with a missing entry is rejected naming it.
+// Machine timing is data, not code (as a memory simulator keeps its DRAM presets): a profile is a
+// named table of micro-op costs plus the machine's geometry and clock. The engine never
+// special-cases a machine; the MPP's published figures (Batcher 1980) fall out of the same
+// schedules as the WaveTracer's, with different numbers in the table. Any entry can be overridden
+// at run time ("name=value"); a profile with a missing entry is rejected naming it.
 #pragma once
 
 #include <array>
@@ -17,9 +17,9 @@ namespace zephyr::bitserial {
 
 // The micro-ops of a 1-bit PE datapath (docs/bitserial.md, "Micro-ops").
 enum class MicroOp : int {
-  ReadInternal,      // read one bit of internal PE memory into the ALU
-  WriteInternal,     // write one ALU output bit to internal memory (gated by activity)
-  ReadExternal,      // the same for external PE memory
+  ReadInternal,   // read one bit of internal PE memory into the ALU
+  WriteInternal,  // write one ALU output bit to internal memory (gated by activity)
+  ReadExternal,   // the same for external PE memory
   WriteExternal,
   AluStep,           // one boolean / full-adder step (sum + carry flag, or a logic op)
   FlagOp,            // clear/set/latch a PE flag (carry, mask register, overflow latch)
@@ -36,8 +36,15 @@ inline constexpr int kMicroOpCount = static_cast<int>(MicroOp::kCount);
 const char* MicroOpName(MicroOp op);  // "readInternal", ... (the profile's entry names)
 
 // The cycle classes of the report.
-enum class CycleClass : int { Alu, InternalMemory, ExternalMemory, Communication, Reduction,
-                              Host, kCount };
+enum class CycleClass : int {
+  Alu,
+  InternalMemory,
+  ExternalMemory,
+  Communication,
+  Reduction,
+  Host,
+  kCount
+};
 inline constexpr int kCycleClassCount = static_cast<int>(CycleClass::kCount);
 const char* CycleClassName(CycleClass c);  // "alu", "internalMemory", ...
 CycleClass ClassOf(MicroOp op);
@@ -66,9 +73,9 @@ struct MicroOpCounts {
 
 struct MachineProfile {
   std::string name;
-  std::string source;           // where the numbers come from
-  double clockHz = 0;           // cycles per second
-  int physicalPes = 0;          // PEs in the array
+  std::string source;   // where the numbers come from
+  double clockHz = 0;   // cycles per second
+  int physicalPes = 0;  // PEs in the array
   int64_t internalBitsPerPe = 0;
   int64_t externalBitsPerPe = 0;
   std::vector<MeshShape> shapes;  // the shapes software may choose; [0] is the default
@@ -77,7 +84,7 @@ struct MachineProfile {
   // (bitserial/float.h). Table entry "floatSubnormals" (1 or 0) with its note.
   bool floatSubnormals = true;
   std::string floatNote;
-  std::array<double, kMicroOpCount> cost{};  // cycles per micro-op
+  std::array<double, kMicroOpCount> cost{};       // cycles per micro-op
   std::array<std::string, kMicroOpCount> note{};  // "Batcher 1980 ..." or "assumed: ..."
 
   double Cost(MicroOp op) const { return cost[static_cast<int>(op)]; }
@@ -94,7 +101,7 @@ std::vector<std::string> ProfileNames();
 
 // The check behind Profile(): every micro-op must have an entry. Exposed for the tests.
 // `entries` maps entry names to (cost, note).
-MachineProfile ProfileFromTable(const std::string& name,
-                                const std::map<std::string, std::pair<double, std::string>>& entries);
+MachineProfile ProfileFromTable(
+    const std::string& name, const std::map<std::string, std::pair<double, std::string>>& entries);
 
 }  // namespace zephyr::bitserial

@@ -1,8 +1,6 @@
 // bitserial/reductions.cpp — MultiC's reductions over the whole array (bitserial/multi.h):
 // Any, ReduceOr/And/Xor, ReduceMax/Min, ReduceSum, each charged by its schedule (cost.h) and
 // combining every layer.
-#include "bitserial/multi.h"
-
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -10,6 +8,7 @@
 #include <cstring>
 
 #include "bitserial/internals.h"
+#include "bitserial/multi.h"
 #include "fixed/check.h"
 
 namespace zephyr::bitserial {
@@ -23,11 +22,11 @@ namespace {
 // A reduction combines every layer: a layer block holds only some (bitserial/blocks.h).
 void CheckWhole(const Machine& m, const char* what) {
   if (m.IsBlock())
-    throw UserError(fmt::format("{} reduces over every virtual-PE layer; a machine holding only "
-                                "layers {}..{} of {} cannot run it (run reductions on the whole "
-                                "machine, not in layer blocks)",
-                                what, m.FirstLayer(), m.FirstLayer() + m.Layers() - 1,
-                                m.ModelledLayers()));
+    throw UserError(
+        fmt::format("{} reduces over every virtual-PE layer; a machine holding only "
+                    "layers {}..{} of {} cannot run it (run reductions on the whole "
+                    "machine, not in layer blocks)",
+                    what, m.FirstLayer(), m.FirstLayer() + m.Layers() - 1, m.ModelledLayers()));
 }
 
 bool AnyActive(const Machine& m, const Word* plane, bool complement) {
@@ -48,7 +47,8 @@ fixed::Fixed Bitwise(const Multi& a, ReduceKind kind) {
     if (kind == ReduceKind::And) bit = !AnyActive(m, a.Plane(i), true);
     if (kind == ReduceKind::Xor) {
       int64_t n = 0;
-      for (size_t w = 0; w < m.WordsPerPlane(); ++w) n += std::popcount(a.Plane(i)[w] & m.Activity()[w]);
+      for (size_t w = 0; w < m.WordsPerPlane(); ++w)
+        n += std::popcount(a.Plane(i)[w] & m.Activity()[w]);
       bit = n & 1;
     }
     if (bit) boost::multiprecision::bit_set(bits, i);
@@ -62,8 +62,7 @@ fixed::Fixed Extreme(const Multi& a, bool isMax) {
   m.Charge(ReduceName(isMax ? ReduceKind::Max : ReduceKind::Min),
            ReduceCost(isMax ? ReduceKind::Max : ReduceKind::Min, a.AsOperand()));
   const Format& f = a.Format();
-  if (!AnyActive(m, m.OnesPlane(), false))
-    return fixed::Fixed{f, isMax ? f.MinRaw() : f.MaxRaw()};
+  if (!AnyActive(m, m.OnesPlane(), false)) return fixed::Fixed{f, isMax ? f.MinRaw() : f.MaxRaw()};
   const size_t words = m.WordsPerPlane();
   std::vector<Word> cand(m.Activity(), m.Activity() + words);
   fixed::BigInt bits = 0;
@@ -72,8 +71,7 @@ fixed::Fixed Extreme(const Multi& a, bool isMax) {
     // The bit value the extreme prefers: 1 for max, 0 for min; inverted for a sign bit.
     bool want = isMax != (f.isSigned && i == a.Width() - 1);
     bool found = false;
-    for (size_t w = 0; w < words && !found; ++w)
-      found = (want ? plane[w] : ~plane[w]) & cand[w];
+    for (size_t w = 0; w < words && !found; ++w) found = (want ? plane[w] : ~plane[w]) & cand[w];
     bool bit = found ? want : !want;
     for (size_t w = 0; w < words; ++w) cand[w] &= bit ? plane[w] : ~plane[w];
     if (bit) boost::multiprecision::bit_set(bits, i);
@@ -97,10 +95,13 @@ fixed::Fixed ReduceSum(const Multi& a) {
   fixed::BigInt sum = 0;
   for (int i = 0; i < a.Width(); ++i) {
     int64_t n = 0;
-    for (size_t w = 0; w < m.WordsPerPlane(); ++w) n += std::popcount(a.Plane(i)[w] & m.Activity()[w]);
+    for (size_t w = 0; w < m.WordsPerPlane(); ++w)
+      n += std::popcount(a.Plane(i)[w] & m.Activity()[w]);
     fixed::BigInt term = fixed::BigInt(n) << i;
-    if (a.Format().isSigned && i == a.Width() - 1) sum -= term;
-    else sum += term;
+    if (a.Format().isSigned && i == a.Width() - 1)
+      sum -= term;
+    else
+      sum += term;
   }
   int extra = 0;
   while ((int64_t{1} << extra) < m.ModelledPes()) ++extra;

@@ -151,7 +151,8 @@ nlohmann::json CycleReport::Json() const {
       if (runs_.size() == 1)
         byLayer.push_back({{"layer", l}, {"cycles", runs_[k].LayerCycles()}});
       else
-        byLayer.push_back({{"layer", byLayer.size()}, {"pass", k}, {"cycles", runs_[k].LayerCycles()}});
+        byLayer.push_back(
+            {{"layer", byLayer.size()}, {"pass", k}, {"cycles", runs_[k].LayerCycles()}});
     }
   j["byLayer"] = byLayer;
   // Per op, over the runs that called it: calls, cycles, the classes and micro-ops it used.
@@ -189,10 +190,11 @@ nlohmann::json CycleReport::Json() const {
 std::string CycleReport::Table() const {
   const ProgramRun& run = Single();
   const int layers = run.layers;
-  std::string s = fmt::format("cycle report — profile {}, {} virtual-PE layer{}, {:.0f} cycles = "
-                              "{:.6g} s at {:g} Hz\n", profile_.name, layers,
-                              layers == 1 ? "" : "s", TotalCycles(), ModelledSeconds(),
-                              profile_.clockHz);
+  std::string s = fmt::format(
+      "cycle report — profile {}, {} virtual-PE layer{}, {:.0f} cycles = "
+      "{:.6g} s at {:g} Hz\n",
+      profile_.name, layers, layers == 1 ? "" : "s", TotalCycles(), ModelledSeconds(),
+      profile_.clockHz);
   s += "  by class:\n";
   for (int i = 0; i < kCycleClassCount; ++i)
     s += fmt::format("    {:<16} {:>14.0f}\n", CycleClassName(static_cast<CycleClass>(i)),

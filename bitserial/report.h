@@ -41,11 +41,11 @@ class CycleReport {
   // unless this report is empty (default-constructed).
   void Add(const CycleReport& other);
   int Runs() const { return int(runs_.size()); }  // runs summed (1 unless Add was called)
-  CycleReport Run(int k) const;                    // the k-th run's own report, 0 <= k < Runs()
+  CycleReport Run(int k) const;                   // the k-th run's own report, 0 <= k < Runs()
   const MachineProfile& Profile() const { return profile_; }
 
-  int Layers() const;           // over every run
-  double LayerCycles() const;   // one layer's instruction stream (one run only: ZEPHYR_CHECK)
+  int Layers() const;          // over every run
+  double LayerCycles() const;  // one layer's instruction stream (one run only: ZEPHYR_CHECK)
   double TotalCycles() const;
   double ClassCycles(CycleClass c) const;
   // Total cycles charged to `op` over all layers (0 if never charged) and its call count.

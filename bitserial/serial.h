@@ -26,7 +26,9 @@ enum class Loc : unsigned char { Internal, External, Acc, Flag, Const };
 using Planes = std::vector<const Word*>;
 using OutPlanes = std::vector<Word*>;
 
-inline Planes Slice(const Planes& v, int from, int to) { return Planes(v.begin() + from, v.begin() + to); }
+inline Planes Slice(const Planes& v, int from, int to) {
+  return Planes(v.begin() + from, v.begin() + to);
+}
 inline Planes Concat(std::initializer_list<Planes> parts) {
   Planes r;
   for (const Planes& p : parts) r.insert(r.end(), p.begin(), p.end());
@@ -68,8 +70,9 @@ class Serial {
   Planes Zeros(int n) const { return Planes(n, Zero()); }
 
   void Place(const Multi& x) {
-    const Loc loc = x.IsUni() ? Loc::Const
-                    : x.GetSpace() == Space::Internal ? Loc::Internal : Loc::External;
+    const Loc loc = x.IsUni()                         ? Loc::Const
+                    : x.GetSpace() == Space::Internal ? Loc::Internal
+                                                      : Loc::External;
     for (int i = 0; i < x.Width(); ++i) loc_[x.Plane(i)] = loc;
   }
   Word* New(Loc loc) {
@@ -87,19 +90,35 @@ class Serial {
 
   void Read(const Word* p) {
     switch (LocOf(p)) {
-      case Loc::Internal: c_.Add(MicroOp::ReadInternal); break;
-      case Loc::External: c_.Add(MicroOp::ReadExternal); break;
-      case Loc::Acc: c_.Add(MicroOp::AccumulatorRead); break;
-      default: break;
+      case Loc::Internal:
+        c_.Add(MicroOp::ReadInternal);
+        break;
+      case Loc::External:
+        c_.Add(MicroOp::ReadExternal);
+        break;
+      case Loc::Acc:
+        c_.Add(MicroOp::AccumulatorRead);
+        break;
+      default:
+        break;
     }
   }
   void Write(const Word* p) {
     switch (LocOf(p)) {
-      case Loc::Internal: c_.Add(MicroOp::WriteInternal); break;
-      case Loc::External: c_.Add(MicroOp::WriteExternal); break;
-      case Loc::Acc: c_.Add(MicroOp::AccumulatorWrite); break;
-      case Loc::Flag: c_.Add(MicroOp::FlagOp); break;
-      case Loc::Const: ZEPHYR_CHECK(false);
+      case Loc::Internal:
+        c_.Add(MicroOp::WriteInternal);
+        break;
+      case Loc::External:
+        c_.Add(MicroOp::WriteExternal);
+        break;
+      case Loc::Acc:
+        c_.Add(MicroOp::AccumulatorWrite);
+        break;
+      case Loc::Flag:
+        c_.Add(MicroOp::FlagOp);
+        break;
+      case Loc::Const:
+        ZEPHYR_CHECK(false);
     }
   }
 
@@ -145,11 +164,21 @@ class Serial {
     m_.Kernels().logic(op, x, y, o, words_);
     return o;
   }
-  const Word* And(const Word* x, const Word* y, Loc loc = Loc::Flag) { return Logic(LogicOp::And, x, y, loc); }
-  const Word* Or(const Word* x, const Word* y, Loc loc = Loc::Flag) { return Logic(LogicOp::Or, x, y, loc); }
-  const Word* Xor(const Word* x, const Word* y, Loc loc = Loc::Flag) { return Logic(LogicOp::Xor, x, y, loc); }
-  const Word* AndNot(const Word* x, const Word* y, Loc loc = Loc::Flag) { return Logic(LogicOp::AndNot, x, y, loc); }
-  const Word* Not(const Word* x, Loc loc = Loc::Flag) { return Logic(LogicOp::Not, x, nullptr, loc); }
+  const Word* And(const Word* x, const Word* y, Loc loc = Loc::Flag) {
+    return Logic(LogicOp::And, x, y, loc);
+  }
+  const Word* Or(const Word* x, const Word* y, Loc loc = Loc::Flag) {
+    return Logic(LogicOp::Or, x, y, loc);
+  }
+  const Word* Xor(const Word* x, const Word* y, Loc loc = Loc::Flag) {
+    return Logic(LogicOp::Xor, x, y, loc);
+  }
+  const Word* AndNot(const Word* x, const Word* y, Loc loc = Loc::Flag) {
+    return Logic(LogicOp::AndNot, x, y, loc);
+  }
+  const Word* Not(const Word* x, Loc loc = Loc::Flag) {
+    return Logic(LogicOp::Not, x, nullptr, loc);
+  }
 
   // 1 where every plane is 0 (none) or 1 (all): one serial OR/AND over the planes.
   const Word* NoneOf(const Planes& x, Loc loc = Loc::Flag) { return Scan(x, Zero(), loc); }
@@ -193,8 +222,10 @@ class Serial {
     Planes r(a.size());
     for (size_t i = 0; i < a.size(); ++i) {
       Word* o = New(b.empty() ? LocOf(a[i]) : Loc::Flag);
-      if (b.empty()) m_.Kernels().logic(LogicOp::AndNot, a[i], mask, o, words_);
-      else m_.Kernels().select(mask, &a[i], &b[i], &o, 1, words_);
+      if (b.empty())
+        m_.Kernels().logic(LogicOp::AndNot, a[i], mask, o, words_);
+      else
+        m_.Kernels().select(mask, &a[i], &b[i], &o, 1, words_);
       r[i] = o;
     }
     return r;
@@ -214,7 +245,7 @@ class Serial {
   void CompareAlong(const Planes& a, const Planes& b, const OutPlanes& out) {
     c_.Add(MicroOp::FlagOp);
     AddArgs args{a.data(), b.data(), out.data(), static_cast<int>(out.size()), true, true, 0,
-                 false, nullptr, nullptr};
+                 false,    nullptr,  nullptr};
     m_.Kernels().add(args, words_);
   }
   // The OR of planes that the current pass reads anyway: only the latch is charged.

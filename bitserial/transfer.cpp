@@ -1,12 +1,11 @@
 // bitserial/transfer.cpp — moving a multi between the host and the array (bitserial/multi.h):
 // Load, LoadRaw, Read, ReadRaw and At; each transfer is charged one hostPlane micro-op per
 // bit-plane (cost.h, HostTransferCost), the cycle report's host class.
-#include "bitserial/multi.h"
-
 #include <fmt/format.h>
 
 #include <cstring>
 
+#include "bitserial/multi.h"
 #include "fixed/check.h"
 
 namespace zephyr::bitserial {
@@ -31,8 +30,8 @@ void Transpose64(uint64_t a[64]) {
 void Multi::LoadRaw(const std::vector<int64_t>& raw) {
   Machine& m = *machine_;
   if (static_cast<int64_t>(raw.size()) > m.VirtualPes())
-    throw UserError(fmt::format("multi '{}': {} values for {} virtual PEs", alloc_.name,
-                                raw.size(), m.VirtualPes()));
+    throw UserError(fmt::format("multi '{}': {} values for {} virtual PEs", alloc_.name, raw.size(),
+                                m.VirtualPes()));
   m.Charge("hostLoad", HostTransferCost(Width()));
   std::memset(planes_, 0, sizeof(Word) * Width() * m.PlaneStride());
   // 64 PEs at a time: their values as the rows of a 64x64 bit matrix, transposed into one
@@ -40,7 +39,8 @@ void Multi::LoadRaw(const std::vector<int64_t>& raw) {
   const size_t count = raw.size();
   for (size_t base = 0; base < count; base += 64) {
     uint64_t block[64] = {};
-    for (size_t j = 0; j < 64 && base + j < count; ++j) block[j] = static_cast<uint64_t>(raw[base + j]);
+    for (size_t j = 0; j < 64 && base + j < count; ++j)
+      block[j] = static_cast<uint64_t>(raw[base + j]);
     Transpose64(block);
     for (int i = 0; i < Width(); ++i)
       Plane(i)[base >> 6] = i < 64 ? block[i] : (format_.isSigned ? block[63] : 0);

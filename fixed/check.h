@@ -44,16 +44,18 @@ std::string CheckMessage(const char* expr, const A& a, const B& b) {
 
 }  // namespace zephyr
 
-#define ZEPHYR_CHECK(cond) \
-  do { if (!(cond)) ::zephyr::CheckFailed(__FILE__, __LINE__, #cond); } while (0)
-#define ZEPHYR_CHECK_OP(a, op, b)                                                       \
-  do {                                                                                \
-    const auto& zephyr_a_ = (a);                                                      \
-    const auto& zephyr_b_ = (b);                                                      \
-    if (!(zephyr_a_ op zephyr_b_))                                                    \
-      ::zephyr::CheckFailed(__FILE__, __LINE__,                                       \
-                            ::zephyr::detail::CheckMessage(#a " " #op " " #b,         \
-                                                           zephyr_a_, zephyr_b_));    \
+#define ZEPHYR_CHECK(cond)                                         \
+  do {                                                             \
+    if (!(cond)) ::zephyr::CheckFailed(__FILE__, __LINE__, #cond); \
+  } while (0)
+#define ZEPHYR_CHECK_OP(a, op, b)                                                   \
+  do {                                                                              \
+    const auto& zephyr_a_ = (a);                                                    \
+    const auto& zephyr_b_ = (b);                                                    \
+    if (!(zephyr_a_ op zephyr_b_))                                                  \
+      ::zephyr::CheckFailed(                                                        \
+          __FILE__, __LINE__,                                                       \
+          ::zephyr::detail::CheckMessage(#a " " #op " " #b, zephyr_a_, zephyr_b_)); \
   } while (0)
 #define ZEPHYR_CHECK_EQ(a, b) ZEPHYR_CHECK_OP(a, ==, b)
 #define ZEPHYR_CHECK_LE(a, b) ZEPHYR_CHECK_OP(a, <=, b)

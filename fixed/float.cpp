@@ -46,9 +46,11 @@ FloatFormat FloatFormat::Parse(const std::string& text) {
     f = {std::stoi(m[1]), std::stoi(m[2]), !m[3].matched};
     if (f.IsValid()) return f;
   }
-  throw UserError(fmt::format("float format '{}': expected eXmY or eXmYftz with 2 <= X <= 11, "
-                              "1 <= Y <= 52, 1+X+Y <= 64 (e.g. e8m23 = binary32, e5m10, "
-                              "e6m10ftz), or binary32", text));
+  throw UserError(
+      fmt::format("float format '{}': expected eXmY or eXmYftz with 2 <= X <= 11, "
+                  "1 <= Y <= 52, 1+X+Y <= 64 (e.g. e8m23 = binary32, e5m10, "
+                  "e6m10ftz), or binary32",
+                  text));
 }
 
 uint64_t FloatFormat::CanonicalNaN() const {
@@ -114,7 +116,8 @@ uint64_t FloatAdd(const FloatFormat& f, uint64_t a, uint64_t b) {
     return x.sign == y.sign ? f.Infinity(x.sign) : f.CanonicalNaN();
   if (x.cls == FloatParts::Inf) return f.Infinity(x.sign);
   if (y.cls == FloatParts::Inf) return f.Infinity(y.sign);
-  if (x.cls == FloatParts::Zero && y.cls == FloatParts::Zero) return SignedZero(f, x.sign && y.sign);
+  if (x.cls == FloatParts::Zero && y.cls == FloatParts::Zero)
+    return SignedZero(f, x.sign && y.sign);
   if (y.cls == FloatParts::Zero) return RoundToFloat(f, x.sign, x.sig, x.exp, false);
   if (x.cls == FloatParts::Zero) return RoundToFloat(f, y.sign, y.sig, y.exp, false);
   // Far apart: the smaller is only a sticky δ below the larger's widened significand.
@@ -144,7 +147,8 @@ uint64_t FloatMul(const FloatFormat& f, uint64_t a, uint64_t b) {
   const bool s = x.sign != y.sign;
   if (x.cls == FloatParts::NaN || y.cls == FloatParts::NaN) return f.CanonicalNaN();
   if (x.cls == FloatParts::Inf || y.cls == FloatParts::Inf)
-    return x.cls == FloatParts::Zero || y.cls == FloatParts::Zero ? f.CanonicalNaN() : f.Infinity(s);
+    return x.cls == FloatParts::Zero || y.cls == FloatParts::Zero ? f.CanonicalNaN()
+                                                                  : f.Infinity(s);
   if (x.cls == FloatParts::Zero || y.cls == FloatParts::Zero) return SignedZero(f, s);
   return RoundToFloat(f, s, x.sig * y.sig, x.exp + y.exp, false);
 }
@@ -153,8 +157,7 @@ uint64_t FloatDiv(const FloatFormat& f, uint64_t a, uint64_t b) {
   const FloatParts x = Decode(f, a), y = Decode(f, b);
   const bool s = x.sign != y.sign;
   if (x.cls == FloatParts::NaN || y.cls == FloatParts::NaN) return f.CanonicalNaN();
-  if (x.cls == FloatParts::Inf)
-    return y.cls == FloatParts::Inf ? f.CanonicalNaN() : f.Infinity(s);
+  if (x.cls == FloatParts::Inf) return y.cls == FloatParts::Inf ? f.CanonicalNaN() : f.Infinity(s);
   if (y.cls == FloatParts::Inf) return SignedZero(f, s);
   if (y.cls == FloatParts::Zero)
     return x.cls == FloatParts::Zero ? f.CanonicalNaN() : f.Infinity(s);
@@ -231,10 +234,14 @@ Fixed FloatToFixed(const FloatFormat& f, uint64_t a, Format out, Policy p, Statu
 double FloatToDouble(const FloatFormat& f, uint64_t a) {
   const FloatParts x = Decode(f, a);
   switch (x.cls) {
-    case FloatParts::NaN: return std::nan("");
-    case FloatParts::Inf: return x.sign ? -HUGE_VAL : HUGE_VAL;
-    case FloatParts::Zero: return x.sign ? -0.0 : 0.0;
-    case FloatParts::Finite: break;
+    case FloatParts::NaN:
+      return std::nan("");
+    case FloatParts::Inf:
+      return x.sign ? -HUGE_VAL : HUGE_VAL;
+    case FloatParts::Zero:
+      return x.sign ? -0.0 : 0.0;
+    case FloatParts::Finite:
+      break;
   }
   const double v = std::ldexp(static_cast<double>(x.sig.convert_to<uint64_t>()), x.exp);
   return x.sign ? -v : v;

@@ -30,7 +30,10 @@ BigInt FloorShiftRight(const BigInt& x, int k) {
 
 // Floor of n/d for any signs, d != 0.
 BigInt FloorDiv(BigInt n, BigInt d) {
-  if (d < 0) { n = -n; d = -d; }
+  if (d < 0) {
+    n = -n;
+    d = -d;
+  }
   BigInt q = n / d;  // truncates toward zero
   if (n < 0 && q * d != n) q -= 1;
   return q;
@@ -106,9 +109,7 @@ Format Format::Parse(const std::string& text) {
                   " bits (e.g. s3.12)");
 }
 
-BigInt Fixed::Bits() const {
-  return raw < 0 ? BigInt(raw + Pow2(format.Width())) : raw;
-}
+BigInt Fixed::Bits() const { return raw < 0 ? BigInt(raw + Pow2(format.Width())) : raw; }
 
 Fixed Fixed::FromBits(Format format, const BigInt& bits) {
   ZEPHYR_CHECK(bits >= 0 && bits < Pow2(format.Width()));
@@ -184,7 +185,10 @@ Fixed Div(const Fixed& a, const Fixed& b, Format out, Policy p, Status* status) 
   // q = (a.raw / 2^fa) / (b.raw / 2^fb) in units of 2^-fo  =  a.raw 2^(fb+fo) / (b.raw 2^fa)
   BigInt n = a.raw << (b.format.fracBits + out.fracBits);
   BigInt d = b.raw << a.format.fracBits;
-  if (d < 0) { n = -n; d = -d; }
+  if (d < 0) {
+    n = -n;
+    d = -d;
+  }
   // Nearest: floor(n/d + 1/2) = floor((2n + d) / 2d), the restoring divider's extra bit.
   BigInt q = p.rounding == Rounding::Floor ? FloorDiv(n, d) : FloorDiv(2 * n + d, 2 * d);
   return Fit(std::move(q), out, p, status);

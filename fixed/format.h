@@ -38,9 +38,9 @@ struct Format {
   static Format Unsigned(int intBits, int fracBits) { return {false, intBits, fracBits}; }
 
   int Width() const { return (isSigned ? 1 : 0) + intBits + fracBits; }
-  bool IsValid() const;  // 1 <= Width() <= kMaxWidth, intBits >= 0, fracBits >= 0
-  BigInt MinRaw() const;  // -2^(w-1) or 0
-  BigInt MaxRaw() const;  // 2^(w-1)-1 or 2^w-1
+  bool IsValid() const;      // 1 <= Width() <= kMaxWidth, intBits >= 0, fracBits >= 0
+  BigInt MinRaw() const;     // -2^(w-1) or 0
+  BigInt MaxRaw() const;     // 2^(w-1)-1 or 2^w-1
   std::string Name() const;  // "s3.4", "u8.0"
   // Parses Name()'s form; throws UserError naming the text on failure.
   static Format Parse(const std::string& text);
@@ -68,7 +68,9 @@ struct Status {
   bool invalid = false;       // Sqrt of a negative value; FromDouble of NaN/inf
   bool Any() const { return overflow || divideByZero || invalid; }
   Status& operator|=(const Status& o) {
-    overflow |= o.overflow; divideByZero |= o.divideByZero; invalid |= o.invalid;
+    overflow |= o.overflow;
+    divideByZero |= o.divideByZero;
+    invalid |= o.invalid;
     return *this;
   }
 };

@@ -61,7 +61,8 @@ struct NamedValues {
   // The value named `name`; UserError "WHAT: expected a, b or c, got 'NAME'" otherwise.
   E Parse(std::string_view name, std::string_view what) const {
     if (const std::optional<E> v = Find(name)) return *v;
-    throw UserError(std::string(what) + ": expected " + List() + ", got '" + std::string(name) + "'");
+    throw UserError(std::string(what) + ": expected " + List() + ", got '" + std::string(name) +
+                    "'");
   }
 
  private:

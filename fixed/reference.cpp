@@ -96,8 +96,7 @@ Fixed Sqrt(const Fixed& a, Format out, Policy p, Status* s) {
   BigInt radicand = FloorOf(ExactValue(a) * TwoTo(2 * out.fracBits));
   Policy floor = p;
   floor.rounding = Rounding::Floor;
-  return FromExact(Rational(Unbounded(bmp::sqrt(radicand))) / TwoTo(out.fracBits), out, floor,
-                   s);
+  return FromExact(Rational(Unbounded(bmp::sqrt(radicand))) / TwoTo(out.fracBits), out, floor, s);
 }
 Fixed Shift(const Fixed& a, int k, Format out, Policy p, Status* s) {
   return FromExact(ExactValue(a) * TwoTo(k), out, p, s);

@@ -6,6 +6,8 @@
 //   zephyr accuracy SCENE --method seq --precision float  the sequential tracer's first hits
 //                                                         in float32 (or double: its PSNR
 //                                                         against itself is inf)
+#include "hosts/methods/accuracy.h"
+
 #include <CLI/CLI.hpp>
 #include <cmath>
 #include <cstdio>
@@ -14,7 +16,6 @@
 #include "hosts/cmd/command.h"
 #include "hosts/cmd/flags.h"
 #include "hosts/cmd/simd_flags.h"
-#include "hosts/methods/accuracy.h"
 #include "hosts/methods/memory_budget.h"
 #include "hosts/scene/nff.h"
 
@@ -23,7 +24,8 @@ namespace {
 
 CommandRegistration reg("accuracy", [](CLI::App& program) {
   auto* cmd = program.add_subcommand(
-      "accuracy", "Compare the SIMD primary pass (or the sequential tracer) with an exact (128-bit) reference");
+      "accuracy",
+      "Compare the SIMD primary pass (or the sequential tracer) with an exact (128-bit) reference");
   auto scene = std::make_shared<std::string>();
   auto sample = std::make_shared<int64_t>(0);
   auto flags = std::make_shared<SimdFlags>();
@@ -31,7 +33,8 @@ CommandRegistration reg("accuracy", [](CLI::App& program) {
   auto method = std::make_shared<std::string>("simd");
   auto precision = std::make_shared<Precision>(Precision::kDouble);
   cmd->add_option("scene", *scene, "NFF scene file")->required();
-  cmd->add_option("--method", *method, "simd (default: the SIMD primary pass) or seq (the sequential tracer)");
+  cmd->add_option("--method", *method,
+                  "simd (default: the SIMD primary pass) or seq (the sequential tracer)");
   CLI::Option* precisionFlag =
       AddNamed(*cmd, "--precision", *precision, kPrecisionNames, "--method seq: float or double");
   AddInteger(*cmd, "--sample", *sample, int64_t(0), int64_t(kMaxResolution) * kMaxResolution,
@@ -53,21 +56,25 @@ CommandRegistration reg("accuracy", [](CLI::App& program) {
     CheckMemoryFits("accuracy at " + std::to_string(c.width) + "x" + std::to_string(c.height),
                     {.perPixel = 140, .pixels = uint64_t(c.width) * uint64_t(c.height)});
     const AccuracyResult r =
-        MeasureAccuracy(s, {.simd = simd, .simdOptions = simd ? flags->Options() : simd::SimdOptions{},
-                            .precision = *precision, .sample = *sample});
+        MeasureAccuracy(s, {.simd = simd,
+                            .simdOptions = simd ? flags->Options() : simd::SimdOptions{},
+                            .precision = *precision,
+                            .sample = *sample});
     const nlohmann::json j = AccuracyJson(r, *scene);
     if (*json) {
       std::printf("%s\n", j.dump(2).c_str());
       return;
     }
-    std::printf("%s: %s, %lld pixel(s)%s; reference: 128-bit spheres, ellipsoids, polygons and cones\n",
-                scene->c_str(), r.What().c_str(), (long long)r.pixels,
-                r.sampled ? " (random sample, seed 1)" : " (every pixel)");
+    std::printf(
+        "%s: %s, %lld pixel(s)%s; reference: 128-bit spheres, ellipsoids, polygons and cones\n",
+        scene->c_str(), r.What().c_str(), (long long)r.pixels,
+        r.sampled ? " (random sample, seed 1)" : " (every pixel)");
     std::printf("first object differs: %lld (%.4f %%)\n", (long long)r.firstObjectDiffers,
                 100.0 * double(r.firstObjectDiffers) / double(r.pixels));
     std::printf("t error where the object agrees: max %.3g, mean %.3g", r.tMaxError, r.tMeanError);
     if (r.pass) std::printf(" (bound for certain pixels %.3g)", r.pass->plan.tErrorBound);
-    std::printf("\nPSNR of the final image against the sequential method (double): %.2f dB%s\n", r.psnrDb,
+    std::printf("\nPSNR of the final image against the sequential method (double): %.2f dB%s\n",
+                r.psnrDb,
                 std::isfinite(r.psnrDb) ? "" : " (identical: seq double is the reference itself)");
     if (!r.pass) return;
     std::printf("uncertain: %lld overflow, %lld grazing, %lld near tie, %lld recomputed\n",

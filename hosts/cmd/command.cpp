@@ -41,7 +41,8 @@ int RunZephyr(int argc, const char* const* argv) {
       a = a->get_subcommands().front();
       where += " " + a->get_name();
     }
-    return "zephyr: error: " + std::string(e.what()) + "\n(run '" + where + " --help' for the flags)\n";
+    return "zephyr: error: " + std::string(e.what()) + "\n(run '" + where +
+           " --help' for the flags)\n";
   });
   try {
     program.parse(argc, argv);
@@ -55,8 +56,9 @@ int RunZephyr(int argc, const char* const* argv) {
   } catch (const std::bad_alloc&) {
     // The runs' own estimates refuse what cannot fit before any work (docs/errors.md,
     // "Memory"); this is the last line, for what no estimate foresaw.
-    std::fprintf(stderr, "zephyr: error: out of memory (the process could not allocate what this run "
-                         "needs; try a smaller resolution, fewer threads or a larger memory limit)\n");
+    std::fprintf(stderr,
+                 "zephyr: error: out of memory (the process could not allocate what this run "
+                 "needs; try a smaller resolution, fewer threads or a larger memory limit)\n");
     return 1;
   }
   return 0;

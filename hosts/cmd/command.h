@@ -8,7 +8,9 @@
 #include <functional>
 #include <string>
 
-namespace CLI { class App; }
+namespace CLI {
+class App;
+}
 
 namespace zephyr {
 

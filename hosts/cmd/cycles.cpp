@@ -3,9 +3,9 @@
 //
 //   zephyr cycles --profile mpp --op add --bits 8          -> 25
 //   zephyr cycles --op mul --bits 16 --bits2 12 --json
-#include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <climits>
 #include <functional>
@@ -51,8 +51,10 @@ fixed::FloatFormat FloatFormatOf(const CyclesOptions& o, const MachineProfile& p
   if (o.bits == 16) return {5, 10, sub};
   if (o.bits == 32) return {8, 23, sub};
   if (o.bits == 64) return {11, 52, sub};
-  throw UserError(fmt::format("--op float operations take --bits 16, 32 or 64 (IEEE binary16/"
-                              "32/64) or --float eXmY, got --bits {}", o.bits));
+  throw UserError(
+      fmt::format("--op float operations take --bits 16, 32 or 64 (IEEE binary16/"
+                  "32/64) or --float eXmY, got --bits {}",
+                  o.bits));
 }
 
 // The f* operations: the float format from --float or --bits; the conversions (ftofixed,
@@ -64,9 +66,8 @@ void RunFloatCycles(const CyclesOptions& o, const MachineProfile& profile,
   const fixed::FloatFormat f = conversion && o.floatFormat.empty()
                                    ? fixed::FloatFormat{8, 23, profile.floatSubnormals}
                                    : FloatFormatOf(o, profile);
-  const CycleReport rep = FloatOpReport(profile, o.op, f,
-                                        o.external ? Space::External : Space::Internal,
-                                        fixedSide, policy);
+  const CycleReport rep = FloatOpReport(
+      profile, o.op, f, o.external ? Space::External : Space::Internal, fixedSide, policy);
   const double cycles = rep.OpCycles(o.op);
   const double mops = profile.physicalPes * profile.clockHz / cycles / 1e6;
   if (o.json) {
@@ -78,11 +79,12 @@ void RunFloatCycles(const CyclesOptions& o, const MachineProfile& profile,
     j["mops"] = mops;
     fmt::print("{}\n", j.dump(2));
   } else {
-    fmt::print("{} {}{} on profile {} ({} memory): {} cycles per layer ({:.3g} us at {:g} Hz; "
-               "{:.0f} MOPS on {} PEs)\n", o.op, f.Name(),
-               conversion ? (o.op == "ftofixed" ? " -> " : " <- ") + fixedSide.Name() : "",
-               profile.name, o.external ? "external" : "internal", cycles,
-               cycles / profile.clockHz * 1e6, profile.clockHz, mops, profile.physicalPes);
+    fmt::print(
+        "{} {}{} on profile {} ({} memory): {} cycles per layer ({:.3g} us at {:g} Hz; "
+        "{:.0f} MOPS on {} PEs)\n",
+        o.op, f.Name(), conversion ? (o.op == "ftofixed" ? " -> " : " <- ") + fixedSide.Name() : "",
+        profile.name, o.external ? "external" : "internal", cycles, cycles / profile.clockHz * 1e6,
+        profile.clockHz, mops, profile.physicalPes);
     fmt::print("{}", rep.Table());
   }
 }
@@ -100,10 +102,14 @@ void RunCycles(const CyclesOptions& o) {
                         : fixed::Format::Signed(bits - 1 - o.frac, o.frac);
   };
   fixed::Policy policy;
-  if (o.rounding == "nearest") policy.rounding = fixed::Rounding::Nearest;
-  else if (o.rounding != "floor") throw UserError("--rounding must be floor or nearest, got '" + o.rounding + "'");
-  if (o.overflow == "saturate") policy.overflow = fixed::OverflowPolicy::Saturate;
-  else if (o.overflow != "wrap") throw UserError("--overflow must be wrap or saturate, got '" + o.overflow + "'");
+  if (o.rounding == "nearest")
+    policy.rounding = fixed::Rounding::Nearest;
+  else if (o.rounding != "floor")
+    throw UserError("--rounding must be floor or nearest, got '" + o.rounding + "'");
+  if (o.overflow == "saturate")
+    policy.overflow = fixed::OverflowPolicy::Saturate;
+  else if (o.overflow != "wrap")
+    throw UserError("--overflow must be wrap or saturate, got '" + o.overflow + "'");
   if (IsFloatOp(o.op)) {
     const bool conversion = o.op == "ftofixed" || o.op == "ffromfixed";
     return RunFloatCycles(o, profile, conversion ? format(o.bits, "--bits") : fixed::Format{},
@@ -124,19 +130,26 @@ void RunCycles(const CyclesOptions& o) {
       {"neg", {"neg", [&] { return Neg(a, out, policy); }}},
       {"abs", {"abs", [&] { return Abs(a, out, policy); }}},
       {"mul", {"mul", [&] { return Mul(a, b, out, policy); }}},
-      {"mul-uni", {"mulUni", [&] {
-         fixed::Format fc = format(o.bits2 ? o.bits2 : o.bits, "--bits2");
-         fixed::Fixed c = fixed::Fixed::FromBits(
-             fc, fixed::BigInt(static_cast<unsigned long long>(o.constant)) &
-                     ((fixed::BigInt(1) << fc.Width()) - 1));
-         return Mul(a, Uni{c}, out, policy);
-       }}},
+      {"mul-uni",
+       {"mulUni",
+        [&] {
+          fixed::Format fc = format(o.bits2 ? o.bits2 : o.bits, "--bits2");
+          fixed::Fixed c = fixed::Fixed::FromBits(
+              fc, fixed::BigInt(static_cast<unsigned long long>(o.constant)) &
+                      ((fixed::BigInt(1) << fc.Width()) - 1));
+          return Mul(a, Uni{c}, out, policy);
+        }}},
       {"square", {"square", [&] { return Square(a, out, policy); }}},
       {"compare", {"compare", [&] { return a < b; }}},
       {"min", {"min", [&] { return Min(a, b, out, policy); }}},
       {"max", {"max", [&] { return Max(a, b, out, policy); }}},
-      {"select", {"select", [&] { Multi mask = Multi(m, BoolFormat(), "mask"); m.Report().Clear();
-                                   return Select(mask, a, b, out, policy); }}},
+      {"select",
+       {"select",
+        [&] {
+          Multi mask = Multi(m, BoolFormat(), "mask");
+          m.Report().Clear();
+          return Select(mask, a, b, out, policy);
+        }}},
       {"shift", {"shift", [&] { return Shift(a, 1, out, policy); }}},
       {"div", {"div", [&] { return Div(a, b, out, policy); }}},
       {"sqrt", {"sqrt", [&] { return Sqrt(a, out, policy); }}},
@@ -160,10 +173,11 @@ void RunCycles(const CyclesOptions& o) {
     j["cycles"] = cycles;
     fmt::print("{}\n", j.dump(2));
   } else {
-    fmt::print("{} {} x {} -> {} on profile {} ({} memory): {} cycles per layer "
-               "({:.3g} us at {:g} Hz)\n", o.op, fa.Name(), fb.Name(), out.Name(), profile.name,
-               o.external ? "external" : "internal", cycles, cycles / profile.clockHz * 1e6,
-               profile.clockHz);
+    fmt::print(
+        "{} {} x {} -> {} on profile {} ({} memory): {} cycles per layer "
+        "({:.3g} us at {:g} Hz)\n",
+        o.op, fa.Name(), fb.Name(), out.Name(), profile.name, o.external ? "external" : "internal",
+        cycles, cycles / profile.clockHz * 1e6, profile.clockHz);
     fmt::print("{}", rep.Table());
   }
 }
@@ -173,17 +187,21 @@ CommandRegistration reg("cycles", [](CLI::App& program) {
   CLI::App* cmd = program.add_subcommand(
       "cycles", "Print the machine cycles of one bit-serial operation on one virtual-PE layer");
   cmd->add_option("--profile", opts->profile, "Machine profile (wavetracer, mpp)");
-  cmd->add_option("--op", opts->op,
-                  "Operation: add sub neg abs mul mul-uni square div sqrt compare min max select shift; "
-                  "float: fadd fsub fmul fdiv fsqrt fmin fmax fcompare ftofixed ffromfixed");
-  cmd->add_option("--float", opts->floatFormat,
-                  "Float format of the f* operations, eXmY[ftz] (default: binary16/32/64 by --bits; "
-                  "binary32 for ftofixed/ffromfixed, whose fixed side is --bits/--frac)");
-  AddInteger(*cmd, "--bits", opts->bits, 1, fixed::kMaxWidth, "Width of the first operand (and of the result)");
+  cmd->add_option(
+      "--op", opts->op,
+      "Operation: add sub neg abs mul mul-uni square div sqrt compare min max select shift; "
+      "float: fadd fsub fmul fdiv fsqrt fmin fmax fcompare ftofixed ffromfixed");
+  cmd->add_option(
+      "--float", opts->floatFormat,
+      "Float format of the f* operations, eXmY[ftz] (default: binary16/32/64 by --bits; "
+      "binary32 for ftofixed/ffromfixed, whose fixed side is --bits/--frac)");
+  AddInteger(*cmd, "--bits", opts->bits, 1, fixed::kMaxWidth,
+             "Width of the first operand (and of the result)");
   AddInteger(*cmd, "--bits2", opts->bits2, 1, fixed::kMaxWidth,
              "Width of the second operand / the constant (default --bits)");
   AddInteger(*cmd, "--frac", opts->frac, 0, fixed::kMaxWidth, "Fraction bits of the operands");
-  AddInteger(*cmd, "--constant", opts->constant, LLONG_MIN, LLONG_MAX, "The uni constant's bits for mul-uni");
+  AddInteger(*cmd, "--constant", opts->constant, LLONG_MIN, LLONG_MAX,
+             "The uni constant's bits for mul-uni");
   cmd->add_flag("--unsigned", opts->isUnsigned, "Unsigned operands (default signed)");
   cmd->add_flag("--external", opts->external, "Operands and result in external PE memory");
   cmd->add_option("--rounding", opts->rounding, "floor or nearest");

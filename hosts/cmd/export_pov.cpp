@@ -15,7 +15,8 @@ namespace zephyr {
 namespace {
 
 CommandRegistration reg("export-pov", [](CLI::App& program) {
-  auto* cmd = program.add_subcommand("export-pov", "Write a scene as POV-Ray 3.7 SDL (a reference renderer)");
+  auto* cmd = program.add_subcommand("export-pov",
+                                     "Write a scene as POV-Ray 3.7 SDL (a reference renderer)");
   auto scene = std::make_shared<std::string>();
   auto out = std::make_shared<std::string>();
   auto depth = std::make_shared<int>(5);

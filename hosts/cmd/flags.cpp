@@ -23,8 +23,8 @@ std::string Shown(const std::string& text) {
   return out;
 }
 
-[[noreturn]] void Refuse(const std::string& flag, const std::string& expected, const std::string& text,
-                         const std::string& why = "") {
+[[noreturn]] void Refuse(const std::string& flag, const std::string& expected,
+                         const std::string& text, const std::string& why = "") {
   throw CLI::ValidationError(flag, "expected " + expected + ", got '" + Shown(text) + "'" +
                                        (why.empty() ? "" : " (" + why + ")"));
 }
@@ -42,7 +42,8 @@ T ParseWhole(const std::string& flag, const std::string& text, T lo, T hi, const
   T value{};
   const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), value, 10);
   if (ec == std::errc::result_out_of_range) Refuse(flag, expected, text, why);
-  if (ec != std::errc() || end != s.data() + s.size() || s.empty()) Refuse(flag, expected, text, why);
+  if (ec != std::errc() || end != s.data() + s.size() || s.empty())
+    Refuse(flag, expected, text, why);
   if (value < lo || value > hi) Refuse(flag, expected, text, why);
   return value;
 }
@@ -58,9 +59,10 @@ int64_t ParseIntegerFlag(const std::string& flag, const std::string& text, int64
   return ParseWhole<int64_t>(flag, text, lo, hi, why);
 }
 
-uint64_t ParseUnsignedFlag(const std::string& flag, const std::string& text, uint64_t lo, uint64_t hi,
-                           const std::string& why) {
-  if (!text.empty() && text[0] == '-') Refuse(flag, fmt::format("an integer {}..{}", lo, hi), text, why);
+uint64_t ParseUnsignedFlag(const std::string& flag, const std::string& text, uint64_t lo,
+                           uint64_t hi, const std::string& why) {
+  if (!text.empty() && text[0] == '-')
+    Refuse(flag, fmt::format("an integer {}..{}", lo, hi), text, why);
   return ParseWhole<uint64_t>(flag, text, lo, hi, why);
 }
 
@@ -77,8 +79,9 @@ double ParseNumberFlag(const std::string& flag, const std::string& text, double 
 }
 
 CLI::Option* AddParsedOption(CLI::App& app, const std::string& name,
-                             std::function<void(const std::string&)> set, const std::string& typeName,
-                             const std::string& defaultText, const std::string& help) {
+                             std::function<void(const std::string&)> set,
+                             const std::string& typeName, const std::string& defaultText,
+                             const std::string& help) {
   CLI::Option* o = app.add_option(
       name,
       [set = std::move(set)](const CLI::results_t& r) {
@@ -94,7 +97,10 @@ CLI::Option* AddParsedOption(CLI::App& app, const std::string& name,
 CLI::Option* AddNumber(CLI::App& app, const std::string& name, double& value, double lo, double hi,
                        const std::string& help) {
   return AddParsedOption(
-      app, name, [&value, name, lo, hi](const std::string& text) { value = ParseNumberFlag(name, text, lo, hi); },
+      app, name,
+      [&value, name, lo, hi](const std::string& text) {
+        value = ParseNumberFlag(name, text, lo, hi);
+      },
       "NUMBER " + Range(lo, hi), fmt::format("{}", value), help);
 }
 

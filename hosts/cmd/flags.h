@@ -29,26 +29,30 @@ namespace zephyr {
 // `why`, when given, follows the message in parentheses (where the range comes from).
 int64_t ParseIntegerFlag(const std::string& flag, const std::string& text, int64_t lo, int64_t hi,
                          const std::string& why = "");
-uint64_t ParseUnsignedFlag(const std::string& flag, const std::string& text, uint64_t lo, uint64_t hi,
-                           const std::string& why = "");
+uint64_t ParseUnsignedFlag(const std::string& flag, const std::string& text, uint64_t lo,
+                           uint64_t hi, const std::string& why = "");
 // Parses `text` as a finite decimal number in [lo, hi] (hi may be infinity: no upper end).
 double ParseNumberFlag(const std::string& flag, const std::string& text, double lo, double hi);
 
 // Adds `name` to `app`: `set` receives the flag's text (the last one given) and stores the
 // parsed value; `typeName` and `defaultText` are what --help shows.
 CLI::Option* AddParsedOption(CLI::App& app, const std::string& name,
-                             std::function<void(const std::string&)> set, const std::string& typeName,
-                             const std::string& defaultText, const std::string& help);
+                             std::function<void(const std::string&)> set,
+                             const std::string& typeName, const std::string& defaultText,
+                             const std::string& help);
 
 // An integer flag in [lo, hi], any integral type; the help shows the range and the default
 // (the value at the time of the call, when it is in the range).
 template <class T>
-  requires std::is_integral_v<T>
-CLI::Option* AddInteger(CLI::App& app, const std::string& name, T& value, T lo, T hi,
-                        const std::string& help, const std::string& why = "") {
+requires std::is_integral_v<T> CLI::Option* AddInteger(CLI::App& app, const std::string& name,
+                                                       T& value, T lo, T hi,
+                                                       const std::string& help,
+                                                       const std::string& why = "") {
   auto set = [&value, name, lo, hi, why](const std::string& text) {
-    if constexpr (std::is_signed_v<T>) value = T(ParseIntegerFlag(name, text, lo, hi, why));
-    else value = T(ParseUnsignedFlag(name, text, lo, hi, why));
+    if constexpr (std::is_signed_v<T>)
+      value = T(ParseIntegerFlag(name, text, lo, hi, why));
+    else
+      value = T(ParseUnsignedFlag(name, text, lo, hi, why));
   };
   // A value outside the range is a "not given" marker (-1: the planner chooses): not shown.
   const bool inRange = value >= lo && value <= hi;
@@ -58,14 +62,15 @@ CLI::Option* AddInteger(CLI::App& app, const std::string& name, T& value, T lo, 
 
 // Refuses a flag's text: CLI::ValidationError, printed as "FLAG: expected EXPECTED, got 'TEXT'"
 // (the text shown as printable ASCII, at most 40 bytes).
-[[noreturn]] void RefuseFlag(const std::string& flag, const std::string& expected, const std::string& text);
+[[noreturn]] void RefuseFlag(const std::string& flag, const std::string& expected,
+                             const std::string& text);
 
 // A flag whose value is one of a table's names (fixed/named.h): any other text is refused as
 // the command line is parsed ("--precision: expected float or double, got 'x'"); --help
 // shows the names and the default (the value at the time of the call).
 template <class E, size_t N>
-CLI::Option* AddNamed(CLI::App& app, const std::string& name, E& value, const NamedValues<E, N>& names,
-                      const std::string& help) {
+CLI::Option* AddNamed(CLI::App& app, const std::string& name, E& value,
+                      const NamedValues<E, N>& names, const std::string& help) {
   auto set = [&value, name, &names](const std::string& text) {
     const std::optional<E> v = names.Find(text);
     if (!v) RefuseFlag(name, names.List(), text);
@@ -78,8 +83,8 @@ CLI::Option* AddNamed(CLI::App& app, const std::string& name, E& value, const Na
 inline constexpr double kNoUpperEnd = __builtin_inf();
 
 // A finite number flag in [lo, hi] (hi may be kNoUpperEnd).
-CLI::Option* AddNumber(CLI::App& app, const std::string& name, double& value, double lo,
-                       double hi, const std::string& help);
+CLI::Option* AddNumber(CLI::App& app, const std::string& name, double& value, double lo, double hi,
+                       const std::string& help);
 
 // The rank this process has under mpirun (OpenMPI's OMPI_COMM_WORLD_RANK, or PMI's
 // PMI_RANK / PMIX_RANK), read from the environment before MPI starts; 0 when not under a

@@ -1,5 +1,7 @@
 // hosts/cmd/gen.cpp — `zephyr gen spheres|flake|showcase`: the generators of
 // hosts/scene/gen.h, written as NFF to a file or standard output.
+#include "hosts/scene/gen.h"
+
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <fstream>
@@ -8,7 +10,6 @@
 #include "hosts/cmd/command.h"
 #include "hosts/cmd/flags.h"
 #include "hosts/io/output_file.h"
-#include "hosts/scene/gen.h"
 #include "hosts/scene/nff.h"
 
 namespace zephyr {
@@ -44,7 +45,8 @@ CommandRegistration reg("gen", [](CLI::App& program) {
   };
   auto args = std::make_shared<Args>();
   auto* spheres = gen->add_subcommand("spheres", "The paper's random-sphere scene");
-  AddInteger(*spheres, "--count", args->count, 1, kMaxRandomSpheres, "Number of spheres")->required();
+  AddInteger(*spheres, "--count", args->count, 1, kMaxRandomSpheres, "Number of spheres")
+      ->required();
   AddInteger(*spheres, "--seed", args->seed, uint64_t(0), UINT64_MAX, "Random seed")->required();
   spheres->add_option("--out", args->out, "Output file (default: standard output)");
   spheres->add_option("--size", args->size, "Image size WxH (default 384x384)");
@@ -58,7 +60,9 @@ CommandRegistration reg("gen", [](CLI::App& program) {
     WriteSceneTo(GenerateRandomSpheres(o), args->out);
   });
   auto* flake = gen->add_subcommand("flake", "A sphereflake like SPD balls");
-  AddInteger(*flake, "--depth", args->depth, 0, kMaxFlakeDepth, "Recursion depth (6 is 597,871 spheres)")->required();
+  AddInteger(*flake, "--depth", args->depth, 0, kMaxFlakeDepth,
+             "Recursion depth (6 is 597,871 spheres)")
+      ->required();
   flake->add_option("--out", args->out, "Output file (default: standard output)");
   flake->add_option("--size", args->size, "Image size WxH (default 512x512)");
   flake->callback([args] {
@@ -67,7 +71,8 @@ CommandRegistration reg("gen", [](CLI::App& program) {
     ParseSize(args->size, w, h);
     WriteSceneTo(GenerateSphereflake(args->depth, w, h), args->out);
   });
-  auto* showcase = gen->add_subcommand("showcase", "Transformed primitives (ellipsoid, sheared cylinder, cube)");
+  auto* showcase =
+      gen->add_subcommand("showcase", "Transformed primitives (ellipsoid, sheared cylinder, cube)");
   showcase->add_option("--out", args->out, "Output file (default: standard output)");
   showcase->add_option("--size", args->size, "Image size WxH (default 384x384)");
   showcase->callback([args] {

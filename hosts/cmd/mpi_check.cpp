@@ -47,8 +47,10 @@ void RunCheck(CheckArgs& a) {
   PatternOptions& o = a.pattern;
   if (o.mode != "dist" && o.mode != "hetero")
     throw UserError("--mode must be dist or hetero, got '" + o.mode + "'");
-  if (!a.report.empty() && (SameFile(a.report, a.out) || SameFile(a.report, CheckpointPathFor(a.out))))
-    throw UserError("--report " + a.report + ": is the image or its checkpoint; choose another name");
+  if (!a.report.empty() &&
+      (SameFile(a.report, a.out) || SameFile(a.report, CheckpointPathFor(a.out))))
+    throw UserError("--report " + a.report +
+                    ": is the image or its checkpoint; choose another name");
   if (LauncherRank() == 0) {  // children write no file and hold frames only
     CheckOutputs({{"--out", a.out}, {"--report", a.report}});
     // The parent's image (12 bytes a pixel), the farm's copy and, for hetero, the matrix (40).
@@ -82,7 +84,8 @@ CommandRegistration reg("mpi-check", [](CLI::App& program) {
   AddInteger(*cmd, "--width", args->pattern.width, 1, kMaxResolution, "image width");
   AddInteger(*cmd, "--height", args->pattern.height, 1, kMaxResolution, "image height");
   AddInteger(*cmd, "--objects", args->pattern.objects, 0, 1000, "discs in the pattern");
-  AddInteger(*cmd, "--work", args->pattern.work, 0, 100000000, "stand-in shading iterations per pixel");
+  AddInteger(*cmd, "--work", args->pattern.work, 0, 100000000,
+             "stand-in shading iterations per pixel");
   AddInteger(*cmd, "--seed", args->pattern.seed, std::uint32_t(0), UINT32_MAX, "pattern seed");
   AddInteger(*cmd, "--frame", args->frame, 1, kMaxResolution, "frame size F (F×F frames)");
   cmd->add_flag("--local", args->local, "render in this process, without MPI (the reference)");
@@ -90,8 +93,8 @@ CommandRegistration reg("mpi-check", [](CLI::App& program) {
   cmd->add_option("--report", args->report, "JSON report (parent)");
   cmd->add_flag("--resume", args->farm.resume,
                 "render only the frames missing from the checkpoint");
-  AddNumber(*cmd, "--child-timeout", args->farm.childTimeoutSeconds, kMinChildTimeoutSeconds, kNoUpperEnd,
-            "seconds before a silent child holding frames is declared lost");
+  AddNumber(*cmd, "--child-timeout", args->farm.childTimeoutSeconds, kMinChildTimeoutSeconds,
+            kNoUpperEnd, "seconds before a silent child holding frames is declared lost");
   AddInteger(*cmd, "--in-flight", args->farm.framesInFlight, 1, kMaxFramesInFlight,
              "frames handed to a child at once");
   cmd->callback([args] { RunCheck(*args); });

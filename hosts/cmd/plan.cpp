@@ -16,7 +16,8 @@ namespace {
 using namespace simd;
 
 CommandRegistration planCommand("plan", [](CLI::App& program) {
-  auto* cmd = program.add_subcommand("plan", "Print the SIMD primary pass's formats for a scene, with reasons");
+  auto* cmd = program.add_subcommand(
+      "plan", "Print the SIMD primary pass's formats for a scene, with reasons");
   auto scene = std::make_shared<std::string>();
   auto flags = std::make_shared<SimdFlags>();
   auto json = std::make_shared<bool>(false);
@@ -47,8 +48,9 @@ CommandRegistration planCommand("plan", [](CLI::App& program) {
       std::printf("%s\n", j.dump(2).c_str());
     } else {
       std::printf("%s: %s", scene->c_str(), plan.Text().c_str());
-      std::printf("cycle estimate: %.4g cycles per primary pass (%.4g per layer), %.4g s at %g MHz\n",
-                  cycles, layerCycles, cycles / clock, clock / 1e6);
+      std::printf(
+          "cycle estimate: %.4g cycles per primary pass (%.4g per layer), %.4g s at %g MHz\n",
+          cycles, layerCycles, cycles / clock, clock / 1e6);
     }
   });
 });

@@ -1,6 +1,8 @@
 // hosts/cmd/render.cpp — `zephyr render`: the typed options of every method from the command
 // line (the SIMD flags shared with plan and accuracy: hosts/cmd/simd_flags.h), then
 // RunRender (hosts/methods/render.h) and a one-line summary.
+#include "hosts/methods/render.h"
+
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <memory>
@@ -11,7 +13,6 @@
 #include "hosts/cmd/flags.h"
 #include "hosts/cmd/simd_flags.h"
 #include "hosts/methods/phases.h"
-#include "hosts/methods/render.h"
 #include "hosts/scene/nff.h"
 
 namespace zephyr {
@@ -23,8 +24,9 @@ std::string RenderSummary(const RenderOptions& options, const RenderOutput& out)
   char line[512];
   const auto render = out.phases.find("render");
   const double seconds = render != out.phases.end() ? render->second : 0.0;
-  std::snprintf(line, sizeof line, "%s: %dx%d, %zu objects, rendered in %.3f s", options.method.c_str(),
-                out.image.width, out.image.height, out.scene.objects, seconds);
+  std::snprintf(line, sizeof line, "%s: %dx%d, %zu objects, rendered in %.3f s",
+                options.method.c_str(), out.image.width, out.image.height, out.scene.objects,
+                seconds);
   std::string s = line;
   if (out.farm) {
     const FarmReport& d = *out.farm;
@@ -57,20 +59,24 @@ CommandRegistration reg("render", [](CLI::App& program) {
   std::vector<CLI::Option*> outputs = {
       cmd->add_option("--out", o->out, "Output PNG"),
       cmd->add_option("--report", o->report, "JSON report: time per phase, rays, tests"),
-      cmd->add_option("--dump-primary", o->dumpPrimary, "CSV of primary hits: x,y,dx,dy,dz,object,t,flags")};
-  AddInteger(*cmd, "--depth", o->trace.depth, 1, kMaxDepth, "Ray-tree depth limit (1 = primary rays only)");
-  AddNamed(*cmd, "--precision", o->trace.precision, kPrecisionNames, "Host tracer scalar: float or double");
+      cmd->add_option("--dump-primary", o->dumpPrimary,
+                      "CSV of primary hits: x,y,dx,dy,dz,object,t,flags")};
+  AddInteger(*cmd, "--depth", o->trace.depth, 1, kMaxDepth,
+             "Ray-tree depth limit (1 = primary rays only)");
+  AddNamed(*cmd, "--precision", o->trace.precision, kPrecisionNames,
+           "Host tracer scalar: float or double");
   AddNamed(*cmd, "--sphere-test", o->trace.sphereTest, kSphereTestNames,
            "Sphere test form: hb (Hearn-Baker) or naive");
   cmd->add_flag("--no-progress", *noProgress, "No progress bar even on a terminal");
   auto simdFlags = std::make_shared<SimdFlags>();
   simdFlags->AddTo(*cmd, "simd: ");
   const std::vector<CLI::Option*> farmFlags = {
-      AddInteger(*cmd, "--frame", o->dist.frameSize, 1, kMaxResolution, "dist/hetero: frame size F (F×F frames)"),
+      AddInteger(*cmd, "--frame", o->dist.frameSize, 1, kMaxResolution,
+                 "dist/hetero: frame size F (F×F frames)"),
       cmd->add_flag("--resume", o->dist.resume,
                     "dist/hetero: render only the frames missing from OUT.frames (the checkpoint)"),
-      AddNumber(*cmd, "--child-timeout", o->dist.childTimeoutSeconds, kMinChildTimeoutSeconds, kNoUpperEnd,
-                "dist/hetero: seconds a child may hold frames without answering"),
+      AddNumber(*cmd, "--child-timeout", o->dist.childTimeoutSeconds, kMinChildTimeoutSeconds,
+                kNoUpperEnd, "dist/hetero: seconds a child may hold frames without answering"),
       AddInteger(*cmd, "--in-flight", o->dist.framesInFlight, 1, kMaxFramesInFlight,
                  "dist/hetero: frames handed to a child before it returns one")};
   cmd->add_option("--testbed", o->testbed,
@@ -80,7 +86,8 @@ CommandRegistration reg("render", [](CLI::App& program) {
     RenderOptions options = *o;
     for (CLI::Option* flag : outputs)  // `--out ''` is a mistake, not "no output"
       if (flag->count() > 0 && flag->as<std::string>().empty())
-        throw UserError(flag->get_name() + ": empty path (give a file name, or leave the flag out)");
+        throw UserError(flag->get_name() +
+                        ": empty path (give a file name, or leave the flag out)");
     if (!positional->empty()) {
       if (!options.scenePath.empty() && options.scenePath != *positional)
         throw UserError("render: give the scene once (either --scene or a positional file)");
@@ -94,11 +101,13 @@ CommandRegistration reg("render", [](CLI::App& program) {
     const RenderMethodUse use = RenderMethodUses(options.method);
     if (!use.array && !simdFlags->Given().empty())
       throw UserError(simdFlags->Given().front() + ": --method " + options.method +
-                      " runs no SIMD pass (the flag applies to " + RenderMethodsUsing(true, false) + ")");
+                      " runs no SIMD pass (the flag applies to " + RenderMethodsUsing(true, false) +
+                      ")");
     for (const CLI::Option* flag : farmFlags)
       if (!use.farm && flag->count() > 0)
         throw UserError(flag->get_name() + ": --method " + options.method +
-                        " has no frame farm (the flag applies to " + RenderMethodsUsing(false, true) + ")");
+                        " has no frame farm (the flag applies to " +
+                        RenderMethodsUsing(false, true) + ")");
     RenderOutput out = RunRender(options);
     std::printf("%s\n", RenderSummary(options, out).c_str());
   });

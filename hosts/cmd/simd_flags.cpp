@@ -15,8 +15,9 @@ void SimdFlags::AddTo(CLI::App& command, const std::string& helpPrefix, bool wit
   // widest it supports (hosts/simd/plan.h).
   auto bits = [&](const char* name, int& value, int lo, int hi, const char* help) {
     added_.push_back(AddInteger(command, name, value, lo, hi, helpPrefix + help,
-                                "the SIMD pass's error bounds are tested from " + std::to_string(lo) +
-                                    " bits and it supports up to " + std::to_string(hi) + ", docs/simd.md"));
+                                "the SIMD pass's error bounds are tested from " +
+                                    std::to_string(lo) + " bits and it supports up to " +
+                                    std::to_string(hi) + ", docs/simd.md"));
   };
   bits("--frac-bits", options_.formats.fracBits, simd::kMinFracBits, simd::kMaxFracBits,
        "fraction bits of lengths, t and directions (default: planned per scene)");
@@ -30,23 +31,27 @@ void SimdFlags::AddTo(CLI::App& command, const std::string& helpPrefix, bool wit
                    "(bit-serial floating point; spheres only, docs/simd.md)"));
   added_.push_back(command.add_option(
       "--float-format", floatFormat_,
-      helpPrefix + "with --number float: the format, eXmY[ftz] as in docs/float.md (e8m23 = binary32; "
-                   "default: planned per scene)"));
+      helpPrefix +
+          "with --number float: the format, eXmY[ftz] as in docs/float.md (e8m23 = binary32; "
+          "default: planned per scene)"));
   options_.uncertain = simd::UncertainPolicy::kAuto;  // the command line's default (docs/simd.md)
   if (withUncertain)
     added_.push_back(AddNamed(
         command, "--uncertain", options_.uncertain, simd::kUncertainPolicyNames,
         helpPrefix + "uncertain pixels: auto (refine where the first pass flags more than 1 % of "
-                     "the pixels, else recompute), recompute (in double on the host), refine (a second, wider "
+                     "the pixels, else recompute), recompute (in double on the host), refine (a "
+                     "second, wider "
                      "array pass on them first), keep, fail"));
   added_.push_back(command.add_option("--machine", options_.profile,
                                       helpPrefix + "machine profile (wavetracer, mpp)"));
-  added_.push_back(command.add_option("--set", options_.profileOverrides,
-                                      helpPrefix + "override an entry of the machine profile, NAME=VALUE (e.g. "
-                                                   "--set clockHz=20e6; as zephyr cycles --set, docs/bitserial.md)"));
-  added_.push_back(AddInteger(command, "--threads", options_.threads, 0, bitserial::kMaxThreads,
-                              helpPrefix + "host threads emulating the array and recomputing uncertain "
-                                           "pixels (default or 0: every core; the results do not depend on it)"));
+  added_.push_back(command.add_option(
+      "--set", options_.profileOverrides,
+      helpPrefix + "override an entry of the machine profile, NAME=VALUE (e.g. "
+                   "--set clockHz=20e6; as zephyr cycles --set, docs/bitserial.md)"));
+  added_.push_back(AddInteger(
+      command, "--threads", options_.threads, 0, bitserial::kMaxThreads,
+      helpPrefix + "host threads emulating the array and recomputing uncertain "
+                   "pixels (default or 0: every core; the results do not depend on it)"));
 }
 
 simd::SimdOptions SimdFlags::Options() const {
@@ -59,7 +64,8 @@ simd::SimdOptions SimdFlags::Options() const {
     o.floatFormat = fixed::FloatFormat::Parse(floatFormat_);
   }
   if (o.threads != 0) bitserial::CheckThreads(o.threads);  // 0: not given, every core
-  simd::MachineProfileOf(o);  // an unknown --machine before any work (UserError naming the known ones)
+  simd::MachineProfileOf(
+      o);  // an unknown --machine before any work (UserError naming the known ones)
   return o;
 }
 

@@ -3,8 +3,11 @@
 //
 //   zephyr stability distance --out FILE.csv   error against distance for a small, far sphere
 //   zephyr stability overflow --out FILE.csv   largest scene extent each fixed format holds
-#include <CLI/CLI.hpp>
+#include "hosts/trace/stability.h"
+
 #include <fmt/format.h>
+
+#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <optional>
 #include <string>
@@ -14,7 +17,6 @@
 #include "hosts/cmd/command.h"
 #include "hosts/cmd/flags.h"
 #include "hosts/io/output_file.h"
-#include "hosts/trace/stability.h"
 
 namespace zephyr {
 namespace {
@@ -57,33 +59,43 @@ CommandRegistration reg("stability", [](CLI::App& program) {
   auto a = std::make_shared<Args>();
 
   auto* dist = cmd->add_subcommand(
-      "distance", "Error against distance: a radius-1 sphere at D = 2^(k/steps), naive vs Hearn-Baker");
+      "distance",
+      "Error against distance: a radius-1 sphere at D = 2^(k/steps), naive vs Hearn-Baker");
   dist->add_option("--out", a->out, "CSV file ('-' = standard output)")->capture_default_str();
   dist->add_option("--formats", a->formats, "Formats: float32, float64, sI.F (fixed)")
-      ->delimiter(',')->capture_default_str();
-  AddInteger(*dist, "--rays", a->rays, 1, stability::kMaxFanRays, "Rays in the fan (closest approach 0..1.25 r)");
+      ->delimiter(',')
+      ->capture_default_str();
+  AddInteger(*dist, "--rays", a->rays, 1, stability::kMaxFanRays,
+             "Rays in the fan (closest approach 0..1.25 r)");
   AddInteger(*dist, "--max-log2", a->maxLog2, 1, 60, "Largest distance 2^N");
   AddInteger(*dist, "--steps", a->steps, 1, 1024, "Distances per octave");
   dist->callback([a] {
     CheckOutputs({{"--out", a->out}});
     std::vector<stability::StudyFormat> formats;
-    for (const std::string& name : a->formats) formats.push_back(stability::StudyFormat::Parse(name));
-    WriteCsv(a->out, [&](std::FILE* f) { stability::WriteDistanceStudy(f, formats, a->rays, a->maxLog2, a->steps); });
+    for (const std::string& name : a->formats)
+      formats.push_back(stability::StudyFormat::Parse(name));
+    WriteCsv(a->out, [&](std::FILE* f) {
+      stability::WriteDistanceStudy(f, formats, a->rays, a->maxLog2, a->steps);
+    });
   });
 
   auto* over = cmd->add_subcommand(
       "overflow", "Largest scene extent each fixed format sI.F holds, naive vs Hearn-Baker");
   over->add_option("--out", a->out, "CSV file ('-' = standard output)")->capture_default_str();
   AddInteger(*over, "--frac-bits", a->fracBits, 4, 64, "Fraction bits F");
-  AddInteger(*over, "--max-int-bits", a->maxIntBits, 2, fixed::kMaxWidth, "Integer bits I from 2 to this (I + F + 1 within 128)");
+  AddInteger(*over, "--max-int-bits", a->maxIntBits, 2, fixed::kMaxWidth,
+             "Integer bits I from 2 to this (I + F + 1 within 128)");
   AddInteger(*over, "--rays", a->overflowRays, 1, stability::kMaxFanRays, "Rays in the fan");
   over->callback([a] {
     if (a->maxIntBits + a->fracBits + 1 > fixed::kMaxWidth)
-      throw UserError(fmt::format("--max-int-bits {}: with --frac-bits {} the widest format would be {} bits, "
-                                  "more than the {} of fixed/",
-                                  a->maxIntBits, a->fracBits, a->maxIntBits + a->fracBits + 1, fixed::kMaxWidth));
+      throw UserError(fmt::format(
+          "--max-int-bits {}: with --frac-bits {} the widest format would be {} bits, "
+          "more than the {} of fixed/",
+          a->maxIntBits, a->fracBits, a->maxIntBits + a->fracBits + 1, fixed::kMaxWidth));
     CheckOutputs({{"--out", a->out}});
-    WriteCsv(a->out, [&](std::FILE* f) { stability::WriteOverflowStudy(f, a->fracBits, a->maxIntBits, a->overflowRays); });
+    WriteCsv(a->out, [&](std::FILE* f) {
+      stability::WriteOverflowStudy(f, a->fracBits, a->maxIntBits, a->overflowRays);
+    });
   });
 });
 

@@ -2,6 +2,8 @@
 // testbed's host profiles and work table with their sources, its SimGrid platform file and
 // hostfile, and this host's speed calibrated from a measured render (hosts/testbed/testbed.h;
 // docs/testbed.md).
+#include "hosts/testbed/testbed.h"
+
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <fstream>
@@ -13,17 +15,19 @@
 #include "hosts/cmd/flags.h"
 #include "hosts/io/output_file.h"
 #include "hosts/testbed/host_profile.h"
-#include "hosts/testbed/testbed.h"
 
 namespace zephyr::testbed {
 namespace {
 
 CommandRegistration testbedCommand("testbed", [](CLI::App& program) {
-  auto* cmd = program.add_subcommand("testbed", "The paper's 1992 testbed: host profiles, platform files");
+  auto* cmd =
+      program.add_subcommand("testbed", "The paper's 1992 testbed: host profiles, platform files");
   cmd->require_subcommand(1);
-  auto* profiles = cmd->add_subcommand("profiles", "Print the host profiles and the work table, with sources");
+  auto* profiles =
+      cmd->add_subcommand("profiles", "Print the host profiles and the work table, with sources");
   profiles->callback([] {
-    for (const auto& name : HostProfileNames()) std::printf("%s\n", HostProfileNamed(name).Table().c_str());
+    for (const auto& name : HostProfileNames())
+      std::printf("%s\n", HostProfileNamed(name).Table().c_str());
     std::printf("work table (per counted event):\n");
     for (int e = 0; e < kWorkEvents; ++e)
       std::printf("  %-12s %5g flops %5g instructions  %s\n", WorkEventName(WorkEvent(e)),
@@ -32,7 +36,8 @@ CommandRegistration testbedCommand("testbed", [](CLI::App& program) {
     for (const auto& name : TestbedNames())
       std::printf("\ntestbed %s:\n%s\n", name.c_str(), TestbedNamed(name).Json().dump(2).c_str());
   });
-  auto* platform = cmd->add_subcommand("platform", "Write a SimGrid platform file (and hostfile) of a testbed");
+  auto* platform =
+      cmd->add_subcommand("platform", "Write a SimGrid platform file (and hostfile) of a testbed");
   auto bed = std::make_shared<std::string>("ufmg1992");
   auto children = std::make_shared<int>(8);
   auto out = std::make_shared<std::string>();
@@ -40,30 +45,37 @@ CommandRegistration testbedCommand("testbed", [](CLI::App& program) {
   platform->add_option("--testbed", *bed, "Testbed name")->capture_default_str();
   AddInteger(*platform, "--children", *children, 1, kMaxPlatformChildren, "Number of child hosts");
   platform->add_option("--out", *out, "Platform XML (default: standard output)");
-  platform->add_option("--hostfile", *hostfile, "Also write smpirun's hostfile: the parent, then the children");
+  platform->add_option("--hostfile", *hostfile,
+                       "Also write smpirun's hostfile: the parent, then the children");
   auto bps = std::make_shared<double>(0);
-  AddNumber(*platform, "--ethernet-bps", *bps, 1e3, kNoUpperEnd, "Override the Ethernet's bandwidth, bit/s (what-if runs)");
+  AddNumber(*platform, "--ethernet-bps", *bps, 1e3, kNoUpperEnd,
+            "Override the Ethernet's bandwidth, bit/s (what-if runs)");
   auto hostOps = std::make_shared<double>(0);
   AddNumber(*platform, "--host-ops", *hostOps, 1e3, kNoUpperEnd,
-                       "Parent and children run this many counted operations per second, no profile "
-                       "(the this-host speed from `zephyr testbed calibrate`)");
+            "Parent and children run this many counted operations per second, no profile "
+            "(the this-host speed from `zephyr testbed calibrate`)");
   platform->callback([bed, children, out, hostfile, bps, hostOps] {
     Testbed t = TestbedNamed(*bed);
     if (*bps < 0 || (*bps > 0 && *bps < 1e3))
       throw UserError("--ethernet-bps: expected a bandwidth of at least 1000 bit/s");
-    if (*bps > 0) t.ethernetBandwidth = {*bps, "bit/s", "--ethernet-bps (what-if; not the paper's network)"};
+    if (*bps > 0)
+      t.ethernetBandwidth = {*bps, "bit/s", "--ethernet-bps (what-if; not the paper's network)"};
     if (*hostOps < 0 || (*hostOps > 0 && *hostOps < 1e3))
       throw UserError("--host-ops: expected at least 1000 operations per second");
     CheckOutputs({{"--out", *out}, {"--hostfile", *hostfile}});
     const std::string xml = PlatformXml(t, *children, *hostOps);
-    if (out->empty()) std::fputs(xml.c_str(), stdout);
-    else WriteOutputFile(*out, "platform file", xml);
+    if (out->empty())
+      std::fputs(xml.c_str(), stdout);
+    else
+      WriteOutputFile(*out, "platform file", xml);
     if (!hostfile->empty()) WriteOutputFile(*hostfile, "hostfile", Hostfile(*children));
   });
   auto* calibrate = cmd->add_subcommand(
-      "calibrate", "This host's speed (the this-host profile) from a measured `render --method seq --report`");
+      "calibrate",
+      "This host's speed (the this-host profile) from a measured `render --method seq --report`");
   auto report = std::make_shared<std::string>();
-  calibrate->add_option("--report", *report, "JSON report of a seq render measured on this host")->required();
+  calibrate->add_option("--report", *report, "JSON report of a seq render measured on this host")
+      ->required();
   calibrate->callback([report] {
     std::ifstream in(*report);
     if (!in) throw UserError(*report + ": cannot read the report");

@@ -127,8 +127,8 @@ FrameCheckpoint FrameCheckpoint::Resume(const std::string& path, const Checkpoin
   const std::byte* marker = reinterpret_cast<const std::byte*>(kRecordMarker);
   // The next place at or after `from` where a record could start.
   auto nextMarker = [&](std::size_t from) {
-    auto it = std::search(bytes.begin() + std::ptrdiff_t(std::min(from, bytes.size())),
-                          bytes.end(), marker, marker + 4);
+    auto it = std::search(bytes.begin() + std::ptrdiff_t(std::min(from, bytes.size())), bytes.end(),
+                          marker, marker + 4);
     return std::size_t(it - bytes.begin());
   };
   CheckpointDamage& damage = checkpoint.damage_;

@@ -76,7 +76,7 @@ class FrameCheckpoint {
   std::string path_;
   int fd_ = -1;
   std::map<int, std::vector<std::byte>> frames_;  // only filled by Resume
-  CheckpointDamage damage_;  // only filled by Resume
+  CheckpointDamage damage_;                       // only filled by Resume
 };
 
 }  // namespace zephyr

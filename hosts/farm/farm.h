@@ -1,6 +1,6 @@
 // hosts/farm/farm.h — the frame farm shared by the distributed and heterogeneous methods
-// (paper §4; docs/distributed.md): rank 0 (the parent) cuts the image into frames and hands them out on
-// demand; ranks 1..K (the children) receive the job once, then render frame after frame.
+// (paper §4; docs/distributed.md): rank 0 (the parent) cuts the image into frames and hands them
+// out on demand; ranks 1..K (the children) receive the job once, then render frame after frame.
 //
 // What a child computes is a FrameWork: "given a frame rectangle (and, for hetero, the
 // frame's slice of the per-pixel matrix), produce its pixels". The farm does not know what a
@@ -107,9 +107,9 @@ struct FarmReport {
   TrafficAccount parentToChildren, childrenToParent;
   int ignoredMessages = 0;
   std::vector<ChildReport> perChild;
-  double parentPassSeconds = 0;    // FramedJob::parentPassSeconds
-  double distributionSeconds = 0;  // wall time handing out and collecting frames
-  double parentCpuSeconds = 0;     // the parent's CPU time over it
+  double parentPassSeconds = 0;        // FramedJob::parentPassSeconds
+  double distributionSeconds = 0;      // wall time handing out and collecting frames
+  double parentCpuSeconds = 0;         // the parent's CPU time over it
   double ChildrenBusySeconds() const;  // over the children that sent stats
   double ChildrenIdleSeconds() const;
   // The report's "distributed" section (render --report, mpi-check --report).

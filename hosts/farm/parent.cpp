@@ -101,7 +101,7 @@ class Parent {
   TrafficAccount sent_, received_;
   std::vector<int> skipped_, lost_;
   int resumed_ = 0, ignoredMessages_ = 0;
-  int checkpointed_ = 0;  // frames in the checkpoint file (degenerate ones never are)
+  int checkpointed_ = 0;            // frames in the checkpoint file (degenerate ones never are)
   std::vector<int> checkpointBad_;  // --resume: frames whose records were damaged
   double distributionSeconds_ = 0, distributionCpuSeconds_ = 0;
 };
@@ -408,8 +408,13 @@ FarmReport Parent::Report() const {
   r.parentToChildren = sent_, r.childrenToParent = received_;
   r.ignoredMessages = ignoredMessages_;
   for (const ChildState& c : children_)
-    r.perChild.push_back({.rank = c.rank, .host = c.host, .pid = c.pid, .framesAccepted = c.frames,
-                          .pixels = c.pixels, .lostReason = c.lostReason, .stats = c.stats});
+    r.perChild.push_back({.rank = c.rank,
+                          .host = c.host,
+                          .pid = c.pid,
+                          .framesAccepted = c.frames,
+                          .pixels = c.pixels,
+                          .lostReason = c.lostReason,
+                          .stats = c.stats});
   r.parentPassSeconds = job_.parentPassSeconds;
   r.distributionSeconds = distributionSeconds_, r.parentCpuSeconds = distributionCpuSeconds_;
   return r;
@@ -476,7 +481,9 @@ nlohmann::json FarmReport::Json() const {
         {"resumed", resumedFrames},
         {"checkpointDamaged", damagedFrames},
         {"lost", lostFrames}}},
-      {"traffic", {{"parentToChildren", parentToChildren.ToJson()}, {"childrenToParent", childrenToParent.ToJson()}}},
+      {"traffic",
+       {{"parentToChildren", parentToChildren.ToJson()},
+        {"childrenToParent", childrenToParent.ToJson()}}},
       {"ignoredMessages", ignoredMessages},
       {"perChild", childList},
       {"time",

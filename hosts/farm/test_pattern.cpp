@@ -1,11 +1,11 @@
-// hosts/farm/test_pattern.cpp — the frame farm's synthetic test pattern (hosts/farm/test_pattern.h).
+// hosts/farm/test_pattern.cpp — the frame farm's synthetic test pattern
+// (hosts/farm/test_pattern.h).
 #include "hosts/farm/test_pattern.h"
 
 #include <chrono>
 #include <cstring>
-#include <optional>
-
 #include <nlohmann/json.hpp>
+#include <optional>
 
 #include "fixed/check.h"
 #include "hosts/farm/frame.h"
@@ -34,7 +34,8 @@ std::size_t PatternWork::SliceBytesPerPixel() const {
   return pattern_.Options().mode == "hetero" ? sizeof(PatternHit) : 0;
 }
 
-void PatternWork::RenderFrame(const Frame& frame, std::span<const std::byte> slice, std::span<std::byte> pixels) {
+void PatternWork::RenderFrame(const Frame& frame, std::span<const std::byte> slice,
+                              std::span<std::byte> pixels) {
   std::size_t i = 0;
   for (int y = frame.y0; y < frame.y0 + frame.height; ++y)
     for (int x = frame.x0; x < frame.x0 + frame.width; ++x, ++i) {
@@ -73,10 +74,12 @@ FramedJob PatternJob(const PatternOptions& o, int frameSize, std::vector<Pattern
   matrix.resize(std::size_t(o.width) * o.height);
   for (int y = 0; y < o.height; ++y)
     for (int x = 0; x < o.width; ++x) matrix[std::size_t(y) * o.width + x] = pattern.Primary(x, y);
-  job.parentPassSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  job.parentPassSeconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const int width = o.width;
   job.sliceFor = [&matrix, width](const Frame& f) -> std::optional<std::vector<std::byte>> {
-    std::vector<std::byte> slice = CutFrame(f, std::as_bytes(std::span(matrix)), width, sizeof(PatternHit));
+    std::vector<std::byte> slice =
+        CutFrame(f, std::as_bytes(std::span(matrix)), width, sizeof(PatternHit));
     for (std::size_t i = 0; i < f.PixelCount(); ++i) {
       std::int32_t object;
       std::memcpy(&object, &slice[i * sizeof(PatternHit)], 4);
@@ -85,7 +88,8 @@ FramedJob PatternJob(const PatternOptions& o, int frameSize, std::vector<Pattern
     return std::nullopt;
   };
   job.fillDegenerate = [](const Frame& f, std::span<std::byte> pixels) {
-    for (std::size_t i = 0; i < f.PixelCount(); ++i) std::memcpy(&pixels[i * 12], kPatternBackground, 12);
+    for (std::size_t i = 0; i < f.PixelCount(); ++i)
+      std::memcpy(&pixels[i * 12], kPatternBackground, 12);
   };
   return job;
 }

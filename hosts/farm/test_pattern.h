@@ -107,7 +107,8 @@ class PatternWork : public FrameWork {
   int ImageHeight() const override { return pattern_.Options().height; }
   std::size_t BytesPerPixel() const override { return 3 * sizeof(float); }
   std::size_t SliceBytesPerPixel() const override;
-  void RenderFrame(const Frame& frame, std::span<const std::byte> slice, std::span<std::byte> pixels) override;
+  void RenderFrame(const Frame& frame, std::span<const std::byte> slice,
+                   std::span<std::byte> pixels) override;
 
  private:
   Pattern pattern_;

@@ -121,8 +121,10 @@ void WriteOutputFile(const std::string& path, const std::string& what, std::stri
 }
 
 void CheckOutputPath(const std::string& flag, const std::string& path) {
-  if (path.empty()) throw UserError(flag + ": empty path (give a file name, or leave the flag out)");
-  if (const std::string why = Unreplaceable(path); !why.empty()) throw UserError(flag + " " + path + ": " + why);
+  if (path.empty())
+    throw UserError(flag + ": empty path (give a file name, or leave the flag out)");
+  if (const std::string why = Unreplaceable(path); !why.empty())
+    throw UserError(flag + " " + path + ": " + why);
   struct stat s;
   const std::string dir = DirectoryOf(path);
   if (::stat(dir.c_str(), &s) != 0)
@@ -143,7 +145,8 @@ void CheckOutputs(const std::vector<PlannedOutput>& outputs, const std::vector<R
     if (o.path.empty() || o.path == "-") continue;
     for (const RunInput& in : inputs)
       if (!in.path.empty() && SameFile(o.path, in.path))
-        throw UserError(o.flag + " " + o.path + ": is " + in.what + " this run reads; choose another name");
+        throw UserError(o.flag + " " + o.path + ": is " + in.what +
+                        " this run reads; choose another name");
     for (const PlannedOutput* earlier : seen)
       if (SameFile(o.path, earlier->path))
         throw UserError(earlier->flag + " and " + o.flag + " name the same file (" + o.path +

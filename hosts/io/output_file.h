@@ -65,7 +65,8 @@ struct RunInput {
 // CheckOutputPath (so a device node, a directory or a missing directory is refused, never
 // replaced), none the same file as an input of the run or as another output. Outputs with
 // an empty path or "-" (standard output) are skipped. UserError naming the flag otherwise.
-void CheckOutputs(const std::vector<PlannedOutput>& outputs, const std::vector<RunInput>& inputs = {});
+void CheckOutputs(const std::vector<PlannedOutput>& outputs,
+                  const std::vector<RunInput>& inputs = {});
 
 // True when `a` and `b` name the same file: the same inode when both exist, else the same
 // absolute path after resolving the directories' symbolic links and `..`.

@@ -69,8 +69,10 @@ CommitCalls& Installed() {
     if (!step ||
         (name.size() < text.size() &&
          (std::sscanf(text.c_str() + name.size(), ":%d%c", &file, &rest) != 1 || file < 1)))
-      throw UserError("ZEPHYR_TEST_IO_KILL: expected step[:n] (fflush, fchmod, fsync, fclose, "
-                      "rename, open-dir, fsync-dir or close-dir; n >= 1), got '" + text + "'");
+      throw UserError(
+          "ZEPHYR_TEST_IO_KILL: expected step[:n] (fflush, fchmod, fsync, fclose, "
+          "rename, open-dir, fsync-dir or close-dir; n >= 1), got '" +
+          text + "'");
     return KillingCalls(*step, file);
   }();
   return calls;

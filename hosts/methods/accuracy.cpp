@@ -31,8 +31,10 @@ AccuracyResult MeasureAccuracy(const Scene& s, const AccuracyRequest& request) {
   seqOptions.precision = request.precision;
   // The primary hits under test: the SIMD pass's matrix, or the sequential tracer's.
   std::unique_ptr<Tracer> seqTracer;
-  if (request.simd) r.pass = simd::RunPrimaryPass(s, request.simdOptions);
-  else seqTracer = Tracer::Create(s, seqOptions);
+  if (request.simd)
+    r.pass = simd::RunPrimaryPass(s, request.simdOptions);
+  else
+    seqTracer = Tracer::Create(s, seqOptions);
   const int64_t pixels = int64_t(c.width) * c.height;
   std::vector<int64_t> which;
   if (request.sample <= 0 || request.sample >= pixels) {
@@ -83,18 +85,23 @@ AccuracyResult MeasureAccuracy(const Scene& s, const AccuracyRequest& request) {
 }
 
 nlohmann::json AccuracyJson(const AccuracyResult& r, const std::string& scenePath) {
-  nlohmann::json j = {{"scene", scenePath}, {"method", r.request.simd ? "simd" : "seq"}, {"pixels", r.pixels},
-                      {"sampled", r.sampled},
-                      {"firstObjectDiffers", r.firstObjectDiffers},
-                      {"firstObjectDiffersPercent", 100.0 * double(r.firstObjectDiffers) / double(r.pixels)},
-                      {"tMaxError", r.tMaxError}, {"tMeanError", r.tMeanError},
-                      {"psnrDb", std::isfinite(r.psnrDb) ? nlohmann::json(r.psnrDb) : nlohmann::json("inf")}};
+  nlohmann::json j = {
+      {"scene", scenePath},
+      {"method", r.request.simd ? "simd" : "seq"},
+      {"pixels", r.pixels},
+      {"sampled", r.sampled},
+      {"firstObjectDiffers", r.firstObjectDiffers},
+      {"firstObjectDiffersPercent", 100.0 * double(r.firstObjectDiffers) / double(r.pixels)},
+      {"tMaxError", r.tMaxError},
+      {"tMeanError", r.tMeanError},
+      {"psnrDb", std::isfinite(r.psnrDb) ? nlohmann::json(r.psnrDb) : nlohmann::json("inf")}};
   if (r.pass) {
     // The pass's cost, for speed-against-accuracy charts: modelled cycles of the whole
     // primary pass (every array pass and layer) and the emulator's wall time.
     const simd::PrimaryPass& pass = *r.pass;
     j["number"] = simd::kNumberSystemNames.NameOf(pass.plan.number);
-    if (pass.plan.number == simd::NumberSystem::kFloat) j["floatFormat"] = pass.plan.floatFormat.Name();
+    if (pass.plan.number == simd::NumberSystem::kFloat)
+      j["floatFormat"] = pass.plan.floatFormat.Name();
     j["fracBits"] = pass.plan.fracBits;
     const nlohmann::json section = PrimaryPassJson(pass);  // as render --report writes it
     j["cycles"] = pass.array.cycles.TotalCycles();
@@ -104,7 +111,8 @@ nlohmann::json AccuracyJson(const AccuracyResult& r, const std::string& scenePat
     if (pass.refine) j["refine"] = section["refine"];
   } else {
     j["precision"] = kPrecisionNames.NameOf(r.request.precision);
-    j["hostSeconds"] = r.seqSeconds;  // one render of the image in that precision (shading included)
+    j["hostSeconds"] =
+        r.seqSeconds;  // one render of the image in that precision (shading included)
   }
   return j;
 }

@@ -10,10 +10,9 @@
 #pragma once
 
 #include <cstdint>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
-
-#include <nlohmann/json.hpp>
 
 #include "hosts/scene/scene.h"
 #include "hosts/simd/pass.h"
@@ -23,8 +22,8 @@ namespace zephyr {
 
 // What to measure.
 struct AccuracyRequest {
-  bool simd = true;                        // the SIMD primary pass; false: the sequential tracer
-  simd::SimdOptions simdOptions;           // the pass's, with simd
+  bool simd = true;                          // the SIMD primary pass; false: the sequential tracer
+  simd::SimdOptions simdOptions;             // the pass's, with simd
   Precision precision = Precision::kDouble;  // the sequential tracer's scalar, without simd
   int64_t sample = 0;  // pixels in a random sample (seed 1); 0 or at least the image: every pixel
 };
@@ -32,14 +31,14 @@ struct AccuracyRequest {
 // What it measured. Lengths in scene units.
 struct AccuracyResult {
   AccuracyRequest request;
-  int64_t pixels = 0;                // compared with the reference
-  bool sampled = false;              // a random sample, not every pixel
-  int64_t firstObjectDiffers = 0;    // pixels whose first object is not the reference's
+  int64_t pixels = 0;                    // compared with the reference
+  bool sampled = false;                  // a random sample, not every pixel
+  int64_t firstObjectDiffers = 0;        // pixels whose first object is not the reference's
   double tMaxError = 0, tMeanError = 0;  // |t − t_exact| where the first object agrees and is hit
-  double psnrDb = 0;                 // the final image against seq in double; inf: identical
+  double psnrDb = 0;                     // the final image against seq in double; inf: identical
   std::optional<simd::PrimaryPass> pass;  // with simd: the pass measured (plan, cycles, uncertain)
-  double seqSeconds = 0;             // without simd: one render of the image in that precision
-  std::string What() const;          // "the SIMD pass", "the SIMD pass in float e8m16", "seq float"
+  double seqSeconds = 0;                  // without simd: one render of the image in that precision
+  std::string What() const;  // "the SIMD pass", "the SIMD pass in float e8m16", "seq float"
 };
 
 // UserError as the SIMD pass (a scene that cannot be planned, --uncertain fail).

@@ -50,14 +50,15 @@ class DistWork : public FrameWork {
 
 void DistChildEntry(const RenderOptions& options) {
   farmed::CheckDistOptions(options.dist);
-  if (ServeIfChild("dist", [](const std::string& setup) { return std::make_unique<DistWork>(setup); }))
+  if (ServeIfChild("dist",
+                   [](const std::string& setup) { return std::make_unique<DistWork>(setup); }))
     farmed::EndChild();
 }
 
 void RenderDist(const Scene& scene, const RenderOptions& options, RenderOutput& out) {
   const Camera& c = scene.camera;
   FrameGrid(c.width, c.height, options.dist.frameSize);  // a bad frame size: before any message
-  testbed::StartLinkAccounting();  // simulated testbed only
+  testbed::StartLinkAccounting();                        // simulated testbed only
   FramedJob job;
   job.method = "dist";
   job.imageWidth = c.width, job.imageHeight = c.height, job.frameSize = options.dist.frameSize;
@@ -73,8 +74,9 @@ void RenderDist(const Scene& scene, const RenderOptions& options, RenderOutput& 
 void CheckDistOptions(const RenderOptions& o) {
   farmed::CheckFarmOptions(o);
   if (!o.dumpPrimary.empty())
-    throw UserError("--dump-primary: --method dist has no primary hits at the parent (its "
-                    "children trace whole frames); --method seq gives the same image and dumps them");
+    throw UserError(
+        "--dump-primary: --method dist has no primary hits at the parent (its "
+        "children trace whole frames); --method seq gives the same image and dumps them");
 }
 
 }  // namespace zephyr

@@ -35,12 +35,14 @@ ChildSetup ReadSetup(const std::string& text, const std::string& method) {
     s.json = nlohmann::json::parse(text);
     const std::string got = s.json.at("method").get<std::string>();
     if (got != method)
-      throw UserError("malformed set-up message: it is for method '" + got + "', this child runs '" +
-                      method + "'");
+      throw UserError("malformed set-up message: it is for method '" + got +
+                      "', this child runs '" + method + "'");
     s.scene = ParseNffOrThrow(s.json.at("scene").get<std::string>(), "<scene from the parent>");
     s.trace.depth = s.json.at("depth").get<int>();
-    s.trace.precision = kPrecisionNames.Parse(s.json.at("precision").get<std::string>(), "the set-up's precision");
-    s.trace.sphereTest = kSphereTestNames.Parse(s.json.at("sphereTest").get<std::string>(), "the set-up's sphere test");
+    s.trace.precision =
+        kPrecisionNames.Parse(s.json.at("precision").get<std::string>(), "the set-up's precision");
+    s.trace.sphereTest = kSphereTestNames.Parse(s.json.at("sphereTest").get<std::string>(),
+                                                "the set-up's sphere test");
   } catch (const nlohmann::json::exception& e) {
     throw UserError(std::string("malformed set-up message: ") + e.what());
   }
@@ -77,9 +79,9 @@ void CheckFarmOptions(const RenderOptions& o) {
   if (f.resume && o.out.empty())
     throw UserError("--resume needs --out: the frames it resumes are kept in OUT.frames");
   if (f.checkpointPath.empty()) return;
-  for (const auto& [what, path] : {std::pair{"the scene", &o.scenePath},
-                                   std::pair{"--report", &o.report},
-                                   std::pair{"--dump-primary", &o.dumpPrimary}})
+  for (const auto& [what, path] :
+       {std::pair{"the scene", &o.scenePath}, std::pair{"--report", &o.report},
+        std::pair{"--dump-primary", &o.dumpPrimary}})
     if (!path->empty() && SameFile(*path, f.checkpointPath))
       throw UserError(std::string(what) + " " + *path + " is the checkpoint of --out " + o.out +
                       " (" + f.checkpointPath + "); choose another name");
@@ -122,7 +124,8 @@ testbed::FarmTimes FarmTimesOf(const FarmReport& report) {
       if (c.stats && c.stats->work.contains("testbed"))
         child.busySeconds = c.stats->work.at("testbed").at("busySeconds").get<double>();
     } catch (const nlohmann::json::exception& e) {
-      throw UserError("malformed stats message from child rank " + std::to_string(c.rank) + ": " + e.what());
+      throw UserError("malformed stats message from child rank " + std::to_string(c.rank) + ": " +
+                      e.what());
     }
     t.children.push_back(child);
   }

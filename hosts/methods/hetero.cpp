@@ -114,7 +114,8 @@ class HeteroWork : public FrameWork {
     std::size_t i = 0;
     for (int y = f.y0; y < f.y0 + f.height; ++y)
       for (int x = f.x0; x < f.x0 + f.width; ++x, ++i) {
-        m.hits[i] = hetero::GetEntry(&slice[i * kEntryBytes], int(scene_.objects.size()), m.flags[i]);
+        m.hits[i] =
+            hetero::GetEntry(&slice[i * kEntryBytes], int(scene_.objects.size()), m.flags[i]);
         m.hits[i].direction = hetero::MatrixDirection(tracer_->Rays(), x, y, dirFracBits_,
                                                       refineDirFracBits_, m.flags[i]);
       }
@@ -173,12 +174,13 @@ void RenderHetero(const Scene& scene, const RenderOptions& options, RenderOutput
   job.parentPassSeconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (testbed::Simulated())
-    job.parentPassSeconds = testbed::ChargeArrayCycles(pass.array.cycles, pass.refine ? &pass.refine->array.cycles : nullptr,
-                                                       uint64_t(pass.recomputedPixels), scene, "heterogeneous");
-  job.setup = farmed::SetupText(
-      "hetero", scene, options.trace,
-      {{"dirFracBits", pass.plan.dirFracBits},
-       {"refineDirFracBits", pass.refine ? pass.refine->dirFracBits : -1}});
+    job.parentPassSeconds = testbed::ChargeArrayCycles(
+        pass.array.cycles, pass.refine ? &pass.refine->array.cycles : nullptr,
+        uint64_t(pass.recomputedPixels), scene, "heterogeneous");
+  job.setup =
+      farmed::SetupText("hetero", scene, options.trace,
+                        {{"dirFracBits", pass.plan.dirFracBits},
+                         {"refineDirFracBits", pass.refine ? pass.refine->dirFracBits : -1}});
   std::fprintf(stdout, "cycle report (SIMD primary pass):\n%s", pass.array.Table().c_str());
   // The parent's own work, charged under the simulated testbed: packing each frame's slice,
   // shading the degenerate frames, pasting the children's frames.

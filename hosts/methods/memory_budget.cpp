@@ -41,8 +41,9 @@ MemoryLimit AvailableMemory() {
     struct rlimit r;
     if (::getrlimit(resource, &r) != 0 || r.rlim_cur == RLIM_INFINITY) return;
     const uint64_t left = r.rlim_cur > used ? uint64_t(r.rlim_cur) - used : 0;
-    if (left < best.bytes) best = {left, fmt::format("{} of {:.2f} GiB less the {:.2f} GiB mapped now", name,
-                                                     GiB(r.rlim_cur), GiB(used))};
+    if (left < best.bytes)
+      best = {left, fmt::format("{} of {:.2f} GiB less the {:.2f} GiB mapped now", name,
+                                GiB(r.rlim_cur), GiB(used))};
   };
   consider(RLIMIT_AS, address, "RLIMIT_AS (ulimit -v)");
   consider(RLIMIT_DATA, data, "RLIMIT_DATA (ulimit -d)");
@@ -58,7 +59,8 @@ void CheckMemoryFits(const std::string& what, const MemoryNeed& need, const Memo
   const double room = limit.bytes > need.fixedBytes ? double(limit.bytes - need.fixedBytes) : 0.0;
   const int side = need.perPixel > 0 ? int(std::floor(std::sqrt(room / need.perPixel))) : 0;
   throw UserError(fmt::format(
-      "{} needs about {:.2f} GiB ({} pixels at {:g} bytes each, docs/errors.md \"Memory\"), more than the "
+      "{} needs about {:.2f} GiB ({} pixels at {:g} bytes each, docs/errors.md \"Memory\"), more "
+      "than the "
       "{:.2f} GiB this process may have ({}); {}",
       what, GiB(need.Bytes()), need.pixels, need.perPixel, GiB(limit.bytes), limit.source,
       side > 0 ? fmt::format("the largest square image that fits is about {}x{}", side, side)

@@ -23,8 +23,8 @@ MemoryLimit AvailableMemory();
 // A run's peak memory as fixed bytes plus bytes per pixel (the figures of each method are
 // measured peaks, docs/errors.md "Memory", with a margin).
 struct MemoryNeed {
-  double perPixel = 0;            // bytes per image pixel at the peak
-  uint64_t pixels = 0;            // the image's pixels
+  double perPixel = 0;             // bytes per image pixel at the peak
+  uint64_t pixels = 0;             // the image's pixels
   uint64_t fixedBytes = 64 << 20;  // the program, its libraries' heaps, per-thread arenas
   uint64_t Bytes() const { return fixedBytes + uint64_t(perPixel * double(pixels)); }
 };

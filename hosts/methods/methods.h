@@ -8,8 +8,7 @@ namespace zephyr {
 
 // Fills out.image (and out.primary when options.dumpPrimary is set) and the method's typed
 // results (out.hostWork, out.simd, out.farm).
-using RenderMethod = void (*)(const Scene& scene, const RenderOptions& options,
-                              RenderOutput& out);
+using RenderMethod = void (*)(const Scene& scene, const RenderOptions& options, RenderOutput& out);
 
 // For the methods that run under MPI: called before the scene is read. On a child rank it
 // serves frames and ends the process (on a cluster the scene file exists only where the
@@ -26,7 +25,7 @@ struct RenderMethodEntry {
   const char* name;
   const char* description;
   RenderMethod render;
-  RenderChildEntry child = nullptr;   // nullptr: the method runs in one process
+  RenderChildEntry child = nullptr;    // nullptr: the method runs in one process
   RenderCheckOptions check = nullptr;  // nullptr: nothing beyond the shared checks
   // The method's peak memory at the parent, bytes per image pixel, and what --dump-primary
   // adds: measured peaks (/usr/bin/time %M, 2048x2048, 8 spheres) with ~25 % margin,
@@ -36,13 +35,14 @@ struct RenderMethodEntry {
   bool usesArray = false;  // runs the SIMD pass on the emulated array (--machine applies)
 };
 
-void RenderSeq(const Scene& scene, const RenderOptions& options, RenderOutput& out);      // seq.cpp
-void RenderSimd(const Scene& scene, const RenderOptions& options, RenderOutput& out);     // simd.cpp
-void RenderDist(const Scene& scene, const RenderOptions& options, RenderOutput& out);     // dist.cpp
-void DistChildEntry(const RenderOptions& options);                                        // dist.cpp
-void CheckDistOptions(const RenderOptions& options);                                      // dist.cpp
-void RenderHetero(const Scene& scene, const RenderOptions& options, RenderOutput& out);   // hetero.cpp
-void HeteroChildEntry(const RenderOptions& options);                                      // hetero.cpp
-void CheckHeteroOptions(const RenderOptions& options);                                    // hetero.cpp
+void RenderSeq(const Scene& scene, const RenderOptions& options, RenderOutput& out);   // seq.cpp
+void RenderSimd(const Scene& scene, const RenderOptions& options, RenderOutput& out);  // simd.cpp
+void RenderDist(const Scene& scene, const RenderOptions& options, RenderOutput& out);  // dist.cpp
+void DistChildEntry(const RenderOptions& options);                                     // dist.cpp
+void CheckDistOptions(const RenderOptions& options);                                   // dist.cpp
+void RenderHetero(const Scene& scene, const RenderOptions& options,
+                  RenderOutput& out);                   // hetero.cpp
+void HeteroChildEntry(const RenderOptions& options);    // hetero.cpp
+void CheckHeteroOptions(const RenderOptions& options);  // hetero.cpp
 
 }  // namespace zephyr

@@ -26,7 +26,8 @@ constexpr RenderMethodEntry kMethods[] = {
     {"simd",
      "SIMD/sequential: primary rays on the emulated array in fixed point, secondary rays on "
      "the host",
-     RenderSimd, nullptr, nullptr, /*bytesPerPixel=*/104, /*dumpBytesPerPixel=*/60, /*usesArray=*/true},
+     RenderSimd, nullptr, nullptr, /*bytesPerPixel=*/104, /*dumpBytesPerPixel=*/60,
+     /*usesArray=*/true},
     {"dist",
      "distributed: under mpirun, children trace whole F×F frames handed out on demand "
      "(bit-identical to seq)",
@@ -35,7 +36,8 @@ constexpr RenderMethodEntry kMethods[] = {
     {"hetero",
      "heterogeneous: the SIMD primary pass at the parent, children shade the frames with a hit "
      "(under mpirun; bit-identical to simd)",
-     RenderHetero, HeteroChildEntry, CheckHeteroOptions, /*bytesPerPixel=*/122, /*dumpBytesPerPixel=*/60,
+     RenderHetero, HeteroChildEntry, CheckHeteroOptions, /*bytesPerPixel=*/122,
+     /*dumpBytesPerPixel=*/60,
      /*usesArray=*/true},
 };
 
@@ -66,7 +68,9 @@ void WritePrimaryCsv(const std::string& path, int width, int height,
 }
 
 void CheckRenderOutputs(const RenderOptions& options) {
-  CheckOutputs({{"--out", options.out}, {"--dump-primary", options.dumpPrimary}, {"--report", options.report}},
+  CheckOutputs({{"--out", options.out},
+                {"--dump-primary", options.dumpPrimary},
+                {"--report", options.report}},
                {{"the scene file", options.scenePath}});
 }
 
@@ -93,7 +97,8 @@ RenderMethodUse RenderMethodUses(const std::string& method) {
 std::string RenderMethodsUsing(bool array, bool farm) {
   std::string names;
   for (const RenderMethodEntry& m : kMethods)
-    if ((!array || m.usesArray) && (!farm || m.child != nullptr)) names += (names.empty() ? "" : ", ") + std::string(m.name);
+    if ((!array || m.usesArray) && (!farm || m.child != nullptr))
+      names += (names.empty() ? "" : ", ") + std::string(m.name);
   return names;
 }
 
@@ -105,8 +110,8 @@ RenderOutput RunRender(const RenderOptions& options) {
   // output that could not be written.
   CheckRenderOutputs(options);
   if (it->check) it->check(options);
-  testbed::CheckModelledTimeRequest(options.testbed, options.method, it->child != nullptr, it->usesArray,
-                                    options.simd.profile);
+  testbed::CheckModelledTimeRequest(options.testbed, options.method, it->child != nullptr,
+                                    it->usesArray, options.simd.profile);
   out.method = options.method;
   out.trace = options.trace;
   Scene scene;
@@ -116,12 +121,16 @@ RenderOutput RunRender(const RenderOptions& options) {
   }
   for (const std::string& w : scene.warnings) std::fprintf(stderr, "zephyr: %s\n", w.c_str());
   const Camera& c = scene.camera;
-  CheckMemoryFits("render --method " + options.method + " at " + std::to_string(c.width) + "x" +
-                      std::to_string(c.height),
-                  {.perPixel = it->bytesPerPixel + (options.dumpPrimary.empty() ? 0 : it->dumpBytesPerPixel),
-                   .pixels = uint64_t(c.width) * uint64_t(c.height)});
-  out.scene = {.path = options.scenePath, .objects = scene.objects.size(), .lights = scene.lights.size(),
-               .width = c.width, .height = c.height};
+  CheckMemoryFits(
+      "render --method " + options.method + " at " + std::to_string(c.width) + "x" +
+          std::to_string(c.height),
+      {.perPixel = it->bytesPerPixel + (options.dumpPrimary.empty() ? 0 : it->dumpBytesPerPixel),
+       .pixels = uint64_t(c.width) * uint64_t(c.height)});
+  out.scene = {.path = options.scenePath,
+               .objects = scene.objects.size(),
+               .lights = scene.lights.size(),
+               .width = c.width,
+               .height = c.height};
   {
     PhaseTimer timer(out.phases, "render");
     it->render(scene, options, out);
@@ -148,7 +157,8 @@ RenderOutput RunRender(const RenderOptions& options) {
     }
     if (!options.dumpPrimary.empty()) {
       if (out.primary.size() != size_t(c.width) * c.height)
-        throw UserError("--dump-primary: method '" + options.method + "' does not produce primary hits");
+        throw UserError("--dump-primary: method '" + options.method +
+                        "' does not produce primary hits");
       PhaseTimer timer(out.phases, "dumpPrimary");
       WritePrimaryCsv(options.dumpPrimary, c.width, c.height, out.primary);
     }

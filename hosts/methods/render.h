@@ -27,13 +27,15 @@ namespace zephyr {
 // The flags' ranges (checked as the command line is parsed, hosts/cmd/flags.h): a frame
 // is at most an image's side (kMaxResolution), a child holds at most kMaxFramesInFlight.
 inline constexpr int kMaxFramesInFlight = 1024;
-inline constexpr double kMinChildTimeoutSeconds = 1e-3;  // --child-timeout must be > 0: 1 ms at least
+inline constexpr double kMinChildTimeoutSeconds =
+    1e-3;  // --child-timeout must be > 0: 1 ms at least
 
 struct DistOptions {
-  int frameSize = 64;                // --frame: F×F frames (UserError if < 1)
-  bool resume = false;               // --resume: render only the frames missing from OUT.frames
-  double childTimeoutSeconds = 60;   // --child-timeout: a silent child holding frames is lost (> 0 s)
-  int framesInFlight = 2;            // --in-flight: frames handed to a child before it answers
+  int frameSize = 64;   // --frame: F×F frames (UserError if < 1)
+  bool resume = false;  // --resume: render only the frames missing from OUT.frames
+  double childTimeoutSeconds =
+      60;                  // --child-timeout: a silent child holding frames is lost (> 0 s)
+  int framesInFlight = 2;  // --in-flight: frames handed to a child before it answers
 };
 
 struct RenderOptions {
@@ -70,11 +72,11 @@ struct RenderOutput {
     int width = 0, height = 0;
   } scene;
   TraceOptions trace;
-  Phases phases;                          // wall seconds per phase
-  std::optional<TraceStats> hostWork;     // seq, simd: the host's counted work
+  Phases phases;                       // wall seconds per phase
+  std::optional<TraceStats> hostWork;  // seq, simd: the host's counted work
   // simd, hetero: the primary pass (its matrix emptied once the image and dump have it).
   std::optional<simd::PrimaryPass> simd;
-  std::optional<FarmReport> farm;         // dist, hetero: the frame farm's figures
+  std::optional<FarmReport> farm;                // dist, hetero: the frame farm's figures
   std::optional<testbed::ModelledTime> testbed;  // --testbed: modelled seconds
   // Files deleted once every output is written (dist/hetero's frame checkpoint); kept when
   // a write fails, so --resume can finish the job.

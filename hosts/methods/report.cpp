@@ -7,8 +7,12 @@ namespace {
 
 // One array pass's memory per virtual PE: peak and capacity, bits.
 nlohmann::json MemoryJson(const simd::ArrayPassReport& pass) {
-  return {{"internal", {{"peakBitsPerPe", pass.internalPeakBits}, {"capacityBitsPerPe", pass.internalCapacityBits}}},
-          {"external", {{"peakBitsPerPe", pass.externalPeakBits}, {"capacityBitsPerPe", pass.externalCapacityBits}}}};
+  return {{"internal",
+           {{"peakBitsPerPe", pass.internalPeakBits},
+            {"capacityBitsPerPe", pass.internalCapacityBits}}},
+          {"external",
+           {{"peakBitsPerPe", pass.externalPeakBits},
+            {"capacityBitsPerPe", pass.externalCapacityBits}}}};
 }
 
 // One array pass's cycles: its cycle report, its memory per virtual PE, its timing.
@@ -29,8 +33,10 @@ nlohmann::json ArrayRunJson(const simd::ArrayRunReport& run) {
   total["passes"] = nlohmann::json::array();
   for (size_t k = 0; k < run.passes.size(); ++k) {
     const simd::ArrayPassReport& p = run.passes[k];
-    nlohmann::json entry = {{"pass", k}, {"firstPe", p.firstPe}, {"pes", p.pes}, {"cycles", PassJson(p)}};
-    if (run.rowWidth > 0) entry["rows"] = {p.firstPe / run.rowWidth, (p.firstPe + p.pes) / run.rowWidth - 1};
+    nlohmann::json entry = {
+        {"pass", k}, {"firstPe", p.firstPe}, {"pes", p.pes}, {"cycles", PassJson(p)}};
+    if (run.rowWidth > 0)
+      entry["rows"] = {p.firstPe / run.rowWidth, (p.firstPe + p.pes) / run.rowWidth - 1};
     total["passes"].push_back(entry);
   }
   total["hostSeconds"] = run.hostSeconds;
@@ -46,8 +52,11 @@ nlohmann::json PrimaryPassJson(const simd::PrimaryPass& pass) {
                       {"modelledSeconds", modelled},
                       {"realTimeFactor", host > 0 ? modelled / host : 0.0},
                       {"recomputeSeconds", pass.recomputeSeconds},
-                      {"uncertain", {{"overflow", pass.uncertain.overflow}, {"grazing", pass.uncertain.grazing},
-                                     {"nearTie", pass.uncertain.nearTie}, {"recomputed", pass.recomputedPixels}}}};
+                      {"uncertain",
+                       {{"overflow", pass.uncertain.overflow},
+                        {"grazing", pass.uncertain.grazing},
+                        {"nearTie", pass.uncertain.nearTie},
+                        {"recomputed", pass.recomputedPixels}}}};
   if (pass.refine) {
     const simd::RefineResult& r = *pass.refine;
     j["refine"] = {{"pixels", r.pixels},
@@ -56,8 +65,10 @@ nlohmann::json PrimaryPassJson(const simd::PrimaryPass& pass) {
                    {"dirFracBits", r.dirFracBits},
                    {"tErrorBound", r.tErrorBound},
                    {"stillUncertain", r.stillUncertain},
-                   {"uncertain", {{"overflow", r.uncertain.overflow}, {"grazing", r.uncertain.grazing},
-                                  {"nearTie", r.uncertain.nearTie}}},
+                   {"uncertain",
+                    {{"overflow", r.uncertain.overflow},
+                     {"grazing", r.uncertain.grazing},
+                     {"nearTie", r.uncertain.nearTie}}},
                    {"hostSeconds", r.array.hostSeconds},
                    {"modelledSeconds", r.array.ModelledSeconds()},
                    {"cycles", ArrayRunJson(r.array)}};
@@ -68,8 +79,11 @@ nlohmann::json PrimaryPassJson(const simd::PrimaryPass& pass) {
 nlohmann::json RenderReportJson(const RenderOutput& out) {
   nlohmann::json r = nlohmann::json::object();
   r["method"] = out.method;
-  r["scene"] = {{"path", out.scene.path}, {"objects", out.scene.objects}, {"lights", out.scene.lights},
-                {"width", out.scene.width}, {"height", out.scene.height}};
+  r["scene"] = {{"path", out.scene.path},
+                {"objects", out.scene.objects},
+                {"lights", out.scene.lights},
+                {"width", out.scene.width},
+                {"height", out.scene.height}};
   r["options"] = {{"depth", out.trace.depth},
                   {"precision", kPrecisionNames.NameOf(out.trace.precision)},
                   {"sphereTest", kSphereTestNames.NameOf(out.trace.sphereTest)}};

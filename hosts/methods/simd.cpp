@@ -17,11 +17,15 @@ void RenderSimd(const Scene& scene, const RenderOptions& options, RenderOutput& 
     pass = simd::RunPrimaryPass(scene, options.simd);
   }
   std::fprintf(stdout, "cycle report (SIMD primary pass):\n%s", pass.array.Table().c_str());
-  std::fprintf(stdout, "uncertain pixels: %lld overflow, %lld grazing, %lld near tie; %lld recomputed on the host\n",
-               (long long)pass.uncertain.overflow, (long long)pass.uncertain.grazing,
-               (long long)pass.uncertain.nearTie, (long long)pass.recomputedPixels);
+  std::fprintf(
+      stdout,
+      "uncertain pixels: %lld overflow, %lld grazing, %lld near tie; %lld recomputed on the host\n",
+      (long long)pass.uncertain.overflow, (long long)pass.uncertain.grazing,
+      (long long)pass.uncertain.nearTie, (long long)pass.recomputedPixels);
   if (pass.refine)
-    std::fprintf(stdout, "refine pass: %lld pixel(s) at %d fraction bits in %d layer(s), %.4g cycles; %lld still uncertain\n%s",
+    std::fprintf(stdout,
+                 "refine pass: %lld pixel(s) at %d fraction bits in %d layer(s), %.4g cycles; %lld "
+                 "still uncertain\n%s",
                  (long long)pass.refine->pixels, pass.refine->fracBits, pass.refine->layers,
                  pass.refine->array.cycles.TotalCycles(), (long long)pass.refine->stillUncertain,
                  pass.refine->array.Table().c_str());

@@ -65,7 +65,8 @@ void Flake(Scene& s, int material, const Vec3& centre, double radius, const Vec3
     const double elevation = top ? 54.7356103172 * M_PI / 180 : 0.0;
     const Vec3 dir = u * (std::cos(elevation) * std::cos(azimuth)) +
                      v * (std::cos(elevation) * std::sin(azimuth)) + axis * std::sin(elevation);
-    Flake(s, material, centre + dir * (radius + childRadius), childRadius, Normalize(dir), depth - 1);
+    Flake(s, material, centre + dir * (radius + childRadius), childRadius, Normalize(dir),
+          depth - 1);
   }
 }
 
@@ -73,7 +74,8 @@ void Flake(Scene& s, int material, const Vec3& centre, double radius, const Vec3
 
 Scene GenerateRandomSpheres(const RandomSpheresOptions& o) {
   if (o.count < 1 || o.count > kMaxRandomSpheres)
-    throw UserError("random spheres: the count must be 1.." + std::to_string(kMaxRandomSpheres) + ", got " + std::to_string(o.count));
+    throw UserError("random spheres: the count must be 1.." + std::to_string(kMaxRandomSpheres) +
+                    ", got " + std::to_string(o.count));
   Scene s;
   s.source = "gen spheres --count " + std::to_string(o.count) + " --seed " + std::to_string(o.seed);
   s.camera = Camera{{0, 0, 12}, {0, 0, 0}, {0, 1, 0}, 30, 0.001, o.width, o.height};
@@ -92,18 +94,21 @@ Scene GenerateRandomSpheres(const RandomSpheresOptions& o) {
                    rng.Uniform(-half + sp.radius, half - sp.radius), rng.Uniform(zLo, zHi)};
       bool clear = true;
       for (const Sphere& q : placed)
-        if (Length(q.centre - sp.centre) < q.radius + sp.radius) { clear = false; break; }
+        if (Length(q.centre - sp.centre) < q.radius + sp.radius) {
+          clear = false;
+          break;
+        }
       if (clear) break;  // after 200 tries an overlapping sphere is kept
     }
     placed.push_back(sp);
     const double kind = rng.Uniform();
     const Vec3 colour{rng.Uniform(0.2, 1.0), rng.Uniform(0.2, 1.0), rng.Uniform(0.2, 1.0)};
     Material m;
-    if (kind < 0.6) {         // diffuse with a small highlight
+    if (kind < 0.6) {  // diffuse with a small highlight
       m = Material{colour, 0.8, 0.1, 30, 0, 1};
     } else if (kind < 0.8) {  // mirror
       m = Material{colour, 0.2, 0.8, 100, 0, 1};
-    } else {                  // glass
+    } else {  // glass
       m = Material{{1, 1, 1}, 0.05, 0.1, 100, 0.85, 1.5};
     }
     Add(s, AddMaterial(s, m), sp);
@@ -112,13 +117,16 @@ Scene GenerateRandomSpheres(const RandomSpheresOptions& o) {
 }
 
 Scene GenerateSphereflake(int depth, int width, int height) {
-  if (depth < 0 || depth > kMaxFlakeDepth) throw UserError("sphereflake: the depth must be 0..6 (depth 6 is 597,871 spheres), got " + std::to_string(depth));
+  if (depth < 0 || depth > kMaxFlakeDepth)
+    throw UserError("sphereflake: the depth must be 0..6 (depth 6 is 597,871 spheres), got " +
+                    std::to_string(depth));
   Scene s;
   s.source = "gen flake --depth " + std::to_string(depth);
   // SPD `balls`: view, lights, floor and materials.
   s.camera = Camera{{2.1, 1.3, 1.7}, {0, 0, 0}, {0, 0, 1}, 45, 0.01, width, height};
   s.background = {0.078, 0.361, 0.753};
-  s.lights = {Light{{4, 3, 2}, {1, 1, 1}}, Light{{1, -4, 4}, {1, 1, 1}}, Light{{-3, 1, 5}, {1, 1, 1}}};
+  s.lights = {Light{{4, 3, 2}, {1, 1, 1}}, Light{{1, -4, 4}, {1, 1, 1}},
+              Light{{-3, 1, 5}, {1, 1, 1}}};
   const int floor = AddMaterial(s, Material{{1, 0.75, 0.33}, 0.8, 0, 100000, 0, 1});
   Add(s, floor, Polygon{{{12, 12, -0.5}, {-12, 12, -0.5}, {-12, -12, -0.5}, {12, -12, -0.5}}, {}});
   const int balls = AddMaterial(s, Material{{1, 0.9, 0.7}, 0.5, 0.5, 3.0827, 0, 1});
@@ -137,24 +145,35 @@ Scene GenerateTransformedShowcase(int width, int height) {
   auto rotZ = [](double deg) {
     const double c = std::cos(deg * M_PI / 180), sn = std::sin(deg * M_PI / 180);
     Affine a;
-    a.m[0][0] = c; a.m[0][1] = -sn; a.m[1][0] = sn; a.m[1][1] = c;
+    a.m[0][0] = c;
+    a.m[0][1] = -sn;
+    a.m[1][0] = sn;
+    a.m[1][1] = c;
     return a;
   };
   auto rotX = [](double deg) {
     const double c = std::cos(deg * M_PI / 180), sn = std::sin(deg * M_PI / 180);
     Affine a;
-    a.m[1][1] = c; a.m[1][2] = -sn; a.m[2][1] = sn; a.m[2][2] = c;
+    a.m[1][1] = c;
+    a.m[1][2] = -sn;
+    a.m[2][1] = sn;
+    a.m[2][2] = c;
     return a;
   };
   auto move = [](double sx, double sy, double sz, Vec3 t) {
     Affine a;
-    a.m[0][0] = sx; a.m[1][1] = sy; a.m[2][2] = sz;
-    a.m[0][3] = t.x; a.m[1][3] = t.y; a.m[2][3] = t.z;
+    a.m[0][0] = sx;
+    a.m[1][1] = sy;
+    a.m[2][2] = sz;
+    a.m[0][3] = t.x;
+    a.m[1][3] = t.y;
+    a.m[2][3] = t.z;
     return a;
   };
   // An ellipsoid: a unit sphere scaled, rotated and moved.
   const int red = AddMaterial(s, Material{{0.9, 0.2, 0.2}, 0.7, 0.3, 40, 0, 1});
-  Add(s, red, Sphere{{0, 0, 0}, 1}, move(1, 1, 1, {-1.8, 0.5, 0.7}) * rotZ(30) * move(1.4, 0.6, 0.7, {}));
+  Add(s, red, Sphere{{0, 0, 0}, 1},
+      move(1, 1, 1, {-1.8, 0.5, 0.7}) * rotZ(30) * move(1.4, 0.6, 0.7, {}));
   // A sheared cylinder: x += 0.5 z.
   Affine shear;
   shear.m[0][2] = 0.5;
@@ -162,7 +181,8 @@ Scene GenerateTransformedShowcase(int width, int height) {
   Add(s, green, Cone{{0, 0, 0}, 0.45, {0, 0, 1.6}, 0.45}, move(1, 1, 1, {0.2, 1.2, 0}) * shear);
   // A cone lying on its side.
   const int blue = AddMaterial(s, Material{{0.3, 0.4, 0.9}, 0.7, 0.2, 60, 0, 1});
-  Add(s, blue, Cone{{0, 0, 0}, 0.6, {0, 0, 1.5}, 0.1}, move(1, 1, 1, {1.6, -0.2, 0.6}) * rotZ(-40) * rotX(80));
+  Add(s, blue, Cone{{0, 0, 0}, 0.6, {0, 0, 1.5}, 0.1},
+      move(1, 1, 1, {1.6, -0.2, 0.6}) * rotZ(-40) * rotX(80));
   // A transformed cube: six unit squares under a rotation and a non-uniform scale.
   const int gold = AddMaterial(s, Material{{0.9, 0.7, 0.2}, 0.6, 0.3, 80, 0, 1});
   const Affine cube = move(1, 1, 1, {0.2, -1.6, 0.5}) * rotZ(25) * move(0.9, 0.6, 0.5, {});

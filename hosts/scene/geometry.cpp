@@ -49,7 +49,9 @@ Affine LinearDividedBy(Affine a, double s) {
 }
 }  // namespace
 
-double Affine::RelativeDeterminant() const { return LinearDividedBy(*this, LinearScale()).Determinant(); }
+double Affine::RelativeDeterminant() const {
+  return LinearDividedBy(*this, LinearScale()).Determinant();
+}
 
 Affine Affine::Inverse() const {
   // (A / s)⁻¹ = s A⁻¹: invert the scaled part (entries in [-1, 1]; no overflow or underflow

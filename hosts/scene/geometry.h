@@ -1,8 +1,9 @@
 // hosts/scene/geometry.h — 3-vectors and 3×4 affine transforms, shared by the scene, the tracers
 // and the exporters.
 //
-// Vec3T is templated on the scalar so the tracer can run in float or double (docs/background.md, "Precision, accuracy, speed": the
-// accuracy chart needs both); scenes are always held in double (Vec3).
+// Vec3T is templated on the scalar so the tracer can run in float or double (docs/background.md,
+// "Precision, accuracy, speed": the accuracy chart needs both); scenes are always held in double
+// (Vec3).
 #pragma once
 
 #include <cmath>
@@ -24,25 +25,40 @@ struct Vec3T {
   constexpr Vec3T operator-() const { return {-x, -y, -z}; }
   constexpr Vec3T operator*(T s) const { return {x * s, y * s, z * s}; }
   constexpr Vec3T operator/(T s) const { return {x / s, y / s, z / s}; }
-  constexpr Vec3T& operator+=(const Vec3T& b) { x += b.x; y += b.y; z += b.z; return *this; }
+  constexpr Vec3T& operator+=(const Vec3T& b) {
+    x += b.x;
+    y += b.y;
+    z += b.z;
+    return *this;
+  }
   constexpr bool operator==(const Vec3T&) const = default;
 };
 
 template <typename T>
-constexpr Vec3T<T> operator*(T s, const Vec3T<T>& v) { return v * s; }
+constexpr Vec3T<T> operator*(T s, const Vec3T<T>& v) {
+  return v * s;
+}
 template <typename T>
-constexpr T Dot(const Vec3T<T>& a, const Vec3T<T>& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+constexpr T Dot(const Vec3T<T>& a, const Vec3T<T>& b) {
+  return a.x * b.x + a.y * b.y + a.z * b.z;
+}
 template <typename T>
 constexpr Vec3T<T> Cross(const Vec3T<T>& a, const Vec3T<T>& b) {
   return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
 template <typename T>
-T Length(const Vec3T<T>& v) { return std::sqrt(Dot(v, v)); }
+T Length(const Vec3T<T>& v) {
+  return std::sqrt(Dot(v, v));
+}
 template <typename T>
-Vec3T<T> Normalize(const Vec3T<T>& v) { return v / Length(v); }
+Vec3T<T> Normalize(const Vec3T<T>& v) {
+  return v / Length(v);
+}
 // The largest |component| (the infinity norm): a bound that never overflows.
 template <typename T>
-T MaxAbs(const Vec3T<T>& v) { return std::fmax(std::fabs(v.x), std::fmax(std::fabs(v.y), std::fabs(v.z))); }
+T MaxAbs(const Vec3T<T>& v) {
+  return std::fmax(std::fabs(v.x), std::fmax(std::fabs(v.y), std::fabs(v.z)));
+}
 // v divided by its largest |component|, so Length and Normalize of the result neither
 // overflow nor underflow (v = 0 stays 0).
 template <typename T>
@@ -52,7 +68,9 @@ Vec3T<T> ScaledDown(const Vec3T<T>& v) {
 }
 // Component-wise product (colours).
 template <typename T>
-constexpr Vec3T<T> Mul(const Vec3T<T>& a, const Vec3T<T>& b) { return {a.x * b.x, a.y * b.y, a.z * b.z}; }
+constexpr Vec3T<T> Mul(const Vec3T<T>& a, const Vec3T<T>& b) {
+  return {a.x * b.x, a.y * b.y, a.z * b.z};
+}
 
 using Vec3 = Vec3T<double>;
 

@@ -184,13 +184,14 @@ class NffParser {
       const double nearest = std::strtod(copy.c_str(), nullptr);
       if (std::abs(nearest) < 1)
         Fail(t, std::string("expected a number for ") + what + ", got '" + Printable(t.text) +
-                    "', which underflows double (its magnitude is below 2.2e-308; write 0 if that is meant)");
+                    "', which underflows double (its magnitude is below 2.2e-308; write 0 if that "
+                    "is meant)");
       Fail(t, std::string("expected a finite number for ") + what + ", got '" + Printable(t.text) +
                   "', which overflows double (beyond 1.8e308)");
     }
     if (ec == std::errc() && end == s.data() + s.size() && !std::isfinite(value))
-      Fail(t, std::string("expected a finite number for ") + what + ", got '" +
-                  Printable(t.text) + "'");
+      Fail(t, std::string("expected a finite number for ") + what + ", got '" + Printable(t.text) +
+                  "'");
     if (ec != std::errc() || end != s.data() + s.size())
       Fail(t, std::string("expected a number for ") + what + ", got '" + Printable(t.text) + "'");
     return value;
@@ -289,8 +290,10 @@ class NffParser {
     } else if (w == "transform") {
       TransformStatement(k);
     } else if (LooksNumeric(w)) {
-      Fail(k, "expected a keyword (v, from, at, up, angle, hither, resolution, b, l, f, s, c, "
-              "p, pp, transform), got the number '" + Printable(w) + "'");
+      Fail(k,
+           "expected a keyword (v, from, at, up, angle, hither, resolution, b, l, f, s, c, "
+           "p, pp, transform), got the number '" +
+               Printable(w) + "'");
     } else {
       Fail(k, "unknown keyword '" + Printable(w) +
                   "' (expected v, from, at, up, angle, hither, resolution, b, l, f, s, c, p, "
@@ -311,8 +314,10 @@ class NffParser {
     const double v = Number(what);
     if (!(v >= lo && v <= hi)) {
       char range[64];
-      if (std::isinf(hi)) std::snprintf(range, sizeof range, ">= %g", lo);
-      else std::snprintf(range, sizeof range, "from %g to %g", lo, hi);
+      if (std::isinf(hi))
+        std::snprintf(range, sizeof range, ">= %g", lo);
+      else
+        std::snprintf(range, sizeof range, "from %g to %g", lo, hi);
       Fail(t, std::string("expected ") + what + " " + range + ", got '" + Printable(t.text) + "'");
     }
     return v;
@@ -337,8 +342,9 @@ class NffParser {
     m.ior = NumberIn("the index of refraction ior", 0, kInf);
     // SPD writes ior 0 for opaque materials; a transparent one needs a real index.
     if (m.t > 0 && !(m.ior > 0))
-      Fail(iorToken, "expected an index of refraction ior > 0 for a transparent material (T > 0), got '" +
-                         Printable(iorToken.text) + "'");
+      Fail(iorToken,
+           "expected an index of refraction ior > 0 for a transparent material (T > 0), got '" +
+               Printable(iorToken.text) + "'");
     // Reuse an identical material (SPD files repeat `f` lines).
     auto it = std::find(scene_.materials.begin(), scene_.materials.end(), m);
     current_ = int(it - scene_.materials.begin());
@@ -365,7 +371,8 @@ class NffParser {
     for (size_t i = 0; i < p.vertices.size(); ++i) {
       const Vec3& a = p.vertices[i];
       const Vec3& b = p.vertices[(i + 1) % p.vertices.size()];
-      normal += Vec3{(a.y - b.y) * (a.z + b.z), (a.z - b.z) * (a.x + b.x), (a.x - b.x) * (a.y + b.y)};
+      normal +=
+          Vec3{(a.y - b.y) * (a.z + b.z), (a.z - b.z) * (a.x + b.x), (a.x - b.x) * (a.y + b.y)};
       size = std::max(size, Length(b - p.vertices[0]));
     }
     const double area2 = Length(normal);
@@ -392,17 +399,23 @@ class NffParser {
     }
     Affine a;
     for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 4; ++c) a.m[r][c] = Number("a 'transform' matrix entry (12 numbers, row by row)");
+      for (int c = 0; c < 4; ++c)
+        a.m[r][c] = Number("a 'transform' matrix entry (12 numbers, row by row)");
     // Judged free of the matrix's scale: a uniform 1e-152 is as regular as the identity
     // (its plain determinant, 1e-456, underflows to 0).
     const double det = a.RelativeDeterminant();
     if (!(std::abs(det) > 1e-12)) {
       char what[160];
-      std::snprintf(what, sizeof what, "singular transform: the 3x3 part divided by its largest entry "
-                                       "has determinant %.3g (expected |det| > 1e-12)", det);
+      std::snprintf(what, sizeof what,
+                    "singular transform: the 3x3 part divided by its largest entry "
+                    "has determinant %.3g (expected |det| > 1e-12)",
+                    det);
       Fail(k, what);
     }
-    if (a.IsIdentity()) transform_.reset(); else transform_ = a;
+    if (a.IsIdentity())
+      transform_.reset();
+    else
+      transform_ = a;
   }
 
   void AddObject(const Token& k, Shape shape) {
@@ -417,11 +430,18 @@ class NffParser {
 
   void CheckComplete() {
     const std::string end = WhereEnd() + ": ";
-    struct Need { bool seen; const char* what; };
-    const Need needs[] = {{seenV_, "'v' (the view block)"},      {seenFrom_, "'from'"},
-                          {seenAt_, "'at'"},                     {seenUp_, "'up'"},
-                          {seenAngle_, "'angle'"},               {seenHither_, "'hither'"},
-                          {seenResolution_, "'resolution'"},     {seenBackground_, "'b' (background)"}};
+    struct Need {
+      bool seen;
+      const char* what;
+    };
+    const Need needs[] = {{seenV_, "'v' (the view block)"},
+                          {seenFrom_, "'from'"},
+                          {seenAt_, "'at'"},
+                          {seenUp_, "'up'"},
+                          {seenAngle_, "'angle'"},
+                          {seenHither_, "'hither'"},
+                          {seenResolution_, "'resolution'"},
+                          {seenBackground_, "'b' (background)"}};
     for (const Need& n : needs)
       if (!n.seen) Add(end + "missing " + std::string(n.what));
     if (readFrom_ && readAt_ && readUp_) {  // not when one of them was malformed (its own error)
@@ -456,7 +476,7 @@ class NffParser {
   Scene scene_;
   int current_ = -1;
   std::optional<Affine> transform_;
-  Token fromAt_, atAt_, upAt_;  // where the view items were given
+  Token fromAt_, atAt_, upAt_;                               // where the view items were given
   bool readFrom_ = false, readAt_ = false, readUp_ = false;  // ... and read whole
   bool seenV_ = false, seenFrom_ = false, seenAt_ = false, seenUp_ = false, seenAngle_ = false,
        seenHither_ = false, seenResolution_ = false, seenBackground_ = false, seenMaterial_ = false;
@@ -464,7 +484,8 @@ class NffParser {
 
 }  // namespace
 
-std::optional<Scene> ParseNff(std::string_view text, const std::string& fileName, NffErrors& errors) {
+std::optional<Scene> ParseNff(std::string_view text, const std::string& fileName,
+                              NffErrors& errors) {
   errors = NffErrors{};
   return NffParser(text, fileName, errors).Parse();
 }
@@ -481,7 +502,8 @@ std::string NffErrors::Summary() const {
   std::string message = std::to_string(count) + (stoppedAtLine ? " or more" : "") + " error" +
                         (count > 1 ? "s" : "") + " in scene:";
   for (const std::string& m : messages) message += "\n  " + m;
-  if (count > messages.size()) message += "\n  ... and " + std::to_string(count - messages.size()) + " more";
+  if (count > messages.size())
+    message += "\n  ... and " + std::to_string(count - messages.size()) + " more";
   if (stoppedAtLine)
     message += "; reading stopped at line " + std::to_string(stoppedAtLine) + " after " +
                std::to_string(kMaxNffErrors) + " errors";
@@ -506,16 +528,19 @@ Scene ReadNffFile(const std::string& path) {
   // searched (EACCES) is not "no such file".
   if (ec && ec != std::errc::no_such_file_or_directory && ec != std::errc::not_a_directory)
     throw UserError(shown + ": cannot open the scene file (" + ec.message() + ")");
-  if (ec || !fs::exists(status)) throw UserError(shown + ": cannot open the scene file (no such file)");
+  if (ec || !fs::exists(status))
+    throw UserError(shown + ": cannot open the scene file (no such file)");
   if (fs::is_directory(status))
     throw UserError(shown + ": is a directory, expected an NFF scene file");
   if (!fs::is_regular_file(status))
-    throw UserError(shown + ": is not a regular file (a device, pipe or socket), expected an NFF scene file");
+    throw UserError(
+        shown + ": is not a regular file (a device, pipe or socket), expected an NFF scene file");
   const std::uintmax_t size = fs::file_size(path, ec);
   if (ec) throw UserError(shown + ": cannot read the scene file's size");
   if (size > kMaxSceneBytes)
-    throw UserError(shown + ": the scene file has " + std::to_string(size) + " bytes, more than the " +
-                    std::to_string(kMaxSceneBytes >> 20) + " MiB a scene may have");
+    throw UserError(shown + ": the scene file has " + std::to_string(size) +
+                    " bytes, more than the " + std::to_string(kMaxSceneBytes >> 20) +
+                    " MiB a scene may have");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw UserError(shown + ": cannot open the scene file");
   std::string text(size, '\0');

@@ -19,7 +19,7 @@
 namespace zephyr {
 
 // Limits that make a scene "absurd" rather than merely big.
-inline constexpr int kMaxResolution = 16384;           // per side
+inline constexpr int kMaxResolution = 16384;  // per side
 inline constexpr int kMaxPolygonVertices = 1 << 20;
 // The largest scene file ReadNffFile reads: 64 MiB, over a million SPD objects, far more
 // than an exhaustive tracer (every ray against every object) can render.
@@ -43,7 +43,8 @@ struct NffErrors {
 
 // Parses NFF text. On success returns the scene and leaves errors empty; otherwise returns
 // nullopt with the errors found (count >= 1).
-std::optional<Scene> ParseNff(std::string_view text, const std::string& fileName, NffErrors& errors);
+std::optional<Scene> ParseNff(std::string_view text, const std::string& fileName,
+                              NffErrors& errors);
 // The same, keeping only the messages (the first kKeptNffErrors).
 std::optional<Scene> ParseNff(std::string_view text, const std::string& fileName,
                               std::vector<std::string>& errors);

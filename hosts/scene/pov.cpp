@@ -58,8 +58,9 @@ std::string ExportPov(const Scene& scene, int depth) {
   const Camera& c = scene.camera;
   std::string out = "// Exported by `zephyr export-pov` from " + scene.source + "\n";
   const double ambient = scene.Ambient();
-  out += "#version 3.7;\nglobal_settings { assumed_gamma 1.0 max_trace_level " + std::to_string(depth) +
-         " adc_bailout 0 ambient_light " + Vec(Vec3{ambient, ambient, ambient}) + " }\n";
+  out += "#version 3.7;\nglobal_settings { assumed_gamma 1.0 max_trace_level " +
+         std::to_string(depth) + " adc_bailout 0 ambient_light " +
+         Vec(Vec3{ambient, ambient, ambient}) + " }\n";
   out += "background { rgb " + Vec(scene.background) + " }\n";
   // Our camera (hosts/trace/tracer.cpp PrimaryRays): `angle` spans the centres of the top and
   // bottom rows. POV-Ray's image plane spans the pixel edges, so up and right are the
@@ -72,7 +73,8 @@ std::string ExportPov(const Scene& scene, int depth) {
          Vec(right * (pitch * c.width)) + " up " + Vec(up * (pitch * c.height)) + " }\n";
   // Lights with the intensity every method shades with (SPD's √N/(2N) when a light has no colour).
   for (size_t i = 0; i < scene.lights.size(); ++i)
-    out += "light_source { " + Vec(scene.lights[i].position) + " color rgb " + Vec(scene.LightColour(i)) + " }\n";
+    out += "light_source { " + Vec(scene.lights[i].position) + " color rgb " +
+           Vec(scene.LightColour(i)) + " }\n";
   // Ours refracts by the side of the surface a ray meets (docs/shading.md: entering against
   // the normal, leaving along it); POV-Ray by the interiors the ray has entered: a ray meeting
   // an object whose interior it is not in enters it, with the ratio of that ior to the one it
@@ -91,10 +93,11 @@ std::string ExportPov(const Scene& scene, int depth) {
       body = "sphere { " + Vec(s->centre) + ", " + Num(s->radius) + "\n";
     } else if (auto* cn = std::get_if<Cone>(&o.shape)) {
       if (cn->baseRadius == cn->apexRadius)
-        body = "cylinder { " + Vec(cn->base) + ", " + Vec(cn->apex) + ", " + Num(cn->baseRadius) + " open\n";
+        body = "cylinder { " + Vec(cn->base) + ", " + Vec(cn->apex) + ", " + Num(cn->baseRadius) +
+               " open\n";
       else
-        body = "cone { " + Vec(cn->base) + ", " + Num(cn->baseRadius) + ", " + Vec(cn->apex) + ", " +
-               Num(cn->apexRadius) + " open\n";
+        body = "cone { " + Vec(cn->base) + ", " + Num(cn->baseRadius) + ", " + Vec(cn->apex) +
+               ", " + Num(cn->apexRadius) + " open\n";
     } else {
       const auto& p = std::get<Polygon>(o.shape);
       if (p.normals.empty()) {
@@ -105,8 +108,8 @@ std::string ExportPov(const Scene& scene, int depth) {
         body = "mesh {\n";  // a fan of smooth triangles, as our tracer interpolates
         for (size_t i = 1; i + 1 < p.vertices.size(); ++i)
           body += "  smooth_triangle { " + Vec(p.vertices[0]) + ", " + Vec(p.normals[0]) + ", " +
-                  Vec(p.vertices[i]) + ", " + Vec(p.normals[i]) + ", " + Vec(p.vertices[i + 1]) + ", " +
-                  Vec(p.normals[i + 1]) + " }\n";
+                  Vec(p.vertices[i]) + ", " + Vec(p.normals[i]) + ", " + Vec(p.vertices[i + 1]) +
+                  ", " + Vec(p.normals[i + 1]) + " }\n";
       }
     }
     const Material& m = scene.materials.at(o.material);
@@ -122,8 +125,8 @@ std::string ExportPov(const Scene& scene, int depth) {
     unionBodies[o.material] += body;
   }
   for (const int material : unionOrder)
-    out += "union {\n" + unionBodies[material] + "  interior { ior " + Num(scene.materials[material].ior) +
-           " }\n}\n";
+    out += "union {\n" + unionBodies[material] + "  interior { ior " +
+           Num(scene.materials[material].ior) + " }\n}\n";
   return out;
 }
 

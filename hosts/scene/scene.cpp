@@ -11,9 +11,12 @@ std::string SourceLocation::ToString() const {
 
 const char* ShapeKindName(ShapeKind kind) {
   switch (kind) {
-    case ShapeKind::kSphere: return "sphere";
-    case ShapeKind::kCone: return "cone";
-    case ShapeKind::kPolygon: return "polygon";
+    case ShapeKind::kSphere:
+      return "sphere";
+    case ShapeKind::kCone:
+      return "cone";
+    case ShapeKind::kPolygon:
+      return "polygon";
   }
   return "?";
 }
@@ -94,8 +97,11 @@ std::optional<MagnitudeFault> FindMagnitudeOver(const Scene& scene, double limit
               MaxAbs(cn->apex - cn->base);
     const double m = points * stretch * (1 + slope) * (1 + slope);
     if (over(m))
-      return MagnitudeFault{o.where, std::string(ShapeKindName(o.Kind())) + " (in its own coordinates, "
-                                         "with its transform and slope)", m};
+      return MagnitudeFault{o.where,
+                            std::string(ShapeKindName(o.Kind())) +
+                                " (in its own coordinates, "
+                                "with its transform and slope)",
+                            m};
   }
   return std::nullopt;
 }

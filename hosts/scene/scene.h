@@ -1,6 +1,6 @@
 // hosts/scene/scene.h — a scene as every method sees it: camera, lights, materials and the
-// primitives in scene-file order (docs/background.md, "The ray tracer"). Everything is double; a tracer templated on
-// float converts when it prepares its own copy.
+// primitives in scene-file order (docs/background.md, "The ray tracer"). Everything is double; a
+// tracer templated on float converts when it prepares its own copy.
 //
 // The object index used everywhere (primary-hit matrices, --dump-primary, accuracy
 // reports) is the position in Scene::objects, i.e. file order across all primitive kinds.
@@ -24,8 +24,8 @@ struct SourceLocation {
 };
 
 // NFF `v` block. angle is the full vertical field of view in degrees between the centres of
-// the top and bottom pixel rows (docs/scene-format.md); hither is the near clipping distance along each
-// primary ray.
+// the top and bottom pixel rows (docs/scene-format.md); hither is the near clipping distance along
+// each primary ray.
 struct Camera {
   Vec3 from, at, up;
   double angleDegrees = 45;
@@ -79,8 +79,8 @@ const char* ShapeKindName(ShapeKind kind);  // "sphere", "cone", "polygon"
 
 struct Primitive {
   Shape shape;
-  int material = 0;                  // index into Scene::materials
-  std::optional<Affine> transform;   // object -> world (docs/scene-format.md); none = identity
+  int material = 0;                 // index into Scene::materials
+  std::optional<Affine> transform;  // object -> world (docs/scene-format.md); none = identity
   SourceLocation where;
 
   ShapeKind Kind() const { return static_cast<ShapeKind>(shape.index()); }
@@ -91,8 +91,8 @@ struct Scene {
   Vec3 background{0, 0, 0};
   std::vector<Light> lights;
   std::vector<Material> materials;
-  std::vector<Primitive> objects;  // file order: the object index every method reports
-  std::string source;              // file name, for messages and reports
+  std::vector<Primitive> objects;     // file order: the object index every method reports
+  std::string source;                 // file name, for messages and reports
   std::vector<std::string> warnings;  // "file:line:column: warning: ..." (printed by render)
 
   // The intensity every method shades with for light i: its colour if the file gave one;
@@ -108,7 +108,7 @@ struct Scene {
 // what it is and the magnitude found.
 struct MagnitudeFault {
   SourceLocation where;
-  std::string what;   // "the eye ('from')", "light", "sphere", ...
+  std::string what;  // "the eye ('from')", "light", "sphere", ...
   double magnitude;
 };
 

@@ -21,7 +21,9 @@ fixed::Fixed Tight(double x, int frac) {
                            {fixed::Rounding::Nearest, fixed::OverflowPolicy::Saturate});
 }
 
-double MulErr(double mx, double ex, double my, double ey, double u) { return mx * ey + my * ex + ex * ey + u; }
+double MulErr(double mx, double ex, double my, double ey, double u) {
+  return mx * ey + my * ex + ex * ey + u;
+}
 
 double SquareErr(double m, double e, double u) { return 2 * m * e + e * e + u; }
 
@@ -62,7 +64,8 @@ double FloatMaxFinite(const fixed::FloatFormat& f) {
 double FloatRoundErr(const fixed::FloatFormat& f, double m) {
   if (!(m < FloatMaxFinite(f))) return kInf;
   const int emin = 1 - f.Bias();
-  const double underflow = f.subnormals ? std::ldexp(1.0, emin - f.fracBits - 1) : std::ldexp(1.0, emin);
+  const double underflow =
+      f.subnormals ? std::ldexp(1.0, emin - f.fracBits - 1) : std::ldexp(1.0, emin);
   return std::ldexp(m, -f.Precision()) + underflow;
 }
 

@@ -29,8 +29,8 @@ struct PassFormats {
   double nominalUlp = 0;
   // --number float: the intersections' float format (else unset).
   std::optional<fixed::FloatFormat> floatFormat;
-  double Ulp() const;        // 2^-F: a floor-rounded result's error
-  double DirError() const;   // 2^-Fd / 2: a direction component's rounding error
+  double Ulp() const;       // 2^-F: a floor-rounded result's error
+  double DirError() const;  // 2^-Fd / 2: a direction component's rounding error
   double NominalUlp() const { return nominalUlp > 0 ? nominalUlp : Ulp(); }
   double BandScale() const { return Ulp() / NominalUlp(); }  // 1 for a first pass
 };

@@ -31,7 +31,8 @@ struct ConeDivision {
   Format out;  // the quotient (holds 2·tCut; saturation means "beyond")
 };
 
-ConeDivision PlanDivision(double eN, double eD, double tFar, double target, double freeThreshold, int frac) {
+ConeDivision PlanDivision(double eN, double eD, double tFar, double target, double freeThreshold,
+                          int frac) {
   const double u = std::ldexp(1.0, -frac);
   ConeDivision v;
   v.eN = eN, v.eD = eD;
@@ -72,7 +73,7 @@ struct ConeLadder {
 struct ConeSetup {
   LinearForm da, g, u[3], e[3], q, beta;
   double C = 0, wa = 0, sLo = 0, sHi = 0;
-  bool empty = false;      // no height has a non-negative radius: never hit
+  bool empty = false;  // no height has a non-negative radius: never hit
   Format aFormat, discFormat, sum3A, sum3Disc, rootFormat, qFormat;
   double eA = 0, eDisc = 0, grazeBand = 0, eRoot = 0, eQ = 0;
   // The error of Q where the computed disc >= 4^j·G (rung j of the ladders; [0] = eQ):
@@ -83,7 +84,8 @@ struct ConeSetup {
   Format sFormat[2];
   double tFar = 0, tNear = 0;
   bool degenerate = false;
-  bool rootsOrdered = false;  // G − e_disc > eβ²: a certain C/Q hit hides Q/A (ConeProgram::Run)  // the bounds do not close at these widths: always uncertain
+  bool rootsOrdered = false;  // G − e_disc > eβ²: a certain C/Q hit hides Q/A (ConeProgram::Run) //
+                              // the bounds do not close at these widths: always uncertain
 };
 
 // ‖T‖₂ <= √(‖T‖₁‖T‖∞) (tighter than the Frobenius norm for rotations and scales); 1 without
@@ -93,7 +95,8 @@ double Spectral(const Primitive& p, const ObjectFrame& fr) {
   double n1 = 0, nInf = 0;
   for (int i = 0; i < 3; ++i) {
     double row = 0, col = 0;
-    for (int j = 0; j < 3; ++j) row += std::abs(p.transform->m[i][j]), col += std::abs(p.transform->m[j][i]);
+    for (int j = 0; j < 3; ++j)
+      row += std::abs(p.transform->m[i][j]), col += std::abs(p.transform->m[j][i]);
     nInf = std::max(nInf, row), n1 = std::max(n1, col);
   }
   return std::min(fr.forwardNorm, std::sqrt(n1 * nInf));
@@ -113,7 +116,8 @@ ConeReach Reach(const Primitive& p, const Vec3& eye, double spectral) {
   const Vec3 mid = cone.base + a * halfH;
   const Vec3 midWorld = p.transform ? p.transform->ApplyPoint(mid) : mid;
   const double reach = std::sqrt(halfH * halfH + rMax * rMax) * spectral;
-  return {std::max(0.0, Length(midWorld - eye) - reach), (Length(midWorld - eye) + reach) * (1 + 1e-12)};
+  return {std::max(0.0, Length(midWorld - eye) - reach),
+          (Length(midWorld - eye) + reach) * (1 + 1e-12)};
 }
 
 // The geometry and the linear forms of d: wa, C, the heights [sLo, sHi], da, g, u, e, q, β.
@@ -168,10 +172,12 @@ void SetUpQuadratic(ConeSetup& cs, const PassFormats& pf) {
   // Only |q| <= |e| can hit: where the true disc >= 0, or the computed one >= G, |q| is below
   // |e|'s bound (plus the errors), however large q's coefficients (the eye's distance).
   double eNorm = 0, eErr = 0;
-  for (int k = 0; k < 3; ++k) eNorm += Dot(cs.e[k].c, cs.e[k].c), eErr = std::max(eErr, cs.e[k].err);
+  for (int k = 0; k < 3; ++k)
+    eNorm += Dot(cs.e[k].c, cs.e[k].c), eErr = std::max(eErr, cs.e[k].err);
   const double qMax = std::min(Length(cs.q.c), std::sqrt(eNorm) + std::sqrt(3.0) * eErr + cs.q.err);
   cs.eDisc += SquareErr(qMax, cs.q.err, u);
-  const double maxA = std::max(maxU, cs.g.max * cs.g.max), maxDisc = std::max(maxE, cs.q.max * cs.q.max);
+  const double maxA = std::max(maxU, cs.g.max * cs.g.max),
+               maxDisc = std::max(maxE, cs.q.max * cs.q.max);
   cs.sum3A = Format::Unsigned(IntBitsFor(maxU + u), pf.fracBits);
   cs.sum3Disc = Format::Unsigned(IntBitsFor(maxE + u), pf.fracBits);
   cs.aFormat = Format::Signed(IntBitsFor(maxA + u), pf.fracBits);
@@ -207,11 +213,13 @@ void SetUpDivisions(ConeSetup& cs, const PassFormats& pf, double rho) {
   for (double span = kLadderSpan;; span /= 2) {
     cs.degenerate = false;
     cs.divA = PlanDivision(cs.eQ, cs.eA, cs.tFar, span * target, 0, pf.fracBits);
-    cs.divC = PlanDivision(u / 2, cs.eQ, cs.tFar, span * target, std::abs(cs.C) / (1.25 * cs.tFar), pf.fracBits);
+    cs.divC = PlanDivision(u / 2, cs.eQ, cs.tFar, span * target, std::abs(cs.C) / (1.25 * cs.tFar),
+                           pf.fracBits);
     const ConeDivision* divs[2] = {&cs.divA, &cs.divC};
     for (int i = 0; i < 2; ++i) {
       const ConeDivision& v = *divs[i];
-      cs.sFormat[i] = Format::Signed(IntBitsFor(std::abs(cs.wa) + 2 * v.tCut * cs.da.max + 1), pf.fracBits);
+      cs.sFormat[i] =
+          Format::Signed(IntBitsFor(std::abs(cs.wa) + 2 * v.tCut * cs.da.max + 1), pf.fracBits);
       if (v.tCut >= std::ldexp(1.0, pf.t.intBits)) cs.degenerate = true;  // a hit would not fit t
     }
     if ((!cs.degenerate && std::max(cs.divA.tError, cs.divC.tError) <= rho) || span <= 1) return;
@@ -238,7 +246,8 @@ void SetUpLadders(ConeSetup& cs, const PassFormats& pf) {
         const double dk = std::ldexp(v.dStar, 2 * k);
         const double e = eN / dk + v.tRange * eD / dk + u;
         l.margin[j][k] = RoundUp(e + u, pf.fracBits);
-        l.height[j][k] = RoundUp(MulErr(v.tRange, e, Length(cs.da.c), cs.da.err, u) + u / 2 + u, pf.fracBits);
+        l.height[j][k] =
+            RoundUp(MulErr(v.tRange, e, Length(cs.da.c), cs.da.err, u) + u / 2 + u, pf.fracBits);
         widest = std::max({widest, l.margin[j][k], l.height[j][k]});
       }
     }
@@ -289,7 +298,8 @@ Multi Outside(Machine& m, const Multi& absN, const Multi& absD, double eN, doubl
               double tFar, int frac) {
   const double u = std::ldexp(1.0, -frac);
   const Format bf = Format::Unsigned(absD.Format().intBits + IntBitsFor(tFar + u) + 1, frac);
-  const Multi far = Add(Mul(absD, Uni{Tight(tFar + u, frac)}, bf), Broadcast(m, Tight(tFar * eD + eN + 3 * u, frac)), bf);
+  const Multi far = Add(Mul(absD, Uni{Tight(tFar + u, frac)}, bf),
+                        Broadcast(m, Tight(tFar * eD + eN + 3 * u, frac)), bf);
   Multi out = far <= absN;
   if (tNear > 0) {
     const Multi near = Mul(absD, Uni{Tight(std::max(tNear - u, 0.0), frac)}, bf);
@@ -299,8 +309,9 @@ Multi Outside(Machine& m, const Multi& absN, const Multi& absD, double eN, doubl
   return out;
 }
 
-ConeRoot ConeDivide(Machine& m, const Multi& n, const Multi& den, const Multi& negate, const Multi& active,
-                    const ConeDivision& v, double tNear, double tFar, int frac) {
+ConeRoot ConeDivide(Machine& m, const Multi& n, const Multi& den, const Multi& negate,
+                    const Multi& active, const ConeDivision& v, double tNear, double tFar,
+                    int frac) {
   ConeRoot r;
   const Multi absD = AbsOf(den);
   r.absD = absD;
@@ -323,8 +334,8 @@ class ConeProgram final : public ObjectProgram {
   const ObjectBounds& Bounds() const { return b_; }
 
   std::vector<PlannedFormat> Formats() const {
-    const LinearForm* forms[] = {&cs_.da, &cs_.g, &cs_.u[0], &cs_.u[1], &cs_.u[2], &cs_.e[0],
-                                 &cs_.e[1], &cs_.e[2], &cs_.q, &cs_.beta};
+    const LinearForm* forms[] = {&cs_.da,   &cs_.g,    &cs_.u[0], &cs_.u[1], &cs_.u[2],
+                                 &cs_.e[0], &cs_.e[1], &cs_.e[2], &cs_.q,    &cs_.beta};
     int linear = 1;
     for (const LinearForm* l : forms) linear = std::max(linear, l->format.intBits);
     return {{"linear forms of d", Format::Signed(linear, pf_.fracBits),
@@ -335,8 +346,10 @@ class ConeProgram final : public ObjectProgram {
             {"disc", cs_.discFormat, "|e|² − (d'·(w×a))²"},
             {"root √disc", cs_.rootFormat, "half the discriminant's integer bits"},
             {"Q = |β| + √disc", cs_.qFormat, "sum of the bounds"},
-            {"t = Q/A", cs_.divA.out, "by division where |A| >= its threshold, else flagged unless beyond"},
-            {"t = C/Q", cs_.divC.out, "by division where |Q| >= its threshold, else flagged unless beyond"},
+            {"t = Q/A", cs_.divA.out,
+             "by division where |A| >= its threshold, else flagged unless beyond"},
+            {"t = C/Q", cs_.divC.out,
+             "by division where |Q| >= its threshold, else flagged unless beyond"},
             {"height s of Q/A's root", cs_.sFormat[0], "w·a + t·(d'·a)"},
             {"height s of C/Q's root", cs_.sFormat[1], "w·a + t·(d'·a)"},
             {"t", pf_.t, "the nearer valid root"}};
@@ -351,8 +364,8 @@ class ConeProgram final : public ObjectProgram {
     b_.kind = ShapeKind::kCone;
     b_.farthest = cs_.tFar;
     b_.grazeBand = cs_.grazeBand;
-    for (const Format& f : {cs_.aFormat, cs_.discFormat, cs_.qFormat, cs_.divA.out, cs_.divC.out, cs_.sFormat[0],
-                            cs_.sFormat[1]})
+    for (const Format& f : {cs_.aFormat, cs_.discFormat, cs_.qFormat, cs_.divA.out, cs_.divC.out,
+                            cs_.sFormat[0], cs_.sFormat[1]})
       b_.intBits = std::max(b_.intBits, f.intBits);
     if (cs_.degenerate) {
       b_.alwaysUncertain = true;
@@ -382,8 +395,8 @@ class ConeProgram final : public ObjectProgram {
 
   // Root i's t and height margins at each PE: the tightest rung of its ladder whose
   // conditions hold (discAt[j − 1]: disc >= 4^j·G).
-  void Climb(Machine& m, int i, const Multi (&discAt)[kDiscRungs - 1], const Multi& absD, Multi& margin,
-             Multi& height) const;
+  void Climb(Machine& m, int i, const Multi (&discAt)[kDiscRungs - 1], const Multi& absD,
+             Multi& margin, Multi& height) const;
 
   PassFormats pf_;
   ConeSetup cs_;
@@ -396,7 +409,9 @@ void ConeProgram::Climb(Machine& m, int i, const Multi (&discAt)[kDiscRungs - 1]
   const int F = pf_.fracBits;
   const double dStar = (i == 0 ? cs_.divA : cs_.divC).dStar;
   auto at = [&](double x) {
-    return Broadcast(m, fixed::FromDouble(x, l.format, {fixed::Rounding::Floor, fixed::OverflowPolicy::Saturate}));
+    return Broadcast(
+        m,
+        fixed::FromDouble(x, l.format, {fixed::Rounding::Floor, fixed::OverflowPolicy::Saturate}));
   };
   Multi divAt[kDivRungs - 1];
   for (int k = 1; k < kDivRungs; ++k)
@@ -406,7 +421,9 @@ void ConeProgram::Climb(Machine& m, int i, const Multi (&discAt)[kDiscRungs - 1]
   for (int j = 0; j < kDiscRungs; ++j)
     for (int k = 0; k < kDivRungs; ++k) {
       if (j == 0 && k == 0) continue;
-      const Multi cond = j == 0 ? divAt[k - 1] : k == 0 ? discAt[j - 1] : (discAt[j - 1] && divAt[k - 1]);
+      const Multi cond = j == 0   ? divAt[k - 1]
+                         : k == 0 ? discAt[j - 1]
+                                  : (discAt[j - 1] && divAt[k - 1]);
       Where(cond, [&] { margin = at(l.margin[j][k]), height = at(l.height[j][k]); });
     }
 }
@@ -421,16 +438,20 @@ void ConeProgram::TestRoot(Machine& m, int i, const ConeRoot& r, const Multi& ro
   const Fixed tMax{pf_.t, pf_.t.MaxRaw()};
   // The height of the hit: s = w·a + t·(d'·a).
   Multi s;
-  WithExpectedSaturation(m, [&] { s = Add(Mul(r.t, da, cs_.sFormat[i], kSaturate), UniOf(m, cs_.wa), cs_.sFormat[i], kSaturate); });
+  WithExpectedSaturation(m, [&] {
+    s = Add(Mul(r.t, da, cs_.sFormat[i], kSaturate), UniOf(m, cs_.wa), cs_.sFormat[i], kSaturate);
+  });
   const Multi inRange = roots && r.sure && (r.t < UniOf(m, v.tCut));
   valid = inRange && (hither < r.t) && (sLo < s) && (s < sHi);
   const Multi notBehind = UniOf(m, pf_.hither - v.tError - u) < r.t;
-  const Multi rim = Near(m, r.t - hither, margin, F) || Near(m, s - sLo, height, F) || Near(m, s - sHi, height, F);
+  const Multi rim = Near(m, r.t - hither, margin, F) || Near(m, s - sLo, height, F) ||
+                    Near(m, s - sHi, height, F);
   unsure = (roots && !r.sure && !r.beyond) || (inRange && notBehind && rim);
   // Where uncertain, the true root (if a hit) is >= low.
   WithExpectedSaturation(m, [&] {
     const Multi lowSure = Sub(r.t, margin, pf_.t, kSaturate);
-    low = Select(r.sure, lowSure, Select(r.beyond, Broadcast(m, tMax), UniOf(m, cs_.tNear), pf_.t), pf_.t, kSaturate);
+    low = Select(r.sure, lowSure, Select(r.beyond, Broadcast(m, tMax), UniOf(m, cs_.tNear), pf_.t),
+                 pf_.t, kSaturate);
   });
   if (height_out) *height_out = std::move(s);  // the audit's (Run's `audit`): not in the pass
 }
@@ -455,17 +476,20 @@ Candidate ConeProgram::Run(Machine& m, const Directions& dirs, Audit* audit) con
   Multi uv[3], ev[3];
   for (int k = 0; k < 3; ++k) uv[k] = Linear(d, cs.u[k], F), ev[k] = Linear(d, cs.e[k], F);
   const Multi sumU = SumOfSquares(uv, cs.sum3A);
-  const Multi aq = Length(cs.g.c) > 0 ? Sub(sumU, Square(Linear(d, cs.g, F), cs.aFormat), cs.aFormat)
-                                      : Convert(sumU, cs.aFormat);
-  const Multi disc = Sub(SumOfSquares(ev, cs.sum3Disc), Square(Linear(d, cs.q, F), cs.discFormat), cs.discFormat);
+  const Multi aq = Length(cs.g.c) > 0
+                       ? Sub(sumU, Square(Linear(d, cs.g, F), cs.aFormat), cs.aFormat)
+                       : Convert(sumU, cs.aFormat);
+  const Multi disc =
+      Sub(SumOfSquares(ev, cs.sum3Disc), Square(Linear(d, cs.q, F), cs.discFormat), cs.discFormat);
   const Multi roots = uni(cs.grazeBand) <= disc;  // certainly two roots (of the infinite cone)
   Multi grazing = Near(m, disc, cs.grazeBand, F);
   const Multi root = Sqrt(disc, cs.rootFormat);
   // Q = |β| + √disc; t = −sgn(β)·Q/A and −sgn(β)·C/Q (the stable pair).
   const Multi q = Add(AbsOf(beta), root, cs.qFormat);
   const Multi negate = zero <= beta;
-  const ConeRoot rs[2] = {ConeDivide(m, q, aq, negate, roots, cs.divA, cs.tNear, cs.tFar, F),
-                          ConeDivide(m, uni(cs.C), q, negate, roots, cs.divC, cs.tNear, cs.tFar, F)};
+  const ConeRoot rs[2] = {
+      ConeDivide(m, q, aq, negate, roots, cs.divA, cs.tNear, cs.tFar, F),
+      ConeDivide(m, uni(cs.C), q, negate, roots, cs.divC, cs.tNear, cs.tFar, F)};
   // A grazing ray matters only if the double root could lie in [tNear, tFar]: there Q is
   // within eβ + √(G + e_disc) of its true value (both roots of the true disc >= 0 are).
   {
@@ -592,7 +616,8 @@ ObjectExtent ConeExtent(const Primitive& p, const Vec3& eye) {
   e.farthest = Reach(p, eye, Spectral(p, MakeObjectFrame(p, eye))).far + std::ldexp(1.0, -16);
   // Half the larger radius, or half the height, in world units (r / ‖T⁻¹‖_F).
   e.feature = std::min(std::max(std::abs(cone.baseRadius), std::abs(cone.apexRadius)),
-                       Length(cone.apex - cone.base)) / 2 / InverseFrobenius(p);
+                       Length(cone.apex - cone.base)) /
+              2 / InverseFrobenius(p);
   return e;
 }
 

@@ -27,7 +27,8 @@ class EllipsoidProgram final : public ObjectProgram {
     f_ = std::get<Sphere>(p.shape).centre - fr_.eye;  // object space: a uni
     Bound(p, eye);
     const int F = pf.fracBits;
-    for (int k = 0; k < 3; ++k) dp_[k] = Format::Signed(IntBitsFor(fr_.rowSum[k] + pf.Ulp() * 4), F);
+    for (int k = 0; k < 3; ++k)
+      dp_[k] = Format::Signed(IntBitsFor(fr_.rowSum[k] + pf.Ulp() * 4), F);
     const int R = IntBitsFor(radius_ * std::sqrt(fr_.ddMax));
     n_ = Format::Signed(b_.intBits, F);
     clamped_ = Format::Signed(R, F), square_ = Format::Unsigned(2 * R + 2, F);
@@ -69,12 +70,15 @@ class EllipsoidProgram final : public ObjectProgram {
     const Multi disc = Sub(r2dd, sum, disc_);
     const Multi root = Sqrt(disc, root_);
     const Multi num0 = Sub(tcaN, root, num_), num1 = Add(tcaN, root, num_);
-    const Multi hd = pf_.hither > 0 ? Mul(dd, Uni{Tight(pf_.hither, F)}, num_) : Broadcast(m, Fixed{num_, 0});
+    const Multi hd =
+        pf_.hither > 0 ? Mul(dd, Uni{Tight(pf_.hither, F)}, num_) : Broadcast(m, Fixed{num_, 0});
     const Multi num = Select(hd < num0, num0, num1, num_);
     Candidate out;
     out.hit = (Zero(m) <= disc) && (hd < num);
-    out.uncertain = b_.alwaysUncertain ? (Zero(m) <= num1) : Near(m, disc, b_.grazeBand, F) ||
-                    Near(m, num0 - hd, b_.tError * fr_.ddMax + pf_.Ulp(), F);
+    out.uncertain = b_.alwaysUncertain
+                        ? (Zero(m) <= num1)
+                        : Near(m, disc, b_.grazeBand, F) ||
+                              Near(m, num0 - hd, b_.tError * fr_.ddMax + pf_.Ulp(), F);
     const Multi numPos = Max(num, Zero(m), num_);
     Where(out.hit || out.uncertain, [&] { out.t = Div(numPos, dd, pf_.t, kSaturate); });
     out.tLow = SubBound(m, out.t, b_.slack, pf_.t);
@@ -145,9 +149,9 @@ class EllipsoidProgram final : public ObjectProgram {
     const double ddMax = fr_.ddMax + eDd;
     const double ddMin = std::pow((1 - std::sqrt(3.0) * dd) / fr_.forwardNorm, 2) - eDd;
     const double eR2dd = r * r * eDd + ddMax * u / 2 + u;
-    const auto [band, eDisc] =
-        GrazingBand(r * r * ddMax, std::pow(r * std::sqrt(std::max(ddMin, 0.0)) / 8, 2) * pf_.BandScale(), eCross, eR2dd,
-                    std::ldexp(1.0, IntBitsFor(r * std::sqrt(fr_.ddMax))), u);
+    const auto [band, eDisc] = GrazingBand(
+        r * r * ddMax, std::pow(r * std::sqrt(std::max(ddMin, 0.0)) / 8, 2) * pf_.BandScale(),
+        eCross, eR2dd, std::ldexp(1.0, IntBitsFor(r * std::sqrt(fr_.ddMax))), u);
     const Vec3 centre = p.transform->ApplyPoint(std::get<Sphere>(p.shape).centre);
     b_.farthest = Length(centre - eye) + r * fr_.forwardNorm;
     b_.intBits = IntBitsFor(std::max(b_.farthest, (Length(f_) + r) * std::sqrt(ddMax)) + 1) + 1;

@@ -80,7 +80,8 @@ ObjectPlan PlanEllipsoid(const Primitive& p, const Vec3& eye, const PassFormats&
 ObjectExtent PolygonExtent(const Primitive& p, const Vec3& eye);
 // planeOf: the polygon in exactly p's plane whose plane constants t is computed from (p itself
 // unless exact::CoplanarPolygons names another), so one plane's polygons share t bit for bit.
-ObjectPlan PlanPolygon(const Primitive& p, const Vec3& eye, const PassFormats& pf, const Primitive& planeOf);
+ObjectPlan PlanPolygon(const Primitive& p, const Vec3& eye, const PassFormats& pf,
+                       const Primitive& planeOf);
 ObjectExtent ConeExtent(const Primitive& p, const Vec3& eye);
 ObjectPlan PlanCone(const Primitive& p, const Vec3& eye, const PassFormats& pf);
 

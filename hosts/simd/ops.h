@@ -24,7 +24,8 @@ void WithExpectedSaturation(bitserial::Machine& m, F&& body) {
 }
 
 // c·d for uni constants c, in `out`.
-bitserial::Multi Dot3(const bitserial::Multi (&d)[3], const fixed::Fixed (&c)[3], fixed::Format out);
+bitserial::Multi Dot3(const bitserial::Multi (&d)[3], const fixed::Fixed (&c)[3],
+                      fixed::Format out);
 
 // The 1-bit constant 0 in every PE.
 bitserial::Multi Zero(bitserial::Machine& m);
@@ -33,16 +34,19 @@ bitserial::Multi Zero(bitserial::Machine& m);
 bitserial::Multi Near(bitserial::Machine& m, const bitserial::Multi& x, double band, int frac);
 
 // |x| < band per PE (an unsigned multi with `frac` fraction bits), the clamp's saturation expected.
-bitserial::Multi Near(bitserial::Machine& m, const bitserial::Multi& x, const bitserial::Multi& band, int frac);
+bitserial::Multi Near(bitserial::Machine& m, const bitserial::Multi& x,
+                      const bitserial::Multi& band, int frac);
 
 // x − c, saturating at the format's ends (a bound, not a value that must be exact); the
 // format's least value where c is not finite.
-bitserial::Multi SubBound(bitserial::Machine& m, const bitserial::Multi& x, double c, fixed::Format out);
+bitserial::Multi SubBound(bitserial::Machine& m, const bitserial::Multi& x, double c,
+                          fixed::Format out);
 
 // |f × d|² with each cross component (format `cross`) clamped to `clamped` first: only a
 // component below the radius can hit, so saturation there means a miss, not an error.
-bitserial::Multi CrossSquared(bitserial::Machine& m, const bitserial::Multi (&d)[3], const fixed::Fixed (&f)[3],
-                              fixed::Format cross, fixed::Format clamped, fixed::Format square);
+bitserial::Multi CrossSquared(bitserial::Machine& m, const bitserial::Multi (&d)[3],
+                              const fixed::Fixed (&f)[3], fixed::Format cross,
+                              fixed::Format clamped, fixed::Format square);
 
 // Σ x_k² in f (each square and the sums rounded into f).
 bitserial::Multi SumOfSquares(const bitserial::Multi (&x)[3], fixed::Format f);

@@ -21,19 +21,21 @@ namespace zephyr::simd {
 // default, docs/simd.md "Refine pass": the refine pass costs ~a fifth of the first pass's
 // cycles whatever it refines, and below that share recompute already meets the 1 % budget).
 enum class UncertainPolicy { kRecompute, kKeep, kFail, kRefine, kAuto };
-inline constexpr NamedValues<UncertainPolicy, 5> kUncertainPolicyNames{{{{UncertainPolicy::kAuto, "auto"},
-                                                                        {UncertainPolicy::kRecompute, "recompute"},
-                                                                        {UncertainPolicy::kRefine, "refine"},
-                                                                        {UncertainPolicy::kKeep, "keep"},
-                                                                        {UncertainPolicy::kFail, "fail"}}}};
-constexpr double kAutoRefineShare = 0.01;  // the host's budget of pixels (docs/simd.md, "Refine pass")
+inline constexpr NamedValues<UncertainPolicy, 5> kUncertainPolicyNames{
+    {{{UncertainPolicy::kAuto, "auto"},
+      {UncertainPolicy::kRecompute, "recompute"},
+      {UncertainPolicy::kRefine, "refine"},
+      {UncertainPolicy::kKeep, "keep"},
+      {UncertainPolicy::kFail, "fail"}}}};
+constexpr double kAutoRefineShare =
+    0.01;  // the host's budget of pixels (docs/simd.md, "Refine pass")
 
 // The narrowest widths a user may ask for (--frac-bits, --dir-frac-bits, --int-bits): the
 // narrowest at which the pass's error bounds are tested (docs/simd.md, "Error bounds":
 // RecomputeRepairsEveryPixelAtLowWidths from 4 fraction bits; SimdPrimary's overflow case
-// with 2 integer bits). Narrower ones are refused as the flags are parsed (hosts/cmd/flags.h). Between these and the
-// planner's choice most pixels are uncertain; they are flagged, counted in the report and
-// recomputed unless --uncertain keep.
+// with 2 integer bits). Narrower ones are refused as the flags are parsed (hosts/cmd/flags.h).
+// Between these and the planner's choice most pixels are uncertain; they are flagged, counted in
+// the report and recomputed unless --uncertain keep.
 constexpr int kMinFracBits = 4;
 constexpr int kMinIntBits = 2;
 // The widest the pass supports (docs/simd.md, "The planner"): t, lengths and the matrix's
@@ -53,8 +55,8 @@ struct FormatOverrides {
 // floating point (bitserial/float.h) in one format for the whole pass (docs/simd.md,
 // "Floating point on the array"). The matrix and the closest-hit fold stay fixed point.
 enum class NumberSystem { kFixed, kFloat };
-inline constexpr NamedValues<NumberSystem, 2> kNumberSystemNames{{{{NumberSystem::kFixed, "fixed"},
-                                                                  {NumberSystem::kFloat, "float"}}}};
+inline constexpr NamedValues<NumberSystem, 2> kNumberSystemNames{
+    {{{NumberSystem::kFixed, "fixed"}, {NumberSystem::kFloat, "float"}}}};
 
 struct SimdOptions {
   std::string profile = "wavetracer";
@@ -62,7 +64,8 @@ struct SimdOptions {
   // --float-format (with --number float): the intersections' format; empty = planned per
   // scene (PlanFloatFormat).
   std::optional<fixed::FloatFormat> floatFormat;
-  std::vector<std::string> profileOverrides;  // --set: "readExternal=3", ... (MachineProfile::Override)
+  std::vector<std::string>
+      profileOverrides;  // --set: "readExternal=3", ... (MachineProfile::Override)
   FormatOverrides formats;
   UncertainPolicy uncertain = UncertainPolicy::kRecompute;
   // Host threads (--threads) for the array's layer blocks and the host recompute of

@@ -31,7 +31,8 @@ struct ArrayRun {
 };
 
 // One array pass's report: its blocked run's cycles and memory, its wall time, its PEs.
-ArrayPassReport ReportPass(const bitserial::BlockedRun& run, double hostSeconds, int64_t firstPe, int64_t pes) {
+ArrayPassReport ReportPass(const bitserial::BlockedRun& run, double hostSeconds, int64_t firstPe,
+                           int64_t pes) {
   const bitserial::PeMemory& mem = run.memory;
   return {.cycles = run.report,
           .internalPeakBits = mem.PeakUsed(Space::Internal),
@@ -47,11 +48,12 @@ ArrayPassReport ReportPass(const bitserial::BlockedRun& run, double hostSeconds,
 std::string PassTable(const ArrayPassReport& pass) {
   const double modelled = pass.cycles.ModelledSeconds();
   return pass.cycles.Table() +
-         fmt::format("memory per virtual PE: internal {} of {} bits, external {} of {} bits\n"
-                     "modelled time {:.4f} s at {:g} MHz; host time {:.4f} s; real-time factor {:.2f}\n",
-                     pass.internalPeakBits, pass.internalCapacityBits, pass.externalPeakBits,
-                     pass.externalCapacityBits, modelled, pass.cycles.Profile().clockHz / 1e6,
-                     pass.hostSeconds, modelled / pass.hostSeconds);
+         fmt::format(
+             "memory per virtual PE: internal {} of {} bits, external {} of {} bits\n"
+             "modelled time {:.4f} s at {:g} MHz; host time {:.4f} s; real-time factor {:.2f}\n",
+             pass.internalPeakBits, pass.internalCapacityBits, pass.externalPeakBits,
+             pass.externalCapacityBits, modelled, pass.cycles.Profile().clockHz / 1e6,
+             pass.hostSeconds, modelled / pass.hostSeconds);
 }
 
 }  // namespace
@@ -69,10 +71,11 @@ std::string ArrayRunReport::Table() const {
   }
   const double modelled = ModelledSeconds();
   table += fmt::format(
-      "total over {} array passes: {} layers, {:.0f} cycles; modelled time {:.4f} s at {:g} MHz; host time {:.4f} s; "
+      "total over {} array passes: {} layers, {:.0f} cycles; modelled time {:.4f} s at {:g} MHz; "
+      "host time {:.4f} s; "
       "real-time factor {:.2f}\n",
-      passes.size(), cycles.Layers(), cycles.TotalCycles(), modelled, cycles.Profile().clockHz / 1e6, hostSeconds,
-      modelled / hostSeconds);
+      passes.size(), cycles.Layers(), cycles.TotalCycles(), modelled,
+      cycles.Profile().clockHz / 1e6, hostSeconds, modelled / hostSeconds);
   return table;
 }
 
@@ -101,15 +104,18 @@ void DecodeMatrix(PrimaryPass& pass, const MatrixRaw& raw) {
 }
 
 // Uncertain pixels by the policy: fail with the counts, keep, or recompute in double.
-void HandleUncertain(PrimaryPass& pass, const Scene& scene, const PrimaryRays& rays, UncertainPolicy policy,
-                     int threads) {
+void HandleUncertain(PrimaryPass& pass, const Scene& scene, const PrimaryRays& rays,
+                     UncertainPolicy policy, int threads) {
   PrimaryMatrix& out = pass.matrix;
   const auto isUncertain = [](uint32_t f) { return (f & kUncertainFlags) != 0; };
   const int64_t uncertain = std::count_if(out.flags.begin(), out.flags.end(), isUncertain);
   if (policy == UncertainPolicy::kFail && uncertain > 0)
-    throw UserError(fmt::format("the uncertain-pixel policy is fail, and the pass has {} uncertain pixel(s): {} overflow, {} grazing, {} near tie",
-                                uncertain, pass.uncertain.overflow, pass.uncertain.grazing, pass.uncertain.nearTie));
-  if (policy == UncertainPolicy::kKeep || policy == UncertainPolicy::kFail || uncertain == 0) return;
+    throw UserError(fmt::format(
+        "the uncertain-pixel policy is fail, and the pass has {} uncertain pixel(s): {} overflow, "
+        "{} grazing, {} near tie",
+        uncertain, pass.uncertain.overflow, pass.uncertain.grazing, pass.uncertain.nearTie));
+  if (policy == UncertainPolicy::kKeep || policy == UncertainPolicy::kFail || uncertain == 0)
+    return;
   TraceOptions trace;
   trace.depth = 1;
   const auto tracer = Tracer::Create(scene, trace);
@@ -141,15 +147,19 @@ ArrayRun RunArray(const PrimaryPlan& plan, const SimdOptions& options, const Pri
   const bitserial::MachineProfile profile = MachineProfileOf(options);
   for (int k = 0; k < plan.passes; ++k) {
     const auto passStart = std::chrono::steady_clock::now();
-    const int64_t first = int64_t(k) * plan.pesPerPass, pes = std::min(plan.pesPerPass, plan.virtualPes - first);
+    const int64_t first = int64_t(k) * plan.pesPerPass,
+                  pes = std::min(plan.pesPerPass, plan.virtualPes - first);
     const bitserial::BlockedRun blocked = bitserial::RunLayerBlocks(
         profile, pes, {.blockLayers = options.blockLayers, .threads = options.threads},
         [&](Machine& m) { RunProgram(m, plan, rays, pixels, first, &run.raw); });
     run.report.passes.push_back(ReportPass(
-        blocked, std::chrono::duration<double>(std::chrono::steady_clock::now() - passStart).count(), first, pes));
+        blocked,
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - passStart).count(), first,
+        pes));
     run.report.cycles.Add(blocked.report);
   }
-  run.report.hostSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  run.report.hostSeconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   run.report.rowWidth = pixels.empty() ? plan.width : 0;
   return run;
 }
@@ -160,13 +170,15 @@ ArrayRun RunArray(const PrimaryPlan& plan, const SimdOptions& options, const Pri
 // the first pass's coarser direction beside it, the pair named no point of the surface and a
 // t read along the matrix's direction erred up to 26x the refine bound); a pixel it certifies
 // is flagged kRefined, which the heterogeneous entries decode.
-void Refine(PrimaryPass& pass, const Scene& scene, const SimdOptions& options, const PrimaryRays& rays) {
+void Refine(PrimaryPass& pass, const Scene& scene, const SimdOptions& options,
+            const PrimaryRays& rays) {
   PrimaryMatrix& out = pass.matrix;
   std::vector<int64_t> pixels;
   for (int64_t pe = 0; pe < int64_t(out.flags.size()); ++pe)
     if (out.flags[pe] & kUncertainFlags) pixels.push_back(pe);
   if (pixels.empty()) return;
-  const PrimaryPlan plan = PlanRefinePass(scene, options, pass.plan, int64_t(pixels.size()), kRefineExtraBits);
+  const PrimaryPlan plan =
+      PlanRefinePass(scene, options, pass.plan, int64_t(pixels.size()), kRefineExtraBits);
   const ArrayRun run = RunArray(plan, options, rays, pixels);
   int64_t still = 0, overflow = 0, grazing = 0, tie = 0;
   for (size_t k = 0; k < pixels.size(); ++k) {
@@ -182,14 +194,15 @@ void Refine(PrimaryPass& pass, const Scene& scene, const SimdOptions& options, c
     out.flags[pixels[k]] = fl != 0 ? fl : kRefined;
     still += fl != 0;
   }
-  pass.refine = RefineResult{.pixels = int64_t(pixels.size()),
-                             .layers = plan.layers,
-                             .fracBits = plan.fracBits,
-                             .dirFracBits = plan.dirFracBits,
-                             .tErrorBound = plan.tErrorBound,
-                             .stillUncertain = still,
-                             .uncertain = {.overflow = overflow, .grazing = grazing, .nearTie = tie},
-                             .array = run.report};
+  pass.refine =
+      RefineResult{.pixels = int64_t(pixels.size()),
+                   .layers = plan.layers,
+                   .fracBits = plan.fracBits,
+                   .dirFracBits = plan.dirFracBits,
+                   .tErrorBound = plan.tErrorBound,
+                   .stillUncertain = still,
+                   .uncertain = {.overflow = overflow, .grazing = grazing, .nearTie = tie},
+                   .array = run.report};
 }
 
 }  // namespace
@@ -206,11 +219,13 @@ PrimaryPass RunPrimaryPass(const Scene& scene, const SimdOptions& options) {
   const int64_t flagged = std::count_if(pass.matrix.flags.begin(), pass.matrix.flags.end(),
                                         [](uint32_t f) { return (f & kUncertainFlags) != 0; });
   const int64_t budget = int64_t(kAutoRefineShare * double(pass.matrix.flags.size()));
-  if (options.uncertain == UncertainPolicy::kRefine || (options.uncertain == UncertainPolicy::kAuto && flagged > budget))
+  if (options.uncertain == UncertainPolicy::kRefine ||
+      (options.uncertain == UncertainPolicy::kAuto && flagged > budget))
     Refine(pass, scene, options, rays);
   HandleUncertain(pass, scene, rays, options.uncertain,
                   options.threads > 0 ? options.threads : bitserial::HardwareThreads());
-  pass.recomputeSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - hostStart).count();
+  pass.recomputeSeconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - hostStart).count();
   return pass;
 }
 

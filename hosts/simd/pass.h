@@ -16,7 +16,6 @@
 #include <vector>
 
 #include "bitserial/report.h"
-
 #include "hosts/scene/scene.h"
 #include "hosts/simd/plan.h"
 #include "hosts/trace/tracer.h"
@@ -79,8 +78,8 @@ struct UncertainCounts {
 // --uncertain refine (or auto over budget): the refine pass over the uncertain pixels,
 // compacted (docs/simd.md, "Refine pass").
 struct RefineResult {
-  int64_t pixels = 0;          // the pixels it ran on
-  int layers = 0;              // virtual-PE layers of its plan
+  int64_t pixels = 0;  // the pixels it ran on
+  int layers = 0;      // virtual-PE layers of its plan
   int fracBits = 0, dirFracBits = 0;
   double tErrorBound = 0;      // its plan's bound on t (scene units)
   int64_t stillUncertain = 0;  // pixels it could not certify (then recomputed on the host)
@@ -91,8 +90,8 @@ struct RefineResult {
 struct PrimaryPass {
   PrimaryPlan plan;
   PrimaryMatrix matrix;
-  ArrayRunReport array;        // the first pass on the array: cycles, passes, wall time
-  double recomputeSeconds = 0; // the host's part after the array: decode, refine, recompute
+  ArrayRunReport array;         // the first pass on the array: cycles, passes, wall time
+  double recomputeSeconds = 0;  // the host's part after the array: decode, refine, recompute
   // The first pass's uncertain pixels (by cause), and how many the host recomputed.
   UncertainCounts uncertain;
   int64_t recomputedPixels = 0;
@@ -108,7 +107,7 @@ inline constexpr int kRefineExtraBits = 8;
 PrimaryPass RunPrimaryPass(const Scene& scene, const SimdOptions& options);
 
 // Host shading of the w×h rectangle at (x0, y0) from the matrix (linear RGB, row-major).
-void ShadeRegion(const Tracer& tracer, const PrimaryMatrix& matrix, int x0, int y0, int w,
-                 int h, std::vector<Vec3>& out, TraceStats& stats);
+void ShadeRegion(const Tracer& tracer, const PrimaryMatrix& matrix, int x0, int y0, int w, int h,
+                 std::vector<Vec3>& out, TraceStats& stats);
 
 }  // namespace zephyr::simd

@@ -49,9 +49,12 @@ double InverseFrobenius(const Primitive& p) {
 
 const char* ObjectPlan::KindName() const {
   switch (bounds.kind) {
-    case ShapeKind::kSphere: return bounds.transformed ? "ellipsoid" : "sphere";
-    case ShapeKind::kPolygon: return "polygon";
-    case ShapeKind::kCone: return "cone";
+    case ShapeKind::kSphere:
+      return bounds.transformed ? "ellipsoid" : "sphere";
+    case ShapeKind::kPolygon:
+      return "polygon";
+    case ShapeKind::kCone:
+      return "cone";
   }
   return "?";
 }
@@ -64,34 +67,45 @@ constexpr int kMaxMatrixWordBits = 64;
 
 ObjectExtent ExtentOf(const Primitive& p, const Vec3& eye) {
   switch (p.Kind()) {
-    case ShapeKind::kSphere: return p.transform ? EllipsoidExtent(p, eye) : SphereExtent(p, eye);
-    case ShapeKind::kPolygon: return PolygonExtent(p, eye);
-    case ShapeKind::kCone: return ConeExtent(p, eye);
+    case ShapeKind::kSphere:
+      return p.transform ? EllipsoidExtent(p, eye) : SphereExtent(p, eye);
+    case ShapeKind::kPolygon:
+      return PolygonExtent(p, eye);
+    case ShapeKind::kCone:
+      return ConeExtent(p, eye);
   }
   ZEPHYR_CHECK(false);
   return {};
 }
 
-ObjectPlan PlanObject(const Scene& scene, int index, const PassFormats& pf, const std::vector<int>& planes) {
+ObjectPlan PlanObject(const Scene& scene, int index, const PassFormats& pf,
+                      const std::vector<int>& planes) {
   const Primitive& p = scene.objects[index];
   const Vec3& eye = scene.camera.from;
   ObjectPlan plan;
   if (pf.floatFormat) {
     // --number float has a program for spheres only (docs/simd.md, "Floating point on the array").
     if (p.Kind() != ShapeKind::kSphere || p.transform)
-      throw UserError(fmt::format("{}: the float number system supports spheres only; this object is a {} "
-                                  "(use --number fixed)",
-                                  p.where.ToString(), p.transform && p.Kind() == ShapeKind::kSphere
-                                                          ? "transformed sphere (an ellipsoid)"
-                                                          : ShapeKindName(p.Kind())));
+      throw UserError(fmt::format(
+          "{}: the float number system supports spheres only; this object is a {} "
+          "(use --number fixed)",
+          p.where.ToString(),
+          p.transform && p.Kind() == ShapeKind::kSphere ? "transformed sphere (an ellipsoid)"
+                                                        : ShapeKindName(p.Kind())));
     plan = PlanFloatSphere(p, eye, pf);
     plan.index = index;
     return plan;
   }
   switch (p.Kind()) {
-    case ShapeKind::kSphere: plan = p.transform ? PlanEllipsoid(p, eye, pf) : PlanSphere(p, eye, pf); break;
-    case ShapeKind::kPolygon: plan = PlanPolygon(p, eye, pf, planes[index] >= 0 ? scene.objects[planes[index]] : p); break;
-    case ShapeKind::kCone: plan = PlanCone(p, eye, pf); break;
+    case ShapeKind::kSphere:
+      plan = p.transform ? PlanEllipsoid(p, eye, pf) : PlanSphere(p, eye, pf);
+      break;
+    case ShapeKind::kPolygon:
+      plan = PlanPolygon(p, eye, pf, planes[index] >= 0 ? scene.objects[planes[index]] : p);
+      break;
+    case ShapeKind::kCone:
+      plan = PlanCone(p, eye, pf);
+      break;
   }
   plan.index = index;
   plan.bounds.transformed = bool(p.transform);
@@ -128,27 +142,33 @@ void ChooseWidths(PrimaryPlan& plan, const SceneRange& range, const FormatOverri
   const int planned = std::max(10, std::min(wanted, kMaxMatrixWordBits - 1 - plan.distIntBits));
   plan.fracBits = o.fracBits >= 0 ? o.fracBits : planned;
   plan.dirFracBits = o.dirFracBits >= 0 ? o.dirFracBits : plan.fracBits;
-  const std::string where = range.farthestObject
-      ? fmt::format("{}: the {} {:.4g} from the eye; ", range.farthestObject->where.ToString(),
-                    ShapeKindName(range.farthestObject->Kind()), range.farthest)
-      : std::string();
+  const std::string where =
+      range.farthestObject
+          ? fmt::format("{}: the {} {:.4g} from the eye; ", range.farthestObject->where.ToString(),
+                        ShapeKindName(range.farthestObject->Kind()), range.farthest)
+          : std::string();
   // A width the user gave is named as the one asked for (not as the scene's fault; the
   // command line refuses these as it is parsed, naming the flag).
-  for (const auto& [what, given, limit] : {std::tuple{"fraction bits", o.fracBits, kMaxFracBits},
-                                           std::tuple{"direction fraction bits", o.dirFracBits, kMaxDirFracBits},
-                                           std::tuple{"integer bits", o.intBits, kMaxIntBits}})
+  for (const auto& [what, given, limit] :
+       {std::tuple{"fraction bits", o.fracBits, kMaxFracBits},
+        std::tuple{"direction fraction bits", o.dirFracBits, kMaxDirFracBits},
+        std::tuple{"integer bits", o.intBits, kMaxIntBits}})
     if (given > limit)
-      throw UserError(fmt::format("{} {} asked for: more than the {} bits the primary pass supports (docs/simd.md)",
-                                  given, what, limit));
-  if (plan.fracBits > kMaxFracBits || plan.dirFracBits > kMaxDirFracBits || plan.distIntBits > kMaxIntBits)
-    throw UserError(fmt::format("{}formats too wide for the primary pass: {} integer bits, {} fraction "
-                                "bits, {} direction fraction bits (limits 40, 56, 60)",
-                                where, plan.distIntBits, plan.fracBits, plan.dirFracBits));
+      throw UserError(fmt::format(
+          "{} {} asked for: more than the {} bits the primary pass supports (docs/simd.md)", given,
+          what, limit));
+  if (plan.fracBits > kMaxFracBits || plan.dirFracBits > kMaxDirFracBits ||
+      plan.distIntBits > kMaxIntBits)
+    throw UserError(
+        fmt::format("{}formats too wide for the primary pass: {} integer bits, {} fraction "
+                    "bits, {} direction fraction bits (limits 40, 56, 60)",
+                    where, plan.distIntBits, plan.fracBits, plan.dirFracBits));
   if (1 + plan.distIntBits + plan.fracBits > kMaxMatrixWordBits)
-    throw UserError(fmt::format("{}t would be s{}.{}, {} bits, more than the {} bits the host reads per "
-                                "pixel; use fewer fraction or integer bits",
-                                where, plan.distIntBits, plan.fracBits, 1 + plan.distIntBits + plan.fracBits,
-                                kMaxMatrixWordBits));
+    throw UserError(
+        fmt::format("{}t would be s{}.{}, {} bits, more than the {} bits the host reads per "
+                    "pixel; use fewer fraction or integer bits",
+                    where, plan.distIntBits, plan.fracBits, 1 + plan.distIntBits + plan.fracBits,
+                    kMaxMatrixWordBits));
 }
 
 // Every format an object's program uses must be one the operations support (1..kMaxWidth
@@ -158,15 +178,17 @@ void CheckObjectFormats(const PrimaryPlan& plan, const Scene& scene) {
   for (const ObjectPlan& o : plan.objects)
     for (const PlannedFormat& f : o.formats)
       if (!f.format.IsValid())
-        throw UserError(fmt::format("{}: the {}'s {} would need {} bits ({}), more than the {} the "
-                                    "array's operations support; scale or move the object",
-                                    scene.objects[o.index].where.ToString(), o.KindName(), f.quantity,
-                                    f.format.Width(), f.format.Name(), fixed::kMaxWidth));
+        throw UserError(
+            fmt::format("{}: the {}'s {} would need {} bits ({}), more than the {} the "
+                        "array's operations support; scale or move the object",
+                        scene.objects[o.index].where.ToString(), o.KindName(), f.quantity,
+                        f.format.Width(), f.format.Name(), fixed::kMaxWidth));
   for (const PlannedFormat& f : plan.formats)
     if (!f.format.IsValid())
-      throw UserError(fmt::format("the primary pass's {} would need {} bits ({}), more than the {} the "
-                                  "array's operations support",
-                                  f.quantity, f.format.Width(), f.format.Name(), fixed::kMaxWidth));
+      throw UserError(
+          fmt::format("the primary pass's {} would need {} bits ({}), more than the {} the "
+                      "array's operations support",
+                      f.quantity, f.format.Width(), f.format.Name(), fixed::kMaxWidth));
 }
 
 // The pass-wide table, derived from the object programs (each reports every format it uses,
@@ -176,9 +198,12 @@ void CheckObjectFormats(const PrimaryPlan& plan, const Scene& scene) {
 void SummaryTable(PrimaryPlan& plan, const Scene& scene, const SceneRange& range) {
   plan.formats = {{"direction d (x,y,z)", plan.direction,
                    plan.number == NumberSystem::kFloat
-                       ? "the matrix's, fraction bits = max(F, the float's precision); the pass reads them in float"
+                       ? "the matrix's, fraction bits = max(F, the float's precision); the pass "
+                         "reads them in float"
                        : "unit components in [-1,1]; fraction bits = F"}};
-  const auto width = [](const PlannedFormat& f) { return f.floatFormat ? f.floatFormat->Width() : f.format.Width(); };
+  const auto width = [](const PlannedFormat& f) {
+    return f.floatFormat ? f.floatFormat->Width() : f.format.Width();
+  };
   struct Row {
     PlannedFormat format;
     int users = 0;
@@ -196,12 +221,16 @@ void SummaryTable(PrimaryPlan& plan, const Scene& scene, const SceneRange& range
   for (const std::string& key : order) {
     PlannedFormat f = rows.at(key).format;
     f.quantity = key;
-    if (rows.at(key).users > 1) f.reason += fmt::format(" (the widest of {} objects')", rows.at(key).users);
+    if (rows.at(key).users > 1)
+      f.reason += fmt::format(" (the widest of {} objects')", rows.at(key).users);
     plan.formats.push_back(f);
   }
-  plan.formats.push_back({"t (the matrix)", plan.t,
-                          fmt::format("the farthest point of an array object is {:.4g} from the eye", range.farthest)});
-  plan.formats.push_back({"object index + 1", plan.object, fmt::format("{} objects, 0 = none", scene.objects.size())});
+  plan.formats.push_back(
+      {"t (the matrix)", plan.t,
+       fmt::format("the farthest point of an array object is {:.4g} from the eye",
+                   range.farthest)});
+  plan.formats.push_back(
+      {"object index + 1", plan.object, fmt::format("{} objects, 0 = none", scene.objects.size())});
 }
 
 // The PE memory of one layer of `profile`'s `layers`-layer machine, as one PE's own (a
@@ -229,7 +258,8 @@ bitserial::MachineProfile Roomy(bitserial::MachineProfile profile) {
 // one PE of a pass's capacities (first fit may find no place for a variable the sum has room
 // for); where it does not fit, the passes split again with a sixteenth more. UserError (from
 // SplitPasses) when a single unit needs more layers than fit.
-void FitPasses(PrimaryPlan& plan, const Scene& scene, const bitserial::MachineProfile& profile, int64_t unit) {
+void FitPasses(PrimaryPlan& plan, const Scene& scene, const bitserial::MachineProfile& profile,
+               int64_t unit) {
   const auto fits = [&] {
     if (plan.layersPerPass == 1) return true;  // measured on one layer
     try {
@@ -261,8 +291,9 @@ fixed::FloatFormat PlanFloatFormat(const PrimaryPlan& plan, const SceneRange& ra
 
 // The formats and object programs of a plan over `virtualPes` PEs whose bounds' nominal
 // sizes refer to `nominalUlp` (0: its own); no memory yet.
-PrimaryPlan PlanFormats(const Scene& scene, const SimdOptions& options, const bitserial::MachineProfile& profile,
-                        int64_t virtualPes, double nominalUlp) {
+PrimaryPlan PlanFormats(const Scene& scene, const SimdOptions& options,
+                        const bitserial::MachineProfile& profile, int64_t virtualPes,
+                        double nominalUlp) {
   const Camera& cam = scene.camera;
   PrimaryPlan plan;
   plan.width = cam.width, plan.height = cam.height;
@@ -272,7 +303,8 @@ PrimaryPlan PlanFormats(const Scene& scene, const SimdOptions& options, const bi
   ChooseWidths(plan, range, options.formats);
   if (options.number == NumberSystem::kFloat) {
     plan.number = NumberSystem::kFloat;
-    plan.floatFormat = options.floatFormat ? *options.floatFormat : PlanFloatFormat(plan, range, profile);
+    plan.floatFormat =
+        options.floatFormat ? *options.floatFormat : PlanFloatFormat(plan, range, profile);
     plan.pass.floatFormat = plan.floatFormat;
     // The matrix's direction (the host shades with it) keeps the float's precision too, so
     // the image is not limited by a coarser direction than the pass computed with.
@@ -305,8 +337,10 @@ PrimaryPlan PlanFormats(const Scene& scene, const SimdOptions& options, const bi
     plan.objects.push_back(PlanObject(scene, int(i), plan.pass, planes));
     if (planes[i] >= 0) plan.objects.back().planeClass = classOf[planes[i]];
     const ObjectBounds& b = plan.objects.back().bounds;
-    if (!b.alwaysUncertain) plan.tErrorBound = std::max(plan.tErrorBound, b.tError);
-    else ++plan.alwaysUncertainObjects;
+    if (!b.alwaysUncertain)
+      plan.tErrorBound = std::max(plan.tErrorBound, b.tError);
+    else
+      ++plan.alwaysUncertainObjects;
   }
   SummaryTable(plan, scene, range);
   CheckObjectFormats(plan, scene);
@@ -323,20 +357,23 @@ std::string NotOneLayer(const PrimaryPlan& plan, const Scene& scene, const Progr
   std::string most;
   if (widest != memory.objectBits.end()) {
     const ObjectPlan& o = plan.objects[size_t(widest - memory.objectBits.begin())];
-    most = fmt::format(", and at most {} more for one object's program (the {} at {})", *widest, o.KindName(),
-                       scene.objects[o.index].where.ToString());
+    most = fmt::format(", and at most {} more for one object's program (the {} at {})", *widest,
+                       o.KindName(), scene.objects[o.index].where.ToString());
   }
   // The widest F in [kMinFracBits, F - 1] that fits (fewer bits never need more memory).
-  int lo = kMinFracBits - 1, hi = plan.fracBits;  // fitsAt(lo) or lo is below the range; !fitsAt(hi)
+  int lo = kMinFracBits - 1,
+      hi = plan.fracBits;  // fitsAt(lo) or lo is below the range; !fitsAt(hi)
   while (hi - lo > 1) {
     const int mid = (lo + hi) / 2;
     (fitsAt(mid) ? lo : hi) = mid;
   }
   return fmt::format(
-      "the primary pass does not fit one layer of the {} array: it needs {} bits per virtual PE (the matrix, "
-      "directions and trackers {} bits, t and lengths {}{}) but a PE has {} internal + {} external bits ({}); {}",
-      profile.name, memory.peakBits, memory.baseBits, plan.t.Name(), most, profile.internalBitsPerPe,
-      profile.externalBitsPerPe, full,
+      "the primary pass does not fit one layer of the {} array: it needs {} bits per virtual PE "
+      "(the matrix, "
+      "directions and trackers {} bits, t and lengths {}{}) but a PE has {} internal + {} external "
+      "bits ({}); {}",
+      profile.name, memory.peakBits, memory.baseBits, plan.t.Name(), most,
+      profile.internalBitsPerPe, profile.externalBitsPerPe, full,
       lo >= kMinFracBits ? fmt::format("{} fraction bits would fit", lo)
                          : fmt::format("no width down to {} fraction bits fits", kMinFracBits));
 }
@@ -344,8 +381,8 @@ std::string NotOneLayer(const PrimaryPlan& plan, const Scene& scene, const Progr
 // A plan over `virtualPes` PEs, split into passes of whole units of `unit` PEs when the
 // array is full, whose bounds' nominal sizes refer to `nominalUlp` (0: its own). Its memory
 // is what its program allocates (MeasureProgram), each object's temporaries with it.
-PrimaryPlan PlanFor(const Scene& scene, const SimdOptions& options, int64_t virtualPes, int64_t unit,
-                    double nominalUlp) {
+PrimaryPlan PlanFor(const Scene& scene, const SimdOptions& options, int64_t virtualPes,
+                    int64_t unit, double nominalUlp) {
   const bitserial::MachineProfile profile = MachineProfileOf(options);
   PrimaryPlan plan = PlanFormats(scene, options, profile, virtualPes, nominalUlp);
   // On one layer of the machine, every variable where the pass places it (the matrix in
@@ -358,7 +395,8 @@ PrimaryPlan PlanFor(const Scene& scene, const SimdOptions& options, int64_t virt
     full = e.what();
     memory = MeasureProgram(plan, scene.camera, Roomy(profile));
   }
-  for (size_t i = 0; i < plan.objects.size(); ++i) plan.objects[i].temporaryBits = memory.objectBits[i];
+  for (size_t i = 0; i < plan.objects.size(); ++i)
+    plan.objects[i].temporaryBits = memory.objectBits[i];
   plan.memoryBitsPerPe = memory.peakBits;
   if (!full.empty()) {
     const auto fitsAt = [&](int fracBits) {
@@ -366,7 +404,8 @@ PrimaryPlan PlanFor(const Scene& scene, const SimdOptions& options, int64_t virt
       narrower.formats.fracBits = fracBits;
       narrower.formats.dirFracBits = std::min(fracBits, plan.dirFracBits);
       try {
-        MeasureProgram(PlanFormats(scene, narrower, profile, virtualPes, nominalUlp), scene.camera, profile);
+        MeasureProgram(PlanFormats(scene, narrower, profile, virtualPes, nominalUlp), scene.camera,
+                       profile);
         return true;
       } catch (const UserError&) {
         return false;
@@ -380,7 +419,8 @@ PrimaryPlan PlanFor(const Scene& scene, const SimdOptions& options, int64_t virt
 
 }  // namespace
 
-void SplitPasses(PrimaryPlan& plan, const bitserial::MachineProfile& profile, int64_t unit, int64_t needBits) {
+void SplitPasses(PrimaryPlan& plan, const bitserial::MachineProfile& profile, int64_t unit,
+                 int64_t needBits) {
   const auto capacity = [&](int64_t layers) {
     return profile.internalBitsPerPe / layers + profile.externalBitsPerPe / layers;
   };
@@ -398,10 +438,12 @@ void SplitPasses(PrimaryPlan& plan, const bitserial::MachineProfile& profile, in
   const int64_t units = (plan.virtualPes + unit - 1) / unit;
   const int64_t unitsFit = most * p / unit;
   if (unitsFit == 0)
-    throw UserError(fmt::format(
-        "a row of {} pixels does not fit one pass of the {} array: each virtual PE needs about {} bits, so at "
-        "most {} layer(s) ({} PEs) per pass; use a narrower image or fewer bits (--frac-bits, --int-bits)",
-        unit, profile.name, needBits, most, most * p));
+    throw UserError(
+        fmt::format("a row of {} pixels does not fit one pass of the {} array: each virtual PE "
+                    "needs about {} bits, so at "
+                    "most {} layer(s) ({} PEs) per pass; use a narrower image or fewer bits "
+                    "(--frac-bits, --int-bits)",
+                    unit, profile.name, needBits, most, most * p));
   plan.passes = int((units + unitsFit - 1) / unitsFit);
   const int64_t perPass = (units + plan.passes - 1) / plan.passes;  // balanced; <= unitsFit
   plan.pesPerPass = std::min(plan.virtualPes, perPass * unit);
@@ -413,14 +455,16 @@ void SplitPasses(PrimaryPlan& plan, const bitserial::MachineProfile& profile, in
 }
 
 PrimaryPlan PlanPrimaryPass(const Scene& scene, const SimdOptions& options) {
-  return PlanFor(scene, options, int64_t(scene.camera.width) * scene.camera.height, scene.camera.width, 0);
+  return PlanFor(scene, options, int64_t(scene.camera.width) * scene.camera.height,
+                 scene.camera.width, 0);
 }
 
 PrimaryPlan PlanRefinePass(const Scene& scene, const SimdOptions& options, const PrimaryPlan& first,
                            int64_t pixels, int extraBits) {
   SimdOptions wide = options;
   // As many more bits as still fit t's 64-bit word (a far scene may have none to add).
-  const int fracBits = std::min({first.fracBits + extraBits, 56, kMaxMatrixWordBits - 1 - first.distIntBits});
+  const int fracBits =
+      std::min({first.fracBits + extraBits, 56, kMaxMatrixWordBits - 1 - first.distIntBits});
   wide.formats = {fracBits, std::min(first.dirFracBits + extraBits, 60), first.distIntBits};
   if (first.number == NumberSystem::kFloat) {
     fixed::FloatFormat f = first.floatFormat;
@@ -431,19 +475,29 @@ PrimaryPlan PlanRefinePass(const Scene& scene, const SimdOptions& options, const
 }
 
 nlohmann::json PrimaryPlan::Json() const {
-  nlohmann::json j = {{"width", width}, {"height", height}, {"virtualPes", virtualPes},
-                      {"layers", layers}, {"passes", passes}, {"pesPerPass", pesPerPass},
-                      {"layersPerPass", layersPerPass}, {"distIntBits", distIntBits}, {"fracBits", fracBits},
-                      {"dirFracBits", dirFracBits}, {"objectBits", objectBits},
+  nlohmann::json j = {{"width", width},
+                      {"height", height},
+                      {"virtualPes", virtualPes},
+                      {"layers", layers},
+                      {"passes", passes},
+                      {"pesPerPass", pesPerPass},
+                      {"layersPerPass", layersPerPass},
+                      {"distIntBits", distIntBits},
+                      {"fracBits", fracBits},
+                      {"dirFracBits", dirFracBits},
+                      {"objectBits", objectBits},
                       {"tErrorBound", tErrorBound},
-                      {"grazingFraction", grazingFraction}, {"memoryBitsPerPe", memoryBitsPerPe},
-                      {"matrixBitsPerPe", matrixBitsPerPe}, {"internalCapacity", internalCapacity},
+                      {"grazingFraction", grazingFraction},
+                      {"memoryBitsPerPe", memoryBitsPerPe},
+                      {"matrixBitsPerPe", matrixBitsPerPe},
+                      {"internalCapacity", internalCapacity},
                       {"externalCapacity", externalCapacity},
                       {"alwaysUncertainObjects", alwaysUncertainObjects},
                       {"number", kNumberSystemNames.NameOf(number)}};
   if (number == NumberSystem::kFloat) j["floatFormat"] = floatFormat.Name();
   for (const PlannedFormat& f : formats)
-    j["formats"].push_back({{"quantity", f.quantity}, {"format", f.FormatName()}, {"reason", f.reason}});
+    j["formats"].push_back(
+        {{"quantity", f.quantity}, {"format", f.FormatName()}, {"reason", f.reason}});
   return j;
 }
 
@@ -451,13 +505,20 @@ nlohmann::json PrimaryPlan::ObjectsJson() const {
   nlohmann::json all = nlohmann::json::array();
   for (const ObjectPlan& o : objects) {
     const ObjectBounds& b = o.bounds;
-    auto finite = [](double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json("inf"); };
-    nlohmann::json j = {{"index", o.index}, {"kind", o.KindName()}, {"farthest", b.farthest},
-                        {"tError", finite(b.tError)}, {"slack", finite(b.slack)},
-                        {"grazeBand", b.grazeBand}, {"alwaysUncertain", b.alwaysUncertain},
+    auto finite = [](double x) {
+      return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json("inf");
+    };
+    nlohmann::json j = {{"index", o.index},
+                        {"kind", o.KindName()},
+                        {"farthest", b.farthest},
+                        {"tError", finite(b.tError)},
+                        {"slack", finite(b.slack)},
+                        {"grazeBand", b.grazeBand},
+                        {"alwaysUncertain", b.alwaysUncertain},
                         {"temporaryBits", o.temporaryBits}};
     for (const PlannedFormat& f : o.formats)
-      j["formats"].push_back({{"quantity", f.quantity}, {"format", f.FormatName()}, {"reason", f.reason}});
+      j["formats"].push_back(
+          {{"quantity", f.quantity}, {"format", f.FormatName()}, {"reason", f.reason}});
     all.push_back(j);
   }
   return all;
@@ -467,28 +528,36 @@ std::string PrimaryPlan::Text() const {
   std::string s = fmt::format("{}x{} pixels = {} virtual PEs in {} layer(s)\n", width, height,
                               virtualPes, layers);
   if (passes > 1)
-    s += fmt::format("the array is full: {} array passes of up to {} virtual PEs ({} layers) each\n", passes,
-                     pesPerPass, layersPerPass);
+    s +=
+        fmt::format("the array is full: {} array passes of up to {} virtual PEs ({} layers) each\n",
+                    passes, pesPerPass, layersPerPass);
   for (const PlannedFormat& f : formats)
     s += fmt::format("  {:<34} {:<8} {}\n", f.quantity, f.FormatName(), f.reason);
   if (number == NumberSystem::kFloat)
-    s += fmt::format("number system float: the intersections in bit-serial float {} (directions, f·d, f×d, squares, "
-                     "disc, √disc, t0/t1), t then in the fixed format above\n",
-                     floatFormat.Name());
-  const bool quadrics = std::any_of(objects.begin(), objects.end(),
-                                    [](const ObjectPlan& o) { return o.bounds.kind != ShapeKind::kPolygon; });
-  s += fmt::format("error bound on t (certain pixels): {:.3g} (the largest object's e); near tie per pair: "
-                   "|t_i - t_j| <= e_i + e_j; grazing {}\n",
-                   tErrorBound,
-                   quadrics ? fmt::format("when disc < max((r/{:g})^2, 2 x its error bound), per object", 1 / grazingFraction)
-                            : std::string("within each object's band of its edges (per object below)"));
-  s += fmt::format("memory per virtual PE: {} bits at the peak (matrix {} bits, external) of {} internal + {} "
-                   "external\n",
-                   memoryBitsPerPe, matrixBitsPerPe, internalCapacity, externalCapacity);
+    s += fmt::format(
+        "number system float: the intersections in bit-serial float {} (directions, f·d, f×d, "
+        "squares, "
+        "disc, √disc, t0/t1), t then in the fixed format above\n",
+        floatFormat.Name());
+  const bool quadrics = std::any_of(objects.begin(), objects.end(), [](const ObjectPlan& o) {
+    return o.bounds.kind != ShapeKind::kPolygon;
+  });
+  s += fmt::format(
+      "error bound on t (certain pixels): {:.3g} (the largest object's e); near tie per pair: "
+      "|t_i - t_j| <= e_i + e_j; grazing {}\n",
+      tErrorBound,
+      quadrics ? fmt::format("when disc < max((r/{:g})^2, 2 x its error bound), per object",
+                             1 / grazingFraction)
+               : std::string("within each object's band of its edges (per object below)"));
+  s += fmt::format(
+      "memory per virtual PE: {} bits at the peak (matrix {} bits, external) of {} internal + {} "
+      "external\n",
+      memoryBitsPerPe, matrixBitsPerPe, internalCapacity, externalCapacity);
   if (alwaysUncertainObjects > 0)
-    s += fmt::format("{} object(s) have bounds that do not close at these widths: every pixel that may "
-                     "hit them is uncertain\n",
-                     alwaysUncertainObjects);
+    s += fmt::format(
+        "{} object(s) have bounds that do not close at these widths: every pixel that may "
+        "hit them is uncertain\n",
+        alwaysUncertainObjects);
   // Per object, as the pass runs it: objects with the same kind and formats share one row
   // group (their index ranges, and the largest t error and grazing band among them).
   struct Group {
@@ -509,7 +578,8 @@ std::string PrimaryPlan::Text() const {
     it->second.band = std::max(it->second.band, o.bounds.grazeBand);
     it->second.temporaryBits = std::max(it->second.temporaryBits, o.temporaryBits);
   }
-  s += fmt::format("per object ({} object(s), {} group(s) of equal formats):\n", objects.size(), order.size());
+  s += fmt::format("per object ({} object(s), {} group(s) of equal formats):\n", objects.size(),
+                   order.size());
   for (const std::string& key : order) {
     const Group& g = groups[key];
     std::string which;
@@ -517,12 +587,14 @@ std::string PrimaryPlan::Text() const {
       size_t e = k;
       while (e + 1 < g.indices.size() && g.indices[e + 1] == g.indices[e] + 1) ++e;
       which += fmt::format("{}{}", which.empty() ? "" : ",",
-                           e == k ? fmt::format("{}", g.indices[k]) : fmt::format("{}-{}", g.indices[k], g.indices[e]));
+                           e == k ? fmt::format("{}", g.indices[k])
+                                  : fmt::format("{}-{}", g.indices[k], g.indices[e]));
       k = e;
     }
-    s += fmt::format("  {} x{} (objects {}): t error <= {:.3g}, grazing band {:.3g}{}, temporaries {} bits\n",
-                     g.first->KindName(), g.indices.size(), which, g.tError, g.band,
-                     std::isfinite(g.tError) ? "" : " (always uncertain)", g.temporaryBits);
+    s += fmt::format(
+        "  {} x{} (objects {}): t error <= {:.3g}, grazing band {:.3g}{}, temporaries {} bits\n",
+        g.first->KindName(), g.indices.size(), which, g.tError, g.band,
+        std::isfinite(g.tError) ? "" : " (always uncertain)", g.temporaryBits);
     for (const PlannedFormat& f : g.first->formats)
       s += fmt::format("    {:<26} {:<8} {}\n", f.quantity, f.FormatName(), f.reason);
   }

@@ -45,7 +45,8 @@ struct WorldPolygon {
 
 std::vector<Vec3> WorldVertices(const Primitive& p) {
   std::vector<Vec3> v;
-  for (const Vec3& x : std::get<Polygon>(p.shape).vertices) v.push_back(p.transform ? p.transform->ApplyPoint(x) : x);
+  for (const Vec3& x : std::get<Polygon>(p.shape).vertices)
+    v.push_back(p.transform ? p.transform->ApplyPoint(x) : x);
   return v;
 }
 
@@ -82,7 +83,8 @@ class PolygonProgram final : public ObjectProgram {
   // planeOf: the polygon whose plane constants t is computed from (the lowest-index polygon
   // in exactly the same plane, exact::CoplanarPolygons), so that polygons in one plane compute
   // the same t bit for bit; the edges are always p's own.
-  PolygonProgram(const Primitive& p, const Vec3& eye, const PassFormats& pf, const Primitive& planeOf)
+  PolygonProgram(const Primitive& p, const Vec3& eye, const PassFormats& pf,
+                 const Primitive& planeOf)
       : pf_(pf), w_(MakeWorldPolygon(p, eye)) {
     if (&planeOf != &p) {
       const WorldPolygon plane = MakeWorldPolygon(planeOf, eye);
@@ -96,9 +98,10 @@ class PolygonProgram final : public ObjectProgram {
   std::vector<PlannedFormat> Formats() const {
     size_t edges = 0;
     for (const auto& g : w_.groups) edges += g.size();
-    return {{"edge functions ĝ·d, n̂·d", Format::Signed(1, pf_.fracBits),
-             fmt::format("{} unit edge normal(s), unit plane normal (T folded in on the host)", edges)},
-            {"t = dist/(n̂·d)", pf_.t, "by division"}};
+    return {
+        {"edge functions ĝ·d, n̂·d", Format::Signed(1, pf_.fracBits),
+         fmt::format("{} unit edge normal(s), unit plane normal (T folded in on the host)", edges)},
+        {"t = dist/(n̂·d)", pf_.t, "by division"}};
   }
 
   Candidate Run(Machine& m, const Directions& dirs, Audit* audit) const override {
@@ -211,7 +214,8 @@ ObjectExtent PolygonExtent(const Primitive& p, const Vec3& eye) {
   return e;
 }
 
-ObjectPlan PlanPolygon(const Primitive& p, const Vec3& eye, const PassFormats& pf, const Primitive& planeOf) {
+ObjectPlan PlanPolygon(const Primitive& p, const Vec3& eye, const PassFormats& pf,
+                       const Primitive& planeOf) {
   return PlanOf<PolygonProgram>(p, eye, pf, planeOf);
 }
 

@@ -25,7 +25,8 @@ struct ArrayMatrix {
   ArrayMatrix(Machine& m, const PrimaryPlan& plan)
       : object(m, plan.object, "matrix.object", Space::External),
         t(m, plan.t, "matrix.t", Space::External),
-        d{{Multi(m, plan.direction, "matrix.dx", Space::External), Multi(m, plan.direction, "matrix.dy", Space::External),
+        d{{Multi(m, plan.direction, "matrix.dx", Space::External),
+           Multi(m, plan.direction, "matrix.dy", Space::External),
            Multi(m, plan.direction, "matrix.dz", Space::External)},
           {}},
         grazing(m, bitserial::BoolFormat(), "matrix.grazing", Space::External),
@@ -34,7 +35,8 @@ struct ArrayMatrix {
     // programs read them; the matrix keeps the fixed ones for the host).
     if (plan.number == NumberSystem::kFloat)
       for (int k = 0; k < 3; ++k)
-        d.floats[k] = bitserial::MultiFloat(m, plan.floatFormat, std::string("d.float.") + "xyz"[k]);
+        d.floats[k] =
+            bitserial::MultiFloat(m, plan.floatFormat, std::string("d.float.") + "xyz"[k]);
   }
   Multi object, t;
   Directions d;  // d.fixed: the matrix's
@@ -50,7 +52,8 @@ void LoadDirections(Machine& m, ArrayMatrix& a, const PrimaryRays& rays, const P
   const bool floats = plan.number == NumberSystem::kFloat;
   std::vector<int64_t> raw[3];
   std::vector<uint64_t> bits[3];
-  for (int k = 0; k < 3; ++k) raw[k].resize(m.VirtualPes()), bits[k].resize(floats ? m.VirtualPes() : 0);
+  for (int k = 0; k < 3; ++k)
+    raw[k].resize(m.VirtualPes()), bits[k].resize(floats ? m.VirtualPes() : 0);
   for (int64_t i = 0; i < m.VirtualPes(); ++i) {
     const int64_t pe = first + m.FirstPe() + i, pixel = pixels.empty() ? pe : pixels[pe];
     const Vec3 dir = rays.At(int(pixel % plan.width), int(pixel / plan.width)).direction;
@@ -71,7 +74,9 @@ void LoadDirections(Machine& m, ArrayMatrix& a, const PrimaryRays& rays, const P
 // several polygons): the plane class of the current best (ObjectPlan::planeClass, 0: none).
 struct Trackers {
   Trackers(Machine& m, const Fixed& tMax, const PrimaryPlan& plan)
-      : tGraze(Broadcast(m, tMax)), otherLow(Broadcast(m, tMax)), lowBest(Broadcast(m, tMax)),
+      : tGraze(Broadcast(m, tMax)),
+        otherLow(Broadcast(m, tMax)),
+        lowBest(Broadcast(m, tMax)),
         bestUnsure(Broadcast(m, Fixed{bitserial::BoolFormat(), 0})) {
     if (plan.planeClasses > 0) bestPlane = Broadcast(m, Fixed{PlaneFormat(plan), 0});
   }
@@ -82,7 +87,8 @@ struct Trackers {
 };
 
 // One object's candidate folded into the best hit so far and the trackers.
-void FoldCandidate(Machine& m, const ObjectPlan& object, const PrimaryPlan& plan, ArrayMatrix& a, Trackers& k) {
+void FoldCandidate(Machine& m, const ObjectPlan& object, const PrimaryPlan& plan, ArrayMatrix& a,
+                   Trackers& k) {
   const Format T = plan.t;
   const Candidate c = object.program->Run(m, a.d, nullptr);
   // t − e_i with e_i rounded up (an always-uncertain object's every hit is flagged, so its
@@ -90,7 +96,8 @@ void FoldCandidate(Machine& m, const ObjectPlan& object, const PrimaryPlan& plan
   const double e = object.bounds.alwaysUncertain ? 0.0 : object.bounds.tError + plan.pass.Ulp();
   Multi low;
   WithExpectedSaturation(m, [&] {
-    low = Sub(c.t, c.lowMargin.Empty() ? Broadcast(m, Tight(e, plan.fracBits)) : c.lowMargin, T, kSaturate);
+    low = Sub(c.t, c.lowMargin.Empty() ? Broadcast(m, Tight(e, plan.fracBits)) : c.lowMargin, T,
+              kSaturate);
   });
   Where(c.uncertain, [&] { k.tGraze = Min(k.tGraze, c.tLow, T); });
   const Multi closer = c.hit && (c.t < a.t);
@@ -98,7 +105,8 @@ void FoldCandidate(Machine& m, const ObjectPlan& object, const PrimaryPlan& plan
   // lower index (the best) stays first, as in the exact reference, and it is no near tie.
   Multi other = c.hit && !closer;
   if (object.planeClass > 0)
-    other = other && !Equal(k.bestPlane, bitserial::Uni{Fixed{k.bestPlane.Format(), fixed::BigInt(object.planeClass)}});
+    other = other && !Equal(k.bestPlane, bitserial::Uni{Fixed{k.bestPlane.Format(),
+                                                              fixed::BigInt(object.planeClass)}});
   Where(other, [&] { k.otherLow = Min(k.otherLow, low, T); });
   Where(closer, [&] {
     if (!k.bestPlane.Empty())
@@ -130,16 +138,21 @@ void ReadMatrix(Machine& m, const ArrayMatrix& a, MatrixRaw& r, int64_t passFirs
   for (int k = 0; k < 3; ++k) read(a.d.fixed[k], r.d[k]);
   read(a.grazing, r.grazing), read(a.nearTie, r.nearTie);
   m.Charge("hostRead", bitserial::HostTransferCost(1));  // the overflow flags
-  for (int64_t pe = 0; pe < m.VirtualPes(); ++pe) r.overflow[first + pe] = m.Overflow(pe) || m.DivideByZero(pe);
+  for (int64_t pe = 0; pe < m.VirtualPes(); ++pe)
+    r.overflow[first + pe] = m.Overflow(pe) || m.DivideByZero(pe);
 }
 
 // The bits live and the most live at once since the last ResetPeak (both spaces).
-int64_t LiveBits(Machine& m) { return m.Memory().Used(Space::Internal) + m.Memory().Used(Space::External); }
-int64_t PeakBits(Machine& m) { return m.Memory().PeakUsed(Space::Internal) + m.Memory().PeakUsed(Space::External); }
+int64_t LiveBits(Machine& m) {
+  return m.Memory().Used(Space::Internal) + m.Memory().Used(Space::External);
+}
+int64_t PeakBits(Machine& m) {
+  return m.Memory().PeakUsed(Space::Internal) + m.Memory().PeakUsed(Space::External);
+}
 
 // The program; with `memory`, what each part allocates (the peaks restart at each object).
-void Run(Machine& m, const PrimaryPlan& plan, const PrimaryRays& rays, const std::vector<int64_t>& pixels,
-         int64_t first, MatrixRaw* raw, ProgramMemory* memory) {
+void Run(Machine& m, const PrimaryPlan& plan, const PrimaryRays& rays,
+         const std::vector<int64_t>& pixels, int64_t first, MatrixRaw* raw, ProgramMemory* memory) {
   ArrayMatrix matrix(m, plan);
   LoadDirections(m, matrix, rays, plan, pixels, first);
   const Fixed tMax{plan.t, plan.t.MaxRaw()};
@@ -162,12 +175,13 @@ void Run(Machine& m, const PrimaryPlan& plan, const PrimaryRays& rays, const std
 
 }  // namespace
 
-void RunProgram(Machine& m, const PrimaryPlan& plan, const PrimaryRays& rays, const std::vector<int64_t>& pixels,
-                int64_t first, MatrixRaw* raw) {
+void RunProgram(Machine& m, const PrimaryPlan& plan, const PrimaryRays& rays,
+                const std::vector<int64_t>& pixels, int64_t first, MatrixRaw* raw) {
   Run(m, plan, rays, pixels, first, raw, nullptr);
 }
 
-ProgramMemory MeasureProgram(const PrimaryPlan& plan, const Camera& camera, const bitserial::MachineProfile& profile) {
+ProgramMemory MeasureProgram(const PrimaryPlan& plan, const Camera& camera,
+                             const bitserial::MachineProfile& profile) {
   // The smallest array the kernels run (512 PEs: one vector of the widest target,
   // bitserial/profile.cpp) with the profile's PE memory: the allocation is the same, and each
   // operation costs the host 8 words per bit-plane instead of a whole layer's.

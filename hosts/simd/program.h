@@ -18,8 +18,12 @@ namespace zephyr::simd {
 // every PE of the plan (each layer block of each array pass writes its own PEs).
 struct MatrixRaw {
   explicit MatrixRaw(int64_t pes)
-      : object(pes), t(pes), d{std::vector<int64_t>(pes), std::vector<int64_t>(pes), std::vector<int64_t>(pes)},
-        grazing(pes), nearTie(pes), overflow(pes) {}
+      : object(pes),
+        t(pes),
+        d{std::vector<int64_t>(pes), std::vector<int64_t>(pes), std::vector<int64_t>(pes)},
+        grazing(pes),
+        nearTie(pes),
+        overflow(pes) {}
   // Narrow where the value is: an object index (the plan's object format is far below 32
   // bits) and 0/1 flags; at 4096x4096 this is ~0.65 GB instead of ~0.96 GB.
   std::vector<int32_t> object;
@@ -39,13 +43,15 @@ void RunProgram(bitserial::Machine& m, const PrimaryPlan& plan, const PrimaryRay
 // layer block and array pass of the same capacities: one virtual PE measures it.
 struct ProgramMemory {
   int64_t peakBits = 0;  // the most live at once: internal + external
-  int64_t baseBits = 0;  // live from the directions to the readout: matrix, float directions, trackers
+  int64_t baseBits =
+      0;  // live from the directions to the readout: matrix, float directions, trackers
   // Per object (plan order): the most its candidate and fold hold above the base at once.
   std::vector<int64_t> objectBits;
 };
 
 // The program run on one virtual PE with `profile`'s PE memory (as one layer's), with no
 // readout: UserError (PE memory full) when the program does not fit those capacities.
-ProgramMemory MeasureProgram(const PrimaryPlan& plan, const Camera& camera, const bitserial::MachineProfile& profile);
+ProgramMemory MeasureProgram(const PrimaryPlan& plan, const Camera& camera,
+                             const bitserial::MachineProfile& profile);
 
 }  // namespace zephyr::simd

@@ -56,7 +56,8 @@ class SphereProgram final : public ObjectProgram {
     // Uncertain: the discriminant within its bound of zero, or the near root within its
     // bound of hither — and the far root not certainly behind the eye.
     const Multi front = Broadcast(m, Tight(pf_.hither - b_.slack, F)) < t1;
-    out.uncertain = (Near(m, disc, b_.grazeBand, F) || Near(m, t0 - hither, b_.tError + pf_.Ulp(), F)) && front;
+    out.uncertain =
+        (Near(m, disc, b_.grazeBand, F) || Near(m, t0 - hither, b_.tError + pf_.Ulp(), F)) && front;
     out.tLow = SubBound(m, t0, b_.slack, T);
     if (audit) Record(*audit, tca, disc, root, t0, out);
     return out;
@@ -104,8 +105,9 @@ class SphereProgram final : public ObjectProgram {
       eCross = std::max(eCross, MulErr(1, dd, std::abs(f_[(k + 1) % 3]), u / 2, u) +
                                     MulErr(1, dd, std::abs(f_[(k + 2) % 3]), u / 2, u));
     }
-    const auto [band, eDisc] = GrazingBand(radius_ * radius_, std::pow(radius_ / 8, 2) * pf_.BandScale(), eCross,
-                                           u / 2, std::ldexp(1.0, IntBitsFor(radius_)), u);
+    const auto [band, eDisc] =
+        GrazingBand(radius_ * radius_, std::pow(radius_ / 8, 2) * pf_.BandScale(), eCross, u / 2,
+                    std::ldexp(1.0, IntBitsFor(radius_)), u);
     e_ = {eTca, eCross, eDisc};
     b_.grazeBand = band;
     b_.tError = eTca + eDisc / std::sqrt(b_.grazeBand) + u;
@@ -115,7 +117,7 @@ class SphereProgram final : public ObjectProgram {
   }
 
   PassFormats pf_;
-  Vec3 f_;          // eye to centre
+  Vec3 f_;  // eye to centre
   double radius_;
   Format clamped_, square_, disc_, root_;
   struct {

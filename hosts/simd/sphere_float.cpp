@@ -31,7 +31,9 @@ constexpr double kDoubleError = 0x1p-50;
 class FloatSphereProgram final : public ObjectProgram {
  public:
   FloatSphereProgram(const Primitive& p, const Vec3& eye, const PassFormats& pf)
-      : pf_(pf), ff_(*pf.floatFormat), f_(std::get<Sphere>(p.shape).centre - eye),
+      : pf_(pf),
+        ff_(*pf.floatFormat),
+        f_(std::get<Sphere>(p.shape).centre - eye),
         radius_(std::get<Sphere>(p.shape).radius) {
     for (int k = 0; k < 3; ++k) fBits_[k] = FloatOfDouble(ff_, f_[k]);
     r2Bits_ = FloatOfDouble(ff_, radius_ * radius_);
@@ -44,10 +46,12 @@ class FloatSphereProgram final : public ObjectProgram {
 
   std::vector<PlannedFormat> Formats() const {
     const std::string ff = ff_.Name();
-    return {{"f (uni), f·d, f×d", pf_.t, fmt::format("float {}: |f·d|, |f×d| <= |f|", ff), ff_},
-            {"squares, sum, disc, √disc", pf_.t, fmt::format("float {}: r² − |f×d|², no clamp", ff), ff_},
-            {"t = tca ∓ root (float)", pf_.t, fmt::format("float {}, then to the fixed t", ff), ff_},
-            {"t (fixed, nearest)", pf_.t, "t <= farthest"}};
+    return {
+        {"f (uni), f·d, f×d", pf_.t, fmt::format("float {}: |f·d|, |f×d| <= |f|", ff), ff_},
+        {"squares, sum, disc, √disc", pf_.t, fmt::format("float {}: r² − |f×d|², no clamp", ff),
+         ff_},
+        {"t = tca ∓ root (float)", pf_.t, fmt::format("float {}, then to the fixed t", ff), ff_},
+        {"t (fixed, nearest)", pf_.t, "t <= farthest"}};
   }
 
   Candidate Run(Machine& m, const Directions& dirs, Audit* /*audit: not audited*/) const override {
@@ -56,7 +60,8 @@ class FloatSphereProgram final : public ObjectProgram {
     const Format T = pf_.t;
     const UniFloat f[3] = {{ff_, fBits_[0]}, {ff_, fBits_[1]}, {ff_, fBits_[2]}}, zero{ff_, 0};
     const MultiFloat tca = Add(Add(Mul(d[0], f[0]), Mul(d[1], f[1])), Mul(d[2], f[2]));
-    const MultiFloat c[3] = {Sub(Mul(d[2], f[1]), Mul(d[1], f[2])), Sub(Mul(d[0], f[2]), Mul(d[2], f[0])),
+    const MultiFloat c[3] = {Sub(Mul(d[2], f[1]), Mul(d[1], f[2])),
+                             Sub(Mul(d[0], f[2]), Mul(d[2], f[0])),
                              Sub(Mul(d[1], f[0]), Mul(d[0], f[1]))};
     const MultiFloat sum = Add(Add(Mul(c[0], c[0]), Mul(c[1], c[1])), Mul(c[2], c[2]));
     const MultiFloat disc = Sub(UniFloat{ff_, r2Bits_}, sum);
@@ -69,7 +74,8 @@ class FloatSphereProgram final : public ObjectProgram {
     out.hit = LessEqual(zero, disc) && (hither < out.t);
     // Uncertain: the discriminant within its band of zero, or the near root within its bound
     // of hither — and the far root not certainly behind the eye (as the fixed program).
-    const UniFloat band{ff_, bandBits_}, minusBand{ff_, bandBits_ | (uint64_t{1} << (ff_.Width() - 1))};
+    const UniFloat band{ff_, bandBits_},
+        minusBand{ff_, bandBits_ | (uint64_t{1} << (ff_.Width() - 1))};
     const Multi grazing = Less(disc, band) && Less(minusBand, disc);
     const Multi front = Broadcast(m, Tight(pf_.hither - b_.slack, F)) < t1;
     out.uncertain = (grazing || Near(m, t0 - hither, b_.tError + pf_.Ulp(), F)) && front;
@@ -84,11 +90,12 @@ class FloatSphereProgram final : public ObjectProgram {
   // that matters (|f×d|² <= r² + G).
   void Bound(const Primitive& p) {
     const auto rnd = [&](double magnitude) { return FloatRoundErr(ff_, magnitude); };
-    const double u = pf_.Ulp();  // the fixed t's
+    const double u = pf_.Ulp();               // the fixed t's
     const double ed = rnd(1) + kDoubleError;  // a direction component, |d_k| <= 1
     double ep[3], mp[3];  // a product d_j·f_k: its error and its computed magnitude's bound
     for (int k = 0; k < 3; ++k) {
-      const double af = std::abs(f_[k]), ef = rnd(af) + af * kDoubleError, exact = (1 + ed) * (af + ef);
+      const double af = std::abs(f_[k]), ef = rnd(af) + af * kDoubleError,
+                   exact = (1 + ed) * (af + ef);
       ep[k] = af * ed + ef + ed * ef + rnd(exact);
       mp[k] = exact + rnd(exact);
     }
@@ -118,10 +125,11 @@ class FloatSphereProgram final : public ObjectProgram {
     b_.farthest = Length(f_) + radius_;
     b_.intBits = IntBitsFor(b_.farthest) + 1;
     if (!std::isfinite(b_.tError) || !std::isfinite(b_.slack) || !(2 * eDisc <= g))
-      throw UserError(fmt::format("{}: the sphere's values (|f·d| up to {:.4g}, squares up to {:.4g}) are beyond "
-                                  "the float format {} (largest finite {:.4g}); use more exponent bits "
-                                  "(--float-format)",
-                                  p.where.ToString(), mTca, r2 + g, ff_.Name(), FloatMaxFinite(ff_)));
+      throw UserError(fmt::format(
+          "{}: the sphere's values (|f·d| up to {:.4g}, squares up to {:.4g}) are beyond "
+          "the float format {} (largest finite {:.4g}); use more exponent bits "
+          "(--float-format)",
+          p.where.ToString(), mTca, r2 + g, ff_.Name(), FloatMaxFinite(ff_)));
   }
 
   PassFormats pf_;

@@ -20,25 +20,32 @@ const std::map<std::string, HostProfile>& Profiles() {
       {"sparcstation2",
        {"sparcstation2",
         "Sun SPARCstation 2 (Sun 4/75): the paper's host, SIMD front end and parent (§6.1)",
-        {40e6, "Hz", "Sun, SPARCstation 2 announcement (Nov 1990): 40 MHz Cypress CY7C601 "
-                     "integer unit"},
+        {40e6, "Hz",
+         "Sun, SPARCstation 2 announcement (Nov 1990): 40 MHz Cypress CY7C601 "
+         "integer unit"},
         {28.5, "MIPS", "Sun, SPARCstation 2 announcement (Nov 1990): 28.5 MIPS"},
-        {4.2, "MFLOPS", "Sun, SPARCstation 2 announcement (Nov 1990): 4.2 MFLOPS "
-                        "(double-precision Linpack)"},
-        {21.8, "SPECint92", "SPEC CPU92 result for the SPARCstation 2 (Performance Database "
-                            "Server collection); reported, not used by the model"},
-        {22.8, "SPECfp92", "SPEC CPU92 result for the SPARCstation 2 (Performance Database "
-                           "Server collection); reported, not used by the model"}}},
+        {4.2, "MFLOPS",
+         "Sun, SPARCstation 2 announcement (Nov 1990): 4.2 MFLOPS "
+         "(double-precision Linpack)"},
+        {21.8, "SPECint92",
+         "SPEC CPU92 result for the SPARCstation 2 (Performance Database "
+         "Server collection); reported, not used by the model"},
+        {22.8, "SPECfp92",
+         "SPEC CPU92 result for the SPARCstation 2 (Performance Database "
+         "Server collection); reported, not used by the model"}}},
       {"sparcstation-slc",
        {"sparcstation-slc",
         "Sun SPARCstation SLC (Sun 4/20): the paper's MIMD children (§6.1)",
-        {20e6, "Hz", "Sun, SPARCstation SLC announcement (1990): 20 MHz SPARC integer unit "
-                     "with a Weitek 3170 FPU, the SPARCstation 1's processor"},
+        {20e6, "Hz",
+         "Sun, SPARCstation SLC announcement (1990): 20 MHz SPARC integer unit "
+         "with a Weitek 3170 FPU, the SPARCstation 1's processor"},
         {12.5, "MIPS", "Sun, SPARCstation SLC announcement (1990): 12.5 MIPS"},
-        {1.2, "MFLOPS", "Sun, SPARCstation SLC announcement (1990): 1.2 MFLOPS "
-                        "(double-precision Linpack)"},
-        {0, "SPECint92", "none published: the SLC left the price list before SPEC CPU92 "
-                         "(1992); not used by the model"},
+        {1.2, "MFLOPS",
+         "Sun, SPARCstation SLC announcement (1990): 1.2 MFLOPS "
+         "(double-precision Linpack)"},
+        {0, "SPECint92",
+         "none published: the SLC left the price list before SPEC CPU92 "
+         "(1992); not used by the model"},
         {0, "SPECfp92", "none published (as SPECint92); not used by the model"}}},
   };
   return profiles;
@@ -52,19 +59,25 @@ const std::map<std::string, HostProfile>& Profiles() {
 // loop control, branches, calls (assumed: from the operations' operands, one load per
 // scene value read, ~3 per call or loop step).
 const WorkCost kCosts[kWorkEvents] = {
-    {21, 12, "Hearn-Baker miss path, hosts/trace/intersect.h: f = o-c (3), b = f.d (5), "
-             "v = f+b d (6), v.v (5), disc (1), compare (1); 4 centre/radius loads + loop"},
-    {70, 25, "IntersectCone, hosts/trace/intersect.h: w, d.a, w.a, the quadratic's a, b, c "
-             "(~50), disc, sqrt, two roots and their range tests (~20)"},
-    {44, 30, "polygon in tracer.cpp: n.d (5), t (9), hit point (6), 2-D inside test ~6 per "
-             "edge, 4 edges assumed (24)"},
-    {25, 20, "ray set-up: primary direction u,v (4) + forward+u right+v up (12) + normalise "
-             "(9); secondary directions are of the same size"},
+    {21, 12,
+     "Hearn-Baker miss path, hosts/trace/intersect.h: f = o-c (3), b = f.d (5), "
+     "v = f+b d (6), v.v (5), disc (1), compare (1); 4 centre/radius loads + loop"},
+    {70, 25,
+     "IntersectCone, hosts/trace/intersect.h: w, d.a, w.a, the quadratic's a, b, c "
+     "(~50), disc, sqrt, two roots and their range tests (~20)"},
+    {44, 30,
+     "polygon in tracer.cpp: n.d (5), t (9), hit point (6), 2-D inside test ~6 per "
+     "edge, 4 edges assumed (24)"},
+    {25, 20,
+     "ray set-up: primary direction u,v (4) + forward+u right+v up (12) + normalise "
+     "(9); secondary directions are of the same size"},
     {2, 10, "nearest-hit bookkeeping: compare t, keep index"},
-    {37, 40, "Shade in tracer.cpp: point (6), normal (6), normalise (9), facing (5), "
-             "mirror direction (11); material lookup and recursion set-up"},
-    {66, 40, "one light in Shade: to-light (3), length (6), normalise (3), n.l (5), diffuse "
-             "(7), highlight r (7), r.v (5), pow (20, assumed), accumulate (10)"},
+    {37, 40,
+     "Shade in tracer.cpp: point (6), normal (6), normalise (9), facing (5), "
+     "mirror direction (11); material lookup and recursion set-up"},
+    {66, 40,
+     "one light in Shade: to-light (3), length (6), normalise (3), n.l (5), diffuse "
+     "(7), highlight r (7), r.v (5), pow (20, assumed), accumulate (10)"},
     {0, 20, "pixel store, loop and conversion"},
 };
 constexpr const char* kEventNames[kWorkEvents] = {"sphereTest", "coneTest", "polygonTest", "ray",
@@ -72,7 +85,9 @@ constexpr const char* kEventNames[kWorkEvents] = {"sphereTest", "coneTest", "pol
 
 }  // namespace
 
-nlohmann::json Sourced::Json() const { return {{"value", value}, {"unit", unit}, {"source", source}}; }
+nlohmann::json Sourced::Json() const {
+  return {{"value", value}, {"unit", unit}, {"source", source}};
+}
 
 nlohmann::json HostProfile::Json() const {
   return {{"name", name},
@@ -86,8 +101,11 @@ nlohmann::json HostProfile::Json() const {
 
 std::string HostProfile::Table() const {
   std::string s = name + ": " + description + "\n";
-  for (const auto& [key, e] : {std::pair{"clock", &clock}, {"mips", &mips}, {"mflops", &mflops},
-                               {"specint92", &specint92}, {"specfp92", &specfp92}})
+  for (const auto& [key, e] : {std::pair{"clock", &clock},
+                               {"mips", &mips},
+                               {"mflops", &mflops},
+                               {"specint92", &specint92},
+                               {"specfp92", &specfp92}})
     s += fmt::format("  {:<10} {:>10g} {:<9} {}\n", key, e->value, e->unit, e->source);
   return s;
 }

@@ -16,10 +16,9 @@
 //   HostTime t = ModelHostTime(stats, ss2);   // t.seconds, t.Json()
 #pragma once
 
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "hosts/trace/tracer.h"
 
@@ -35,11 +34,11 @@ struct Sourced {
 };
 
 struct HostProfile {
-  std::string name;         // "sparcstation2", "sparcstation-slc"
-  std::string description;  // "Sun SPARCstation 2 (Sun 4/75), the paper's host and parent"
-  Sourced clock;            // Hz (reported; not used by the model)
-  Sourced mips;             // million instructions per second (used: non-FP work)
-  Sourced mflops;           // double-precision Linpack 100×100, MFLOPS (used: FP work)
+  std::string name;             // "sparcstation2", "sparcstation-slc"
+  std::string description;      // "Sun SPARCstation 2 (Sun 4/75), the paper's host and parent"
+  Sourced clock;                // Hz (reported; not used by the model)
+  Sourced mips;                 // million instructions per second (used: non-FP work)
+  Sourced mflops;               // double-precision Linpack 100×100, MFLOPS (used: FP work)
   Sourced specint92, specfp92;  // SPEC ratios (reported; 0 with a source saying why)
   nlohmann::json Json() const;
   std::string Table() const;  // one line per entry: name, value, unit, source
@@ -51,7 +50,9 @@ std::vector<std::string> HostProfileNames();
 
 // The counted events of the work table, in TraceStats terms.
 enum class WorkEvent : int {
-  kSphereTest, kConeTest, kPolygonTest,  // one ray–primitive test (TraceStats::tests)
+  kSphereTest,
+  kConeTest,
+  kPolygonTest,  // one ray–primitive test (TraceStats::tests)
   kRay,          // one ray set up (any kind: primary, shadow, reflected, refracted)
   kHit,          // a nearest hit found and recorded
   kShade,        // one surface point shaded (point, normal, recursion set-up)

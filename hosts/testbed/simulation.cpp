@@ -9,6 +9,7 @@
 #ifdef ZEPHYR_SMPI
 #include <mpi.h>
 #include <simgrid/plugins/load.h>
+
 #include <simgrid/s4u.hpp>
 #include <xbt/config.hpp>
 #endif
@@ -40,7 +41,8 @@ const HostProfile* ProfileOf(simgrid::s4u::Host* h) {
 nlohmann::json SimulatedHost() {
   simgrid::s4u::Host* h = simgrid::s4u::this_actor::get_host();
   const HostProfile* p = ProfileOf(h);
-  return {{"host", h->get_name()}, {"speedFlops", h->get_speed()},
+  return {{"host", h->get_name()},
+          {"speedFlops", h->get_speed()},
           {"profile", p ? p->name : std::string("(none: flops + instructions at the host speed)")}};
 }
 
@@ -90,17 +92,20 @@ nlohmann::json LinkLoads(double now) {
   return links;
 }
 
-double ChargeArrayCycles(const bitserial::CycleReport& cycles, const bitserial::CycleReport* refineCycles,
-                         uint64_t recomputedPixels, const Scene& scene, const std::string& method) {
+double ChargeArrayCycles(const bitserial::CycleReport& cycles,
+                         const bitserial::CycleReport* refineCycles, uint64_t recomputedPixels,
+                         const Scene& scene, const std::string& method) {
   const double start = SimulatedNow();
   simgrid::s4u::Host* self = simgrid::s4u::this_actor::get_host();
-  const auto arrays = simgrid::s4u::Engine::get_instance()->get_filtered_hosts([](simgrid::s4u::Host* h) {
-    const char* role = h->get_property("zephyr:role");
-    return role && std::string(role) == "array";
-  });
+  const auto arrays =
+      simgrid::s4u::Engine::get_instance()->get_filtered_hosts([](simgrid::s4u::Host* h) {
+        const char* role = h->get_property("zephyr:role");
+        return role && std::string(role) == "array";
+      });
   if (arrays.size() != 1)
     throw UserError("the platform has " + std::to_string(arrays.size()) +
-                    " hosts with zephyr:role=array; the " + method + " method needs exactly one "
+                    " hosts with zephyr:role=array; the " + method +
+                    " method needs exactly one "
                     "(docs/testbed.md)");
   const ArraySplit a = SplitArrayCycles(cycles, refineCycles);
   // The array computes at its clock (the platform gives its speed in cycles per second).
@@ -116,8 +121,8 @@ bool Simulated() { return false; }
 double SimulatedNow() { return 0; }
 nlohmann::json SimulatedHost() { return nlohmann::json::object(); }
 double ChargeHostWork(const TraceStats&) { return 0; }
-double ChargeArrayCycles(const bitserial::CycleReport&, const bitserial::CycleReport*, uint64_t, const Scene&,
-                         const std::string&) {
+double ChargeArrayCycles(const bitserial::CycleReport&, const bitserial::CycleReport*, uint64_t,
+                         const Scene&, const std::string&) {
   return 0;
 }
 void StartLinkAccounting() {}

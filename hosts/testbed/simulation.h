@@ -5,7 +5,6 @@
 #pragma once
 
 #include <cstdint>
-
 #include <nlohmann/json.hpp>
 
 #include "bitserial/report.h"
@@ -28,8 +27,9 @@ double ChargeHostWork(const TraceStats& work);
 // share of the pass (`recomputedPixels` uncertain pixels recomputed in double) on this
 // host. `method` names the caller in the UserError for a platform without exactly one array
 // host. Returns the simulated seconds it took (0 when not simulated).
-double ChargeArrayCycles(const bitserial::CycleReport& cycles, const bitserial::CycleReport* refineCycles,
-                         uint64_t recomputedPixels, const Scene& scene, const std::string& method);
+double ChargeArrayCycles(const bitserial::CycleReport& cycles,
+                         const bitserial::CycleReport* refineCycles, uint64_t recomputedPixels,
+                         const Scene& scene, const std::string& method);
 
 // This rank's simulated seconds charged so far: all host work (ChargeHostWork), and the part
 // ChargeArrayCycles charged (the uncertain pixels recomputed). 0 outside simulation.

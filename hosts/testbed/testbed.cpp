@@ -8,7 +8,6 @@
 #include "fixed/check.h"
 #include "hosts/testbed/simulation.h"
 
-
 namespace zephyr::testbed {
 
 namespace {
@@ -19,20 +18,26 @@ const std::map<std::string, Testbed>& Testbeds() {
        {"ufmg1992",
         "the paper's runs (§6.1): a SPARCstation 2 host/parent with the Zephyr on SCSI, "
         "SPARCstation SLC children, the department's Ethernet under PVM",
-        "sparcstation2", "sparcstation-slc", "wavetracer",
-        {10e6, "bit/s", "assumed: the SPARCstations' built-in 10 Mbit/s Ethernet (10BASE), one "
-                        "medium shared by every station"},
-        {1e-3, "s", "assumed: per-message latency of PVM 3 over Ethernet of the order of a "
-                    "millisecond (daemon-routed UDP)"},
-        {5e6, "byte/s", "assumed: SCSI-1 synchronous at 5 MB/s, the same figure as the "
-                        "wavetracer profile's hostPlane cost"}}},
+        "sparcstation2",
+        "sparcstation-slc",
+        "wavetracer",
+        {10e6, "bit/s",
+         "assumed: the SPARCstations' built-in 10 Mbit/s Ethernet (10BASE), one "
+         "medium shared by every station"},
+        {1e-3, "s",
+         "assumed: per-message latency of PVM 3 over Ethernet of the order of a "
+         "millisecond (daemon-routed UDP)"},
+        {5e6, "byte/s",
+         "assumed: SCSI-1 synchronous at 5 MB/s, the same figure as the "
+         "wavetracer profile's hostPlane cost"}}},
   };
   return testbeds;
 }
 
 }  // namespace
 
-ArraySplit SplitArrayCycles(const bitserial::CycleReport& first, const bitserial::CycleReport* refine) {
+ArraySplit SplitArrayCycles(const bitserial::CycleReport& first,
+                            const bitserial::CycleReport* refine) {
   ArraySplit a;
   const bitserial::MachineProfile& profile = first.Profile();
   a.clockHz = profile.clockHz;
@@ -69,9 +74,10 @@ const Testbed& TestbedNamed(const std::string& name) {
     std::string known;
     for (const auto& n : TestbedNames()) known += (known.empty() ? "" : ", ") + n;
     if (std::filesystem::is_regular_file(name))
-      throw UserError("testbed '" + name + "': a platform file is simulated — run the render under "
-                      "`tools/testbed/simrun.sh --children K --platform " + name +
-                      " -- render ...` (K = 0 for seq and simd; docs/testbed.md)");
+      throw UserError("testbed '" + name +
+                      "': a platform file is simulated — run the render under "
+                      "`tools/testbed/simrun.sh --children K --platform " +
+                      name + " -- render ...` (K = 0 for seq and simd; docs/testbed.md)");
     throw UserError("unknown testbed '" + name + "' (known: " + known + ")");
   }
   return it->second;
@@ -83,8 +89,8 @@ std::vector<std::string> TestbedNames() {
   return names;
 }
 
-void CheckModelledTimeRequest(const std::string& testbedName, const std::string& method, bool farmed,
-                              bool usesArray, const std::string& arrayProfile) {
+void CheckModelledTimeRequest(const std::string& testbedName, const std::string& method,
+                              bool farmed, bool usesArray, const std::string& arrayProfile) {
   if (testbedName.empty()) return;
   if (farmed) {
     if (!Simulated())
@@ -105,8 +111,9 @@ namespace {
 // A farmed render under simulation: SimGrid's clock, the parent's split, the children's.
 ModelledTime FarmTime(const std::string& testbedName, const FarmTimes& farm) {
   if (!Simulated())
-    throw UserError("a testbed's time of a farmed method runs on a simulated network: build/bin/zephyr-smpi "
-                    "under smpirun (`make smpi`; docs/testbed.md)");
+    throw UserError(
+        "a testbed's time of a farmed method runs on a simulated network: build/bin/zephyr-smpi "
+        "under smpirun (`make smpi`; docs/testbed.md)");
   ModelledTime t;
   t.testbed = testbedName;
   const double now = SimulatedNow();
@@ -133,7 +140,8 @@ std::optional<ModelledTime> ModelTime(const std::string& testbedName, const Coun
                                       const Scene& scene) {
   if (testbedName.empty()) return std::nullopt;
   if (work.farm) return FarmTime(testbedName, *work.farm);
-  if (!work.host) throw UserError("testbed '" + testbedName + "': the method counts no host work to model");
+  if (!work.host)
+    throw UserError("testbed '" + testbedName + "': the method counts no host work to model");
   TraceStats stats = *work.host;
   ModelledTime t;
   t.testbed = testbedName;
@@ -146,7 +154,8 @@ std::optional<ModelledTime> ModelTime(const std::string& testbedName, const Coun
     t.simulatedHost = SimulatedHost();
     if (work.arrayCycles) {
       const double arrayStart = SimulatedNow();
-      ChargeArrayCycles(*work.arrayCycles, work.refineCycles, work.recomputedPixels, scene, "SIMD/sequential");
+      ChargeArrayCycles(*work.arrayCycles, work.refineCycles, work.recomputedPixels, scene,
+                        "SIMD/sequential");
       t.simulatedArraySeconds = SimulatedNow() - arrayStart;
     }
     t.simulatedHostSeconds = ChargeHostWork(stats);
@@ -166,7 +175,8 @@ std::optional<ModelledTime> ModelTime(const std::string& testbedName, const Coun
                       "', but the machine profile is '" + profile + "'");
     // The host recomputes each uncertain pixel against every object, in double.
     stats.Add(RecomputeWork(work.recomputedPixels, scene));
-    t.array = ModelledTime::ArrayShare{profile, SplitArrayCycles(*work.arrayCycles, work.refineCycles)};
+    t.array =
+        ModelledTime::ArrayShare{profile, SplitArrayCycles(*work.arrayCycles, work.refineCycles)};
     arraySeconds = t.array->split.arraySeconds + t.array->split.scsiSeconds;
   }
   t.host = ModelHostTime(stats, host);
@@ -204,9 +214,11 @@ nlohmann::json ModelledTime::Json() const {
     t["hostProfile"] = simulatedHost;
     if (simulatedArraySeconds)
       t["array"] = {{"seconds", *simulatedArraySeconds},
-                    {"what", "array cycles at the array host's speed, the matrix over the link to "
-                             "it, the uncertain pixels recomputed on this host"}};
-    t["host"] = {{"seconds", simulatedHostSeconds.value_or(0)}, {"events", simulatedEvents.ToJson()}};
+                    {"what",
+                     "array cycles at the array host's speed, the matrix over the link to "
+                     "it, the uncertain pixels recomputed on this host"}};
+    t["host"] = {{"seconds", simulatedHostSeconds.value_or(0)},
+                 {"events", simulatedEvents.ToJson()}};
     t["modelledSeconds"] = modelledSeconds;
     return t;
   }
@@ -214,12 +226,16 @@ nlohmann::json ModelledTime::Json() const {
   t["hostProfile"] = hostProfile->Json();
   if (array) {
     const ArraySplit& a = array->split;
-    t["array"] = {{"profile", array->profile},  {"clockHz", a.clockHz},
-                  {"cycles", a.arrayCycles},    {"seconds", a.arraySeconds},
-                  {"scsiBytes", a.scsiBytes},   {"scsiSeconds", a.scsiSeconds},
-                  {"refineCycles", a.refineCycles},
-                  {"cyclesSource", "the first pass's cycle report, and the refine pass's if one ran"},
-                  {"scsiSource", "the cycle reports' host class (hostPlane cycles of the matrix)"}};
+    t["array"] = {
+        {"profile", array->profile},
+        {"clockHz", a.clockHz},
+        {"cycles", a.arrayCycles},
+        {"seconds", a.arraySeconds},
+        {"scsiBytes", a.scsiBytes},
+        {"scsiSeconds", a.scsiSeconds},
+        {"refineCycles", a.refineCycles},
+        {"cyclesSource", "the first pass's cycle report, and the refine pass's if one ran"},
+        {"scsiSource", "the cycle reports' host class (hostPlane cycles of the matrix)"}};
   }
   t["host"] = host->Json();
   t["modelledSeconds"] = modelledSeconds;
@@ -249,23 +265,24 @@ nlohmann::json CalibrateThisHost(const nlohmann::json& r, const std::string& fil
   if (!(seconds > 0)) throw UserError(file + ": phases.render is not a positive time");
   const HostTime h = ModelHostTime(stats, HostProfileNamed("sparcstation2"));  // counts only
   const double ops = h.flops + h.instructions;
-  return {{"profile", "this-host"},
-          {"operationsPerSecond", ops / seconds},
-          {"operations", ops},
-          {"flops", h.flops},
-          {"instructions", h.instructions},
-          {"measuredSeconds", seconds},
-          {"source", "zephyr testbed calibrate --report " + file +
-                         ": the work table's operations of that seq render over its measured render "
-                         "seconds; flops and instructions at one rate (assumed)"},
-          {"use", "zephyr testbed platform --host-ops " + std::to_string(ops / seconds) +
-                      " --children K --out this-host.xml"}};
+  return {
+      {"profile", "this-host"},
+      {"operationsPerSecond", ops / seconds},
+      {"operations", ops},
+      {"flops", h.flops},
+      {"instructions", h.instructions},
+      {"measuredSeconds", seconds},
+      {"source", "zephyr testbed calibrate --report " + file +
+                     ": the work table's operations of that seq render over its measured render "
+                     "seconds; flops and instructions at one rate (assumed)"},
+      {"use", "zephyr testbed platform --host-ops " + std::to_string(ops / seconds) +
+                  " --children K --out this-host.xml"}};
 }
 
 std::string PlatformXml(const Testbed& bed, int children, double hostOps) {
   if (children < 1 || children > kMaxPlatformChildren)
-    throw UserError("a platform's children must be 1.." + std::to_string(kMaxPlatformChildren) + ", got " +
-                    std::to_string(children));
+    throw UserError("a platform's children must be 1.." + std::to_string(kMaxPlatformChildren) +
+                    ", got " + std::to_string(children));
   const HostProfile& parent = HostProfileNamed(bed.parentProfile);
   const HostProfile& child = HostProfileNamed(bed.childProfile);
   const bitserial::MachineProfile array = bitserial::Profile(bed.arrayProfile);
@@ -279,22 +296,26 @@ std::string PlatformXml(const Testbed& bed, int children, double hostOps) {
   std::string x =
       "<?xml version='1.0'?>\n"
       "<!DOCTYPE platform SYSTEM \"https://simgrid.org/simgrid.dtd\">\n"
-      "<!-- Written by zephyr testbed platform (testbed " + bed.name + ", " +
-      std::to_string(children) + " children; docs/testbed.md): " + Comment(bed.description) + ".\n"
-      + (hostOps > 0
-             ? "     Parent and children: this host calibrated (zephyr testbed calibrate), one counted "
-               "operation per flop of speed; the array's speed is its clock (cycles/s). -->\n"
-             : "     Host speeds are the profiles' Linpack rates (flops/s) and the array's clock "
-               "(cycles/s);\n     work is charged as the profiles' modelled seconds, so the speeds "
-               "only convert. -->\n") +
+      "<!-- Written by zephyr testbed platform (testbed " +
+      bed.name + ", " + std::to_string(children) +
+      " children; docs/testbed.md): " + Comment(bed.description) + ".\n" +
+      (hostOps > 0
+           ? "     Parent and children: this host calibrated (zephyr testbed calibrate), one "
+             "counted "
+             "operation per flop of speed; the array's speed is its clock (cycles/s). -->\n"
+           : "     Host speeds are the profiles' Linpack rates (flops/s) and the array's clock "
+             "(cycles/s);\n     work is charged as the profiles' modelled seconds, so the speeds "
+             "only convert. -->\n") +
       "<platform version=\"4.1\">\n  <zone id=\"" + bed.name + "\" routing=\"Full\">\n";
   const bool calibrated = hostOps > 0;
-  x += host("parent", calibrated ? hostOps : parent.mflops.value * 1e6, calibrated ? "" : parent.name, "parent");
+  x += host("parent", calibrated ? hostOps : parent.mflops.value * 1e6,
+            calibrated ? "" : parent.name, "parent");
   x += host("zephyr", array.clockHz, "", "array");
   for (int i = 1; i <= children; ++i)
     x += host("child-" + std::to_string(i), calibrated ? hostOps : child.mflops.value * 1e6,
               calibrated ? "" : child.name, "child");
-  x += "    <!-- " + Comment(bed.ethernetBandwidth.source + "; " + bed.ethernetLatency.source) + " -->\n";
+  x += "    <!-- " + Comment(bed.ethernetBandwidth.source + "; " + bed.ethernetLatency.source) +
+       " -->\n";
   x += "    <link id=\"ethernet\" bandwidth=\"" + std::to_string(bed.ethernetBandwidth.value) +
        "bps\" latency=\"" + std::to_string(bed.ethernetLatency.value) +
        "s\" sharing_policy=\"SHARED\"/>\n";

@@ -13,11 +13,10 @@
 #pragma once
 
 #include <cstdint>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "bitserial/report.h"
 #include "hosts/scene/scene.h"
@@ -27,7 +26,7 @@
 namespace zephyr::testbed {
 
 struct Testbed {
-  std::string name;           // "ufmg1992"
+  std::string name;  // "ufmg1992"
   std::string description;
   std::string parentProfile;  // host profile of the host/parent (seq, simd, parent of dist/hetero)
   std::string childProfile;   // host profile of every child
@@ -70,7 +69,8 @@ struct ArraySplit {
   double arraySeconds = 0, scsiSeconds = 0, scsiBytes = 0, clockHz = 0, arrayCycles = 0;
   double refineCycles = 0;  // the refine pass's share of arrayCycles + its host class
 };
-ArraySplit SplitArrayCycles(const bitserial::CycleReport& first, const bitserial::CycleReport* refine);
+ArraySplit SplitArrayCycles(const bitserial::CycleReport& first,
+                            const bitserial::CycleReport* refine);
 
 // The farm's figures the testbed needs (dist, hetero under simulation): per child its rank,
 // host and the simulated seconds its charged work took (none when its stats did not say).
@@ -100,7 +100,7 @@ struct CountedWork {
 // simulation (one process: seq, simd) from the work table and the array's cycles; under
 // simulation SimGrid's clock and what the simulation measured.
 struct ModelledTime {
-  std::string testbed;        // the testbed's name
+  std::string testbed;  // the testbed's name
   double modelledSeconds = 0;
   // Outside simulation: the testbed, the host's profile and modelled time; the array's share
   // when the SIMD pass ran.
@@ -137,8 +137,8 @@ struct ModelledTime {
 // work: an unknown testbed, a farmed method outside SimGrid, a --machine other than the
 // testbed's array (`arrayProfile`: the machine profile the SIMD pass would use; only when
 // `usesArray`). No-op when `testbedName` is empty. `method` only names it in messages.
-void CheckModelledTimeRequest(const std::string& testbedName, const std::string& method, bool farmed,
-                              bool usesArray, const std::string& arrayProfile);
+void CheckModelledTimeRequest(const std::string& testbedName, const std::string& method,
+                              bool farmed, bool usesArray, const std::string& arrayProfile);
 
 // The modelled seconds on the testbed `testbedName` ("" = none: nullopt) of the counted work
 // of a finished render of `scene`. A farmed render (work.farm) needs the simulated build

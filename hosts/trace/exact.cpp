@@ -49,7 +49,8 @@ std::optional<Real> SphereHit(const RealVec& centre, const Real& radius, const R
 
 // The plane (Newell's normal) and the inside by the tracer's edge functions along the ray,
 // with its shared-edge rule (hosts/trace/intersect.h InsideAlongRay).
-std::optional<Real> PolygonHit(const Polygon& poly, const RealVec& o, const RealVec& d, const Real& tMin) {
+std::optional<Real> PolygonHit(const Polygon& poly, const RealVec& o, const RealVec& d,
+                               const Real& tMin) {
   const size_t n = poly.vertices.size();
   std::vector<RealVec> v;
   for (const Vec3& p : poly.vertices) v.push_back(Make(p));
@@ -57,7 +58,8 @@ std::optional<Real> PolygonHit(const Polygon& poly, const RealVec& o, const Real
   Vec3 normal;  // the same normal in double, for the tracer's edge groups
   for (size_t i = 0; i < n; ++i) {
     const RealVec &a = v[i], &b = v[(i + 1) % n];
-    nn = {nn.x + (a.y - b.y) * (a.z + b.z), nn.y + (a.z - b.z) * (a.x + b.x), nn.z + (a.x - b.x) * (a.y + b.y)};
+    nn = {nn.x + (a.y - b.y) * (a.z + b.z), nn.y + (a.z - b.z) * (a.x + b.x),
+          nn.z + (a.x - b.x) * (a.y + b.y)};
     const Vec3 &p = poly.vertices[i], &q = poly.vertices[(i + 1) % n];
     normal += Vec3{(p.y - q.y) * (p.z + q.z), (p.z - q.z) * (p.x + q.x), (p.x - q.x) * (p.y + q.y)};
   }
@@ -74,7 +76,8 @@ std::optional<Real> PolygonHit(const Polygon& poly, const RealVec& o, const Real
 }
 
 // As hosts/trace/intersect.h IntersectCone: A t² + 2β t + C = 0 in the stable form.
-std::optional<Real> ConeHit(const Cone& cone, const RealVec& o, const RealVec& d, const Real& tMin) {
+std::optional<Real> ConeHit(const Cone& cone, const RealVec& o, const RealVec& d,
+                            const Real& tMin) {
   const RealVec base = Make(cone.base), axisFull = Minus(Make(cone.apex), base);
   const Real h = sqrt(Dot(axisFull, axisFull));
   const RealVec a = {axisFull.x / h, axisFull.y / h, axisFull.z / h};
@@ -106,20 +109,23 @@ std::optional<Real> ConeHit(const Cone& cone, const RealVec& o, const RealVec& d
   return std::nullopt;
 }
 
-std::optional<Real> ObjectHit(const Scene& scene, int index, const Vec3& origin, const Vec3& direction,
-                              double tMin) {
+std::optional<Real> ObjectHit(const Scene& scene, int index, const Vec3& origin,
+                              const Vec3& direction, double tMin) {
   const Primitive& p = scene.objects[index];
   if (const Sphere* sp = std::get_if<Sphere>(&p.shape); sp && !p.transform) {
     // A clear miss in double needs no 128-bit test: the ray's closest approach to the
     // centre is farther than the radius by far more than double rounding (~1e-15 of |f|).
     const Vec3 f = sp->centre - origin;
     const double tca = Dot(f, direction) / Dot(direction, direction);
-    if (Length(f - direction * tca) > sp->radius + 1e-9 * (Length(f) + sp->radius + 1)) return std::nullopt;
+    if (Length(f - direction * tca) > sp->radius + 1e-9 * (Length(f) + sp->radius + 1))
+      return std::nullopt;
   }
   RealVec o = Make(origin), d = Make(direction);
   ToObject(p, o, d);
-  if (const Sphere* sp = std::get_if<Sphere>(&p.shape)) return SphereHit(Make(sp->centre), Real(sp->radius), o, d, Real(tMin));
-  if (const Polygon* poly = std::get_if<Polygon>(&p.shape)) return PolygonHit(*poly, o, d, Real(tMin));
+  if (const Sphere* sp = std::get_if<Sphere>(&p.shape))
+    return SphereHit(Make(sp->centre), Real(sp->radius), o, d, Real(tMin));
+  if (const Polygon* poly = std::get_if<Polygon>(&p.shape))
+    return PolygonHit(*poly, o, d, Real(tMin));
   return ConeHit(std::get<Cone>(p.shape), o, d, Real(tMin));
 }
 
@@ -189,8 +195,8 @@ std::vector<int> CoplanarPolygons(const Scene& scene) {
     if (!(len > 0) || !std::isfinite(len)) continue;
     Vec3 n = nn / len;
     const double big = std::abs(n.x) >= std::abs(n.y) && std::abs(n.x) >= std::abs(n.z) ? n.x
-                       : std::abs(n.y) >= std::abs(n.z)                                   ? n.y
-                                                                                          : n.z;
+                       : std::abs(n.y) >= std::abs(n.z)                                 ? n.y
+                                                                                        : n.z;
     if (big < 0) n = n * -1.0;
     const double off = Dot(n, v[0]);
     auto key = [](double x) { return int64_t(std::llround(x * 1e6)); };
@@ -218,7 +224,8 @@ std::vector<int> CoplanarPolygons(const Scene& scene) {
   return rep;
 }
 
-Hit FirstHit(const Scene& scene, const PrimaryRay& ray, double tMin, const std::vector<int>& planes) {
+Hit FirstHit(const Scene& scene, const PrimaryRay& ray, double tMin,
+             const std::vector<int>& planes) {
   Hit best;
   for (size_t i = 0; i < scene.objects.size(); ++i) {
     const std::optional<Real> t = ObjectHit(scene, int(i), ray.origin, ray.direction, tMin);

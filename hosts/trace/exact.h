@@ -7,8 +7,8 @@
 // Inputs are the double values the methods see (the scene's numbers, the double eye ray),
 // taken exactly; only the arithmetic after them is 128-bit. Spheres (Hearn–Baker), ellipsoids
 // and transformed cones (the ray through the scene's double T⁻¹, then exact), polygons
-// (Newell's plane, the tracer's edge functions with the shared-edge rule) and open truncated cones as hosts/trace/intersect.h
-// defines them.
+// (Newell's plane, the tracer's edge functions with the shared-edge rule) and open truncated cones
+// as hosts/trace/intersect.h defines them.
 #pragma once
 
 #include <optional>
@@ -35,7 +35,8 @@ std::optional<Real> SphereHit(const RealVec& centre, const Real& radius, const R
                               const RealVec& d, const Real& tMin);
 
 // A polygon's hit t > tMin, in the polygon's own coordinates (o, d as given).
-std::optional<Real> PolygonHit(const Polygon& poly, const RealVec& o, const RealVec& d, const Real& tMin);
+std::optional<Real> PolygonHit(const Polygon& poly, const RealVec& o, const RealVec& d,
+                               const Real& tMin);
 
 // An open truncated cone (NFF `c`): the nearest root t > tMin whose height lies in [0, h]
 // on the nappe of non-negative radius.
@@ -43,8 +44,8 @@ std::optional<Real> ConeHit(const Cone& cone, const RealVec& o, const RealVec& d
 
 // Object `index` of the scene along origin + t·direction (world space; a transformed object's
 // ray goes through T⁻¹ as the scene computes it in double, then exactly).
-std::optional<Real> ObjectHit(const Scene& scene, int index, const Vec3& origin, const Vec3& direction,
-                              double tMin);
+std::optional<Real> ObjectHit(const Scene& scene, int index, const Vec3& origin,
+                              const Vec3& direction, double tMin);
 
 // Untransformed polygons in exactly the same plane (every vertex of one on the other's plane,
 // decided in rational arithmetic on the scene's double coordinates): for each object, the
@@ -61,7 +62,8 @@ struct Hit {
   int object = -1;
   Real t = 0;
 };
-Hit FirstHit(const Scene& scene, const PrimaryRay& ray, double tMin, const std::vector<int>& planes);
+Hit FirstHit(const Scene& scene, const PrimaryRay& ray, double tMin,
+             const std::vector<int>& planes);
 Hit FirstHit(const Scene& scene, const PrimaryRay& ray, double tMin);
 
 }  // namespace zephyr::exact

@@ -26,7 +26,9 @@ uint8_t ToByte(double c) {
 
 namespace {
 struct FileCloser {
-  void operator()(FILE* f) const { if (f) std::fclose(f); }
+  void operator()(FILE* f) const {
+    if (f) std::fclose(f);
+  }
 };
 using File = std::unique_ptr<FILE, FileCloser>;
 }  // namespace
@@ -87,7 +89,8 @@ Image ReadPng(const std::string& path) {
   Image out(w, h);
   for (int y = 0; y < h; ++y)
     for (int x = 0; x < w; ++x)
-      out.At(x, y) = {rows[y][3 * x] / 255.0, rows[y][3 * x + 1] / 255.0, rows[y][3 * x + 2] / 255.0};
+      out.At(x, y) = {rows[y][3 * x] / 255.0, rows[y][3 * x + 1] / 255.0,
+                      rows[y][3 * x + 2] / 255.0};
   png_destroy_read_struct(&png, &info, nullptr);
   return out;
 }

@@ -1,6 +1,6 @@
 // hosts/trace/intersect.h — ray–primitive intersection in the primitive's own coordinates,
-// templated on the scalar (float or double). The tracer applies transforms (docs/background.md, "The ray tracer": the ray
-// is mapped by T⁻¹, t is the same in both spaces).
+// templated on the scalar (float or double). The tracer applies transforms (docs/background.md,
+// "The ray tracer": the ray is mapped by T⁻¹, t is the same in both spaces).
 //
 // Each routine writes the roots it finds in (tMin, +inf) in increasing order into
 // roots[0..1] and returns how many (0, 1 or 2). A miss returns 0.
@@ -14,10 +14,11 @@
 
 namespace zephyr {
 
-// The two algebraic forms of the ray–sphere test (docs/background.md, "Precision, accuracy, speed"; Ray Tracing Gems ch. 7).
+// The two algebraic forms of the ray–sphere test (docs/background.md, "Precision, accuracy, speed";
+// Ray Tracing Gems ch. 7).
 enum class SphereTest {
   kHearnBaker,  // discriminant r² − |f − (f·d̂)d̂|²: keeps its bits for small, far spheres
-  kNaive,       // c = |f|² − r², discriminant b² − c: loses them (kept for the stability study)
+  kNaive,  // c = |f|² − r², discriminant b² − c: loses them (kept for the stability study)
 };
 
 template <typename T>
@@ -59,8 +60,9 @@ inline int IntersectSphereNaive(const Vec3T<T>& o, const Vec3T<T>& d, const Vec3
 template <typename T>
 inline int IntersectSphere(SphereTest form, const Vec3T<T>& o, const Vec3T<T>& d,
                            const Vec3T<T>& centre, T radius2, T tMin, T* roots) {
-  return form == SphereTest::kHearnBaker ? IntersectSphereHearnBaker(o, d, centre, radius2, tMin, roots)
-                                         : IntersectSphereNaive(o, d, centre, radius2, tMin, roots);
+  return form == SphereTest::kHearnBaker
+             ? IntersectSphereHearnBaker(o, d, centre, radius2, tMin, roots)
+             : IntersectSphereNaive(o, d, centre, radius2, tMin, roots);
 }
 
 // An open truncated cone: points p with s = (p − base)·axis in [0, height] and distance
@@ -118,7 +120,8 @@ using PolygonEdgeGroup = std::vector<PolygonEdge>;
 
 // The groups of a planar polygon with Newell normal `normal` (convex: one group of every
 // edge; concave: the fan triangles (0, i, i+1) that are not collinear).
-inline std::vector<PolygonEdgeGroup> PolygonEdgeGroups(const std::vector<Vec3>& v, const Vec3& normal) {
+inline std::vector<PolygonEdgeGroup> PolygonEdgeGroups(const std::vector<Vec3>& v,
+                                                       const Vec3& normal) {
   const size_t n = v.size();
   bool convex = true;
   for (size_t i = 0; i < n; ++i) {
@@ -126,7 +129,8 @@ inline std::vector<PolygonEdgeGroup> PolygonEdgeGroups(const std::vector<Vec3>& 
     if (Dot(Cross(e0, e1), normal) < 0) convex = false;
   }
   auto less = [&](int a, int b) {
-    return v[a].x != v[b].x ? v[a].x < v[b].x : (v[a].y != v[b].y ? v[a].y < v[b].y : v[a].z < v[b].z);
+    return v[a].x != v[b].x ? v[a].x < v[b].x
+                            : (v[a].y != v[b].y ? v[a].y < v[b].y : v[a].z < v[b].z);
   };
   auto edge = [&](int a, int b, int tau) {
     return less(a, b) ? PolygonEdge{a, b, tau} : PolygonEdge{b, a, -tau};
@@ -156,8 +160,9 @@ inline bool InsideEdge(T e, int sideTimesFacing) {
 // Whether the ray o + t d passes inside the polygon (vertices v, groups from
 // PolygonEdgeGroups, facing = sign of d · normal, ±1).
 template <typename T>
-inline bool InsideAlongRay(const std::vector<Vec3T<T>>& v, const std::vector<PolygonEdgeGroup>& groups,
-                           const Vec3T<T>& o, const Vec3T<T>& d, int facing) {
+inline bool InsideAlongRay(const std::vector<Vec3T<T>>& v,
+                           const std::vector<PolygonEdgeGroup>& groups, const Vec3T<T>& o,
+                           const Vec3T<T>& d, int facing) {
   bool inside = false;
   for (const PolygonEdgeGroup& g : groups) {
     bool in = true;

@@ -11,10 +11,10 @@
 
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "hosts/trace/sphere_kernels.cpp"
+#include "hosts/trace/sphere_kernels.h"
+
 #include "hwy/foreach_target.h"  // IWYU pragma: keep
 #include "hwy/highway.h"
-
-#include "hosts/trace/sphere_kernels.h"
 
 HWY_BEFORE_NAMESPACE();
 namespace zephyr::HWY_NAMESPACE {
@@ -29,7 +29,7 @@ template <bool kHearnBaker, class D, class V = hn::Vec<D>, class M = hn::Mask<D>
 HWY_INLINE void SphereBlock(D d, M live, V cx, V cy, V cz, V rr, const V (&ray)[7], V& best,
                             VI& bestIndex, VI index) {
   const V zero = hn::Zero(d);
-  const V& ox = ray[0], &oy = ray[1], &oz = ray[2], &dx = ray[3], &dy = ray[4], &dz = ray[5];
+  const V &ox = ray[0], &oy = ray[1], &oz = ray[2], &dx = ray[3], &dy = ray[4], &dz = ray[5];
   const V& tMin = ray[6];
   // f = o − centre; b = −(f·d)
   const V fx = hn::Sub(ox, cx), fy = hn::Sub(oy, cy), fz = hn::Sub(oz, cz);
@@ -96,9 +96,9 @@ int32_t NearestSphereForm(const T* HWY_RESTRICT cx, const T* HWY_RESTRICT cy,
     const auto live = hn::FirstN(d, n - i);
 #if HWY_TARGET <= HWY_AVX2
     // Masked loads that do not touch the lanes beyond n (vmaskmov / AVX-512 masking).
-    SphereBlock<kHearnBaker>(d, live, hn::MaskedLoad(live, d, cx + i), hn::MaskedLoad(live, d, cy + i),
-                             hn::MaskedLoad(live, d, cz + i), hn::MaskedLoad(live, d, r2 + i), ray,
-                             best, bestIndex, index);
+    SphereBlock<kHearnBaker>(d, live, hn::MaskedLoad(live, d, cx + i),
+                             hn::MaskedLoad(live, d, cy + i), hn::MaskedLoad(live, d, cz + i),
+                             hn::MaskedLoad(live, d, r2 + i), ray, best, bestIndex, index);
 #else
     // Older targets' MaskedLoad reads the whole vector: copy into a vector-sized buffer.
     HWY_ALIGN T tail[4][hn::MaxLanes(d)] = {};
@@ -158,8 +158,8 @@ template <typename T, typename Kernel>
 int32_t Call(Kernel* kernel, SphereTest form, const SphereArrays<T>& s, const Vec3T<T>& o,
              const Vec3T<T>& d, T tMin, T* t) {
   const T ray[7] = {o.x, o.y, o.z, d.x, d.y, d.z, tMin};
-  return kernel(form == SphereTest::kHearnBaker, s.cx.data(), s.cy.data(), s.cz.data(),
-                s.r2.data(), s.Size(), ray, t);
+  return kernel(form == SphereTest::kHearnBaker, s.cx.data(), s.cy.data(), s.cz.data(), s.r2.data(),
+                s.Size(), ray, t);
 }
 }  // namespace
 

@@ -45,7 +45,9 @@ struct Outcome {
 // The exact nearest root t > 0 for the given (already rounded) inputs: the exact
 // reference's sphere (hosts/trace/exact.h).
 Outcome ExactHit(const RefReal o[3], const RefReal d[3], const RefReal c[3], const RefReal& r) {
-  return {exact::SphereHit({c[0], c[1], c[2]}, r, {o[0], o[1], o[2]}, {d[0], d[1], d[2]}, RefReal(0)), false};
+  return {
+      exact::SphereHit({c[0], c[1], c[2]}, r, {o[0], o[1], o[2]}, {d[0], d[1], d[2]}, RefReal(0)),
+      false};
 }
 
 template <typename T>
@@ -54,8 +56,9 @@ Outcome FloatHit(SphereTest form, const Vec3& dir, double distance, RefReal d[3]
   d[0] = RefReal(dd.x), d[1] = RefReal(dd.y), d[2] = RefReal(dd.z);
   c[0] = 0, c[1] = 0, c[2] = RefReal(centre.z);
   T roots[2];
-  const int n = form == SphereTest::kNaive ? IntersectSphereNaive<T>(o, dd, centre, T(1), T(0), roots)
-                                     : IntersectSphereHearnBaker<T>(o, dd, centre, T(1), T(0), roots);
+  const int n = form == SphereTest::kNaive
+                    ? IntersectSphereNaive<T>(o, dd, centre, T(1), T(0), roots)
+                    : IntersectSphereHearnBaker<T>(o, dd, centre, T(1), T(0), roots);
   if (n == 0) return {};
   return {RefReal(roots[0]), false};
 }
@@ -101,9 +104,12 @@ Outcome FixedHit(SphereTest form, fixed::Format w, const Vec3& dir, double dista
 Outcome Hit(const StudyFormat& f, SphereTest form, const Vec3& dir, double distance, RefReal d[3],
             RefReal c[3]) {
   switch (f.kind) {
-    case StudyFormat::Kind::kFloat32: return FloatHit<float>(form, dir, distance, d, c);
-    case StudyFormat::Kind::kFloat64: return FloatHit<double>(form, dir, distance, d, c);
-    case StudyFormat::Kind::kFixed: return FixedHit(form, f.fixedFormat, dir, distance, d, c);
+    case StudyFormat::Kind::kFloat32:
+      return FloatHit<float>(form, dir, distance, d, c);
+    case StudyFormat::Kind::kFloat64:
+      return FloatHit<double>(form, dir, distance, d, c);
+    case StudyFormat::Kind::kFixed:
+      return FixedHit(form, f.fixedFormat, dir, distance, d, c);
   }
   ZEPHYR_CHECK(false);
   return {};
@@ -111,7 +117,8 @@ Outcome Hit(const StudyFormat& f, SphereTest form, const Vec3& dir, double dista
 
 // A count of the study outside its range: a value error (the command names its flag).
 void CheckStudyRange(const char* what, int value, int lo, int hi) {
-  if (value < lo || value > hi) throw UserError(fmt::format("stability: {} must be {}..{}, got {}", what, lo, hi, value));
+  if (value < lo || value > hi)
+    throw UserError(fmt::format("stability: {} must be {}..{}, got {}", what, lo, hi, value));
 }
 
 }  // namespace
@@ -153,24 +160,24 @@ FanResult RunFan(const StudyFormat& f, SphereTest form, double distance, int ray
   return r;
 }
 
-
 // distance: one row per (distance, form, format).
-void WriteDistanceStudy(std::FILE* f, const std::vector<StudyFormat>& formats, int rays, int maxLog2,
-                        int stepsPerOctave) {
+void WriteDistanceStudy(std::FILE* f, const std::vector<StudyFormat>& formats, int rays,
+                        int maxLog2, int stepsPerOctave) {
   CheckStudyRange("rays", rays, 1, kMaxFanRays);
   CheckStudyRange("the largest distance's log2", maxLog2, 1, 60);
   CheckStudyRange("distances per octave", stepsPerOctave, 1, 1024);
-  std::fprintf(f, "distance,form,format,rays,wrong_hit_pct,flagged_pct,silent_wrong_pct,"
-                  "t_relerr_max,t_relerr_median\n");
+  std::fprintf(f,
+               "distance,form,format,rays,wrong_hit_pct,flagged_pct,silent_wrong_pct,"
+               "t_relerr_max,t_relerr_median\n");
   for (int k = stepsPerOctave; k <= maxLog2 * stepsPerOctave; ++k) {
     const double distance = std::exp2(double(k) / stepsPerOctave);
     for (SphereTest form : {SphereTest::kNaive, SphereTest::kHearnBaker}) {
       for (const StudyFormat& sf : formats) {
         const FanResult r = RunFan(sf, form, distance, rays);
-        std::fprintf(f, "%.9g,%s,%s,%d,%.6g,%.6g,%.6g,%.6g,%.6g\n", distance, kSphereTestNames.NameOf(form),
-                     sf.name.c_str(), r.rays, 100.0 * r.wrongHit / r.rays,
-                     100.0 * r.flagged / r.rays, 100.0 * r.silentWrong / r.rays, r.tRelErrMax,
-                     r.tRelErrMedian);
+        std::fprintf(f, "%.9g,%s,%s,%d,%.6g,%.6g,%.6g,%.6g,%.6g\n", distance,
+                     kSphereTestNames.NameOf(form), sf.name.c_str(), r.rays,
+                     100.0 * r.wrongHit / r.rays, 100.0 * r.flagged / r.rays,
+                     100.0 * r.silentWrong / r.rays, r.tRelErrMax, r.tRelErrMedian);
       }
     }
   }
@@ -197,12 +204,18 @@ void WriteOverflowStudy(std::FILE* f, int fracBits, int maxIntBits, int rays) {
       for (int k = kSteps; k <= (intBits + 1) * kSteps && !(flagSeen && wrongSeen); ++k) {
         const double distance = std::exp2(double(k) / kSteps);
         const FanResult r = RunFan(sf, form, distance, rays);
-        if (!flagSeen && r.flagged == 0) unflagged = distance; else flagSeen = true;
+        if (!flagSeen && r.flagged == 0)
+          unflagged = distance;
+        else
+          flagSeen = true;
         const bool right = r.wrongHit == 0 && r.tRelErrMax <= 0.01;
-        if (!wrongSeen && right) correct = distance; else wrongSeen = true;
+        if (!wrongSeen && right)
+          correct = distance;
+        else
+          wrongSeen = true;
       }
-      std::fprintf(f, "%d,%d,%s,%.9g,%.9g\n", intBits, fracBits, kSphereTestNames.NameOf(form), unflagged,
-                   correct);
+      std::fprintf(f, "%d,%d,%s,%.9g,%.9g\n", intBits, fracBits, kSphereTestNames.NameOf(form),
+                   unflagged, correct);
     }
   }
 }

@@ -42,9 +42,9 @@ inline constexpr int kMaxFanRays = 1 << 20;
 // What one (distance, form, format) cell measured over the fan.
 struct FanResult {
   int rays = 0;
-  int wrongHit = 0;      // hit where the exact test misses, or the reverse
-  int flagged = 0;       // fixed: some operation overflowed (detected)
-  int silentWrong = 0;   // wrong (hit/miss or t off by > 1 %) with no flag raised
+  int wrongHit = 0;     // hit where the exact test misses, or the reverse
+  int flagged = 0;      // fixed: some operation overflowed (detected)
+  int silentWrong = 0;  // wrong (hit/miss or t off by > 1 %) with no flag raised
   double tRelErrMax = 0, tRelErrMedian = 0;  // over rays both call a hit
 };
 
@@ -54,8 +54,8 @@ FanResult RunFan(const StudyFormat& f, SphereTest form, double distance, int ray
 // Distance: one CSV row per (distance, form, format), D = 2^(k/stepsPerOctave) for k up to
 // maxLog2·stepsPerOctave. UserError for a count outside its range (rays 1..kMaxFanRays,
 // maxLog2 1..60, stepsPerOctave 1..1024).
-void WriteDistanceStudy(std::FILE* out, const std::vector<StudyFormat>& formats, int rays, int maxLog2,
-                        int stepsPerOctave);
+void WriteDistanceStudy(std::FILE* out, const std::vector<StudyFormat>& formats, int rays,
+                        int maxLog2, int stepsPerOctave);
 // Overflow: per fixed format s<I>.<F>, I = 2..maxIntBits, the largest extent each form holds
 // unflagged and correct (one CSV row per I and form). UserError for fracBits outside 4..64 or
 // a format wider than the 128 bits of fixed/.

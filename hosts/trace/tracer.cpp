@@ -1,8 +1,8 @@
 #include "hosts/trace/tracer.h"
 
 #include <algorithm>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <nlohmann/json.hpp>
 
@@ -255,10 +255,11 @@ int Intersect(const Prepared<T>& obj, SphereTest form, Vec3T<T> o, Vec3T<T> d, T
 
 // Barycentric weights of p in triangle (a, b, c); all >= -eps means inside.
 template <typename T>
-void Barycentric(const Vec3T<T>& p, const Vec3T<T>& a, const Vec3T<T>& b, const Vec3T<T>& c,
-                 T& u, T& v, T& w) {
+void Barycentric(const Vec3T<T>& p, const Vec3T<T>& a, const Vec3T<T>& b, const Vec3T<T>& c, T& u,
+                 T& v, T& w) {
   const Vec3T<T> v0 = b - a, v1 = c - a, v2 = p - a;
-  const T d00 = Dot(v0, v0), d01 = Dot(v0, v1), d11 = Dot(v1, v1), d20 = Dot(v2, v0), d21 = Dot(v2, v1);
+  const T d00 = Dot(v0, v0), d01 = Dot(v0, v1), d11 = Dot(v1, v1), d20 = Dot(v2, v0),
+          d21 = Dot(v2, v1);
   const T den = d00 * d11 - d01 * d01;
   v = (d11 * d20 - d01 * d21) / den;
   w = (d00 * d21 - d01 * d20) / den;
@@ -326,7 +327,8 @@ class TracerT final : public Tracer {
       }
     }
     hither_ = T(std::max(scene.camera.hither, 0.0));
-    for (size_t i = 0; i < scene.lights.size(); ++i) lightColour_.push_back(V(scene.LightColour(i)));
+    for (size_t i = 0; i < scene.lights.size(); ++i)
+      lightColour_.push_back(V(scene.LightColour(i)));
     ambient_ = T(scene.Ambient());
   }
 
@@ -438,25 +440,27 @@ class TracerT final : public Tracer {
     if (depth < options_.depth) {
       const T dn = Dot(d, n);  // < 0: n faces the incoming ray
       const V reflected = d - n * (T(2) * dn);
-      if (m.ks > 0) colour += Trace(p, reflected, leave, depth + 1, RayKind::kReflected, stats) * T(m.ks);
+      if (m.ks > 0)
+        colour += Trace(p, reflected, leave, depth + 1, RayKind::kReflected, stats) * T(m.ks);
       if (m.t > 0) {
         // Snell: entering uses 1/ior, leaving uses ior/1. Under total internal reflection
         // the transmitted share is reflected.
         const T eta = inside ? T(m.ior) : T(1) / T(m.ior);
         const std::optional<V> refracted = Refract(d, n, eta);
         colour += Trace(p, refracted ? *refracted : reflected, leave, depth + 1,
-                        refracted ? RayKind::kRefracted : RayKind::kReflected, stats) * T(m.t);
+                        refracted ? RayKind::kRefracted : RayKind::kReflected, stats) *
+                  T(m.t);
       }
     }
     return colour;
   }
 
   std::vector<Prepared<T>> objects_;
-  SphereArrays<T> spheres_;          // the untransformed spheres, for NearestSphere
-  std::vector<int> sphereObject_;    // spheres_ index -> objects_ index (increasing)
-  std::vector<int> scalarObjects_;   // every other object, in order
+  SphereArrays<T> spheres_;         // the untransformed spheres, for NearestSphere
+  std::vector<int> sphereObject_;   // spheres_ index -> objects_ index (increasing)
+  std::vector<int> scalarObjects_;  // every other object, in order
   uint64_t kindCount_[kShapeKinds] = {};
-  std::vector<V> lightColour_;       // Scene::LightColour of each light
+  std::vector<V> lightColour_;  // Scene::LightColour of each light
   T ambient_, hither_;
 };
 
@@ -464,19 +468,20 @@ class TracerT final : public Tracer {
 
 std::unique_ptr<Tracer> Tracer::Create(const Scene& scene, const TraceOptions& options) {
   if (options.depth < 1 || options.depth > kMaxDepth)
-    throw UserError("the ray-tree depth must be 1.." + std::to_string(kMaxDepth) + ", got " + std::to_string(options.depth));
+    throw UserError("the ray-tree depth must be 1.." + std::to_string(kMaxDepth) + ", got " +
+                    std::to_string(options.depth));
   // The reader has held the scene to double's limit; float's is lower (docs/scene-format.md).
   const bool isFloat = options.precision == Precision::kFloat;
   const double limit = isFloat ? kMagnitudeLimitFloat : kMagnitudeLimitDouble;
   if (const auto fault = FindMagnitudeOver(scene, limit)) {
     char what[320];
-    std::snprintf(what, sizeof what,
-                  ": %s reaches %.3g, beyond %.0e, where squares overflow %s%s", fault->what.c_str(),
-                  fault->magnitude, limit, isFloat ? "float" : "double",
+    std::snprintf(what, sizeof what, ": %s reaches %.3g, beyond %.0e, where squares overflow %s%s",
+                  fault->what.c_str(), fault->magnitude, limit, isFloat ? "float" : "double",
                   isFloat ? " (use --precision double)" : " (scale the scene down)");
     throw UserError(fault->where.ToString() + what);
   }
-  if (options.precision == Precision::kFloat) return std::make_unique<TracerT<float>>(scene, options);
+  if (options.precision == Precision::kFloat)
+    return std::make_unique<TracerT<float>>(scene, options);
   return std::make_unique<TracerT<double>>(scene, options);
 }
 
@@ -506,9 +511,11 @@ void RenderRegion(const Tracer& tracer, int x0, int y0, int w, int h, std::vecto
   }
 }
 
-void ShadeFromHits(const Tracer& tracer, const std::vector<PrimaryHit>& hits, int hitsWidth, int hitsHeight,
-                   int x0, int y0, int w, int h, std::vector<Vec3>& out, TraceStats& stats) {
-  ZEPHYR_CHECK(x0 >= 0 && y0 >= 0 && w >= 0 && h >= 0 && x0 + w <= hitsWidth && y0 + h <= hitsHeight);
+void ShadeFromHits(const Tracer& tracer, const std::vector<PrimaryHit>& hits, int hitsWidth,
+                   int hitsHeight, int x0, int y0, int w, int h, std::vector<Vec3>& out,
+                   TraceStats& stats) {
+  ZEPHYR_CHECK(x0 >= 0 && y0 >= 0 && w >= 0 && h >= 0 && x0 + w <= hitsWidth &&
+               y0 + h <= hitsHeight);
   ZEPHYR_CHECK_EQ(hits.size(), size_t(hitsWidth) * hitsHeight);
   out.resize(size_t(w) * h);
   for (int y = 0; y < h; ++y)

@@ -1,4 +1,5 @@
-// hosts/trace/tracer.h — the exhaustive Whitted tracer every method shares (paper §2, docs/shading.md).
+// hosts/trace/tracer.h — the exhaustive Whitted tracer every method shares (paper §2,
+// docs/shading.md).
 //
 // It comes in three pieces so the other methods can swap the middle one:
 //   (a) PrimaryRays::At(x, y)        — the eye ray through pixel (x, y), in double;
@@ -14,11 +15,10 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <nlohmann/json_fwd.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json_fwd.hpp>
 
 #include "fixed/named.h"
 #include "hosts/scene/scene.h"
@@ -40,11 +40,12 @@ struct TraceOptions {
 
 // The names of the host tracer's scalar (--precision) and sphere test (--sphere-test;
 // "hearn-baker" is another name for hb).
-inline constexpr NamedValues<Precision, 2> kPrecisionNames{{{{Precision::kFloat, "float"},
-                                                            {Precision::kDouble, "double"}}}};
-inline constexpr NamedValues<SphereTest, 3> kSphereTestNames{{{{SphereTest::kHearnBaker, "hb"},
-                                                              {SphereTest::kNaive, "naive"},
-                                                              {SphereTest::kHearnBaker, "hearn-baker"}}}};
+inline constexpr NamedValues<Precision, 2> kPrecisionNames{
+    {{{Precision::kFloat, "float"}, {Precision::kDouble, "double"}}}};
+inline constexpr NamedValues<SphereTest, 3> kSphereTestNames{
+    {{{SphereTest::kHearnBaker, "hb"},
+      {SphereTest::kNaive, "naive"},
+      {SphereTest::kHearnBaker, "hearn-baker"}}}};
 
 struct PrimaryRay {
   Vec3 origin;     // the eye
@@ -80,10 +81,10 @@ inline constexpr int kRayKinds = 4;
 struct TraceStats {
   uint64_t rays[kRayKinds] = {};
   uint64_t tests[kShapeKinds] = {};  // ray–primitive tests performed, by primitive kind
-  uint64_t hits = 0;         // rays (not shadow rays) whose nearest object was found
-  uint64_t shades = 0;       // surface points shaded (normal, material, recursion)
-  uint64_t lightSamples = 0; // light sources evaluated at a shaded point (local light)
-  uint64_t pixels = 0;       // pixels written
+  uint64_t hits = 0;                 // rays (not shadow rays) whose nearest object was found
+  uint64_t shades = 0;               // surface points shaded (normal, material, recursion)
+  uint64_t lightSamples = 0;         // light sources evaluated at a shaded point (local light)
+  uint64_t pixels = 0;               // pixels written
   void Add(const TraceStats& other);
   // {"rays": {...}, "tests": {...}, "hits", "shades", "lightSamples", "pixels"}
   nlohmann::json ToJson() const;
@@ -147,7 +148,8 @@ void RenderRegion(const Tracer& tracer, int x0, int y0, int w, int h, std::vecto
 // against the one object found, in double (one test, not N), then shaded; every count goes
 // to `stats` (one primary ray per pixel). Gives for any rectangle exactly the pixels the
 // whole image gives there.
-void ShadeFromHits(const Tracer& tracer, const std::vector<PrimaryHit>& hits, int hitsWidth, int hitsHeight,
-                   int x0, int y0, int w, int h, std::vector<Vec3>& out, TraceStats& stats);
+void ShadeFromHits(const Tracer& tracer, const std::vector<PrimaryHit>& hits, int hitsWidth,
+                   int hitsHeight, int x0, int y0, int w, int h, std::vector<Vec3>& out,
+                   TraceStats& stats);
 
 }  // namespace zephyr

@@ -70,15 +70,25 @@ struct BinaryOp {
 std::vector<BinaryOp> BinaryOps() {
   return {
       {"add", [](auto& a, auto& b, Format o, Policy p) { return Add(a, b, o, p); },
-       [](auto& a, auto& b, Format o, Policy p, fixed::Status* s) { return fixed::Add(a, b, o, p, s); }},
+       [](auto& a, auto& b, Format o, Policy p, fixed::Status* s) {
+         return fixed::Add(a, b, o, p, s);
+       }},
       {"sub", [](auto& a, auto& b, Format o, Policy p) { return Sub(a, b, o, p); },
-       [](auto& a, auto& b, Format o, Policy p, fixed::Status* s) { return fixed::Sub(a, b, o, p, s); }},
+       [](auto& a, auto& b, Format o, Policy p, fixed::Status* s) {
+         return fixed::Sub(a, b, o, p, s);
+       }},
       {"mul", [](auto& a, auto& b, Format o, Policy p) { return Mul(a, b, o, p); },
-       [](auto& a, auto& b, Format o, Policy p, fixed::Status* s) { return fixed::Mul(a, b, o, p, s); }},
+       [](auto& a, auto& b, Format o, Policy p, fixed::Status* s) {
+         return fixed::Mul(a, b, o, p, s);
+       }},
       {"min", [](auto& a, auto& b, Format o, Policy p) { return Min(a, b, o, p); },
-       [](auto& a, auto& b, Format o, Policy p, fixed::Status* s) { return fixed::Min(a, b, o, p, s); }},
+       [](auto& a, auto& b, Format o, Policy p, fixed::Status* s) {
+         return fixed::Min(a, b, o, p, s);
+       }},
       {"max", [](auto& a, auto& b, Format o, Policy p) { return Max(a, b, o, p); },
-       [](auto& a, auto& b, Format o, Policy p, fixed::Status* s) { return fixed::Max(a, b, o, p, s); }},
+       [](auto& a, auto& b, Format o, Policy p, fixed::Status* s) {
+         return fixed::Max(a, b, o, p, s);
+       }},
   };
 }
 
@@ -90,13 +100,21 @@ std::vector<BinaryOp> UnaryOps() {
       {"abs", [](auto& a, auto&, Format o, Policy p) { return Abs(a, o, p); },
        [](auto& a, auto&, Format o, Policy p, fixed::Status* s) { return fixed::Abs(a, o, p, s); }},
       {"convert", [](auto& a, auto&, Format o, Policy p) { return Convert(a, o, p); },
-       [](auto& a, auto&, Format o, Policy p, fixed::Status* s) { return fixed::Convert(a, o, p, s); }},
+       [](auto& a, auto&, Format o, Policy p, fixed::Status* s) {
+         return fixed::Convert(a, o, p, s);
+       }},
       {"shift+3", [](auto& a, auto&, Format o, Policy p) { return Shift(a, 3, o, p); },
-       [](auto& a, auto&, Format o, Policy p, fixed::Status* s) { return fixed::Shift(a, 3, o, p, s); }},
+       [](auto& a, auto&, Format o, Policy p, fixed::Status* s) {
+         return fixed::Shift(a, 3, o, p, s);
+       }},
       {"shift-2", [](auto& a, auto&, Format o, Policy p) { return Shift(a, -2, o, p); },
-       [](auto& a, auto&, Format o, Policy p, fixed::Status* s) { return fixed::Shift(a, -2, o, p, s); }},
+       [](auto& a, auto&, Format o, Policy p, fixed::Status* s) {
+         return fixed::Shift(a, -2, o, p, s);
+       }},
       {"square", [](auto& a, auto&, Format o, Policy p) { return Square(a, o, p); },
-       [](auto& a, auto&, Format o, Policy p, fixed::Status* s) { return fixed::Mul(a, a, o, p, s); }},
+       [](auto& a, auto&, Format o, Policy p, fixed::Status* s) {
+         return fixed::Mul(a, a, o, p, s);
+       }},
   };
 }
 
@@ -110,9 +128,11 @@ TEST(BitserialArith, ExhaustiveSmallWidthsEveryTarget) {
         AllPairs(fa, fb, a, b);
         for (const Format& out : {fa, Format::Signed(1, 2), Format::Unsigned(2, 4)})
           for (const Policy& p : kPolicies) {
-            for (const BinaryOp& op : BinaryOps()) CheckBinary(m, op.name, a, b, out, p, op.engine, op.ref);
+            for (const BinaryOp& op : BinaryOps())
+              CheckBinary(m, op.name, a, b, out, p, op.engine, op.ref);
             if (&fb == &formats[0])
-              for (const BinaryOp& op : UnaryOps()) CheckBinary(m, op.name, a, b, out, p, op.engine, op.ref);
+              for (const BinaryOp& op : UnaryOps())
+                CheckBinary(m, op.name, a, b, out, p, op.engine, op.ref);
           }
       }
   });
@@ -138,7 +158,8 @@ TEST(BitserialArith, RandomWidthsAllPes) {
       CheckBinary(m, op.name, a, c, out, p, op.engine, op.ref);
     }
     for (const BinaryOp& op : UnaryOps())
-      if (w <= 64 || std::string(op.name) != "square") CheckBinary(m, op.name, a, b, out, p, op.engine, op.ref);
+      if (w <= 64 || std::string(op.name) != "square")
+        CheckBinary(m, op.name, a, b, out, p, op.engine, op.ref);
   }
 }
 
@@ -150,7 +171,8 @@ TEST(BitserialArith, OtherTargetsOnSampledWidths) {
       const Format f = Format::Signed(w / 2, w - 1 - w / 2);
       auto a = Values(f, 8192, rng), b = Values(f, 8192, rng);
       for (const Policy& p : kPolicies)
-        for (const BinaryOp& op : BinaryOps()) CheckBinary(m, op.name, a, b, f, p, op.engine, op.ref);
+        for (const BinaryOp& op : BinaryOps())
+          CheckBinary(m, op.name, a, b, f, p, op.engine, op.ref);
     }
   });
 }
@@ -197,7 +219,8 @@ TEST(BitserialArith, MulUniEveryConstantOfAByteAndWideOnes) {
       fixed::Status st;
       ASSERT_EQ(r.At(pe), fixed::Mul(a[pe], c, out, p, &st))
           << fixed::ToString(a[pe]) << " * " << fixed::ToString(c);
-      ASSERT_EQ(m.Overflow(pe), st.overflow) << fixed::ToString(a[pe]) << " * " << fixed::ToString(c);
+      ASSERT_EQ(m.Overflow(pe), st.overflow)
+          << fixed::ToString(a[pe]) << " * " << fixed::ToString(c);
     }
   };
   for (const Format& fc : {Format::Signed(3, 4), Format::Unsigned(4, 4)})
@@ -226,8 +249,9 @@ TEST(BitserialArith, ComparisonsAndSelectMatchFixed) {
   Multi ma(m, fa, "a"), mb(m, fb, "b");
   ma.Load(a);
   mb.Load(b);
-  Multi lt = ma < mb, le = ma <= mb, eq = ma == mb, gt = ma > mb;
-  Multi sel = Select(lt, ma, mb, Format::Signed(2, 3), {fixed::Rounding::Nearest, fixed::OverflowPolicy::Saturate});
+  Multi lt = ma<mb, le = ma <= mb, eq = ma == mb, gt = ma> mb;
+  Multi sel = Select(lt, ma, mb, Format::Signed(2, 3),
+                     {fixed::Rounding::Nearest, fixed::OverflowPolicy::Saturate});
   for (int pe = 0; pe < 8192; ++pe) {
     const int c = fixed::Compare(a[pe], b[pe]);
     ASSERT_EQ(lt.BitAt(0, pe), c < 0);
@@ -255,7 +279,8 @@ TEST(BitserialArith, ActivityMaskKeepsInactivePes) {
   Where(mask, [&] { t = Add(ma, mb, f); }).Elsewhere([&] { t = Mul(ma, mb, f); });
   for (int pe = 0; pe < 8192; ++pe) {
     fixed::Status st;
-    Fixed want = maskRaw[pe] ? fixed::Add(a[pe], b[pe], f, {}, &st) : fixed::Mul(a[pe], b[pe], f, {}, &st);
+    Fixed want =
+        maskRaw[pe] ? fixed::Add(a[pe], b[pe], f, {}, &st) : fixed::Mul(a[pe], b[pe], f, {}, &st);
     ASSERT_EQ(t.At(pe), want) << pe;
     ASSERT_EQ(m.Overflow(pe), st.overflow) << pe;
   }
@@ -298,12 +323,13 @@ TEST(BitserialArith, HostTransfersEveryWidthAgreeWithThePlanes) {
         for (int i = 0; i < width; ++i) {
           const uint64_t v = pe < 1000 ? static_cast<uint64_t>(raw[pe]) : 0;
           const bool want = i < 64 ? (v >> i) & 1 : (isSigned && (v >> 63));
-          ASSERT_EQ(x.BitAt(i, pe), want) << "width " << width << " signed " << isSigned
-                                          << " pe " << pe << " bit " << i;
+          ASSERT_EQ(x.BitAt(i, pe), want)
+              << "width " << width << " signed " << isSigned << " pe " << pe << " bit " << i;
         }
       if (width <= 64) {
         const std::vector<int64_t> back = x.ReadRaw();
-        ASSERT_EQ(std::vector<int64_t>(back.begin(), back.begin() + 1000), raw) << "width " << width;
+        ASSERT_EQ(std::vector<int64_t>(back.begin(), back.begin() + 1000), raw)
+            << "width " << width;
         for (int64_t pe = 1000; pe < m.VirtualPes(); ++pe) ASSERT_EQ(back[pe], 0) << pe;
       }
     }
@@ -313,7 +339,8 @@ TEST(BitserialArith, HostTransfersRoundTrip) {
   Machine m(Profile("wavetracer"), 384 * 384);
   const Format f = Format::Signed(20, 11);
   std::vector<int64_t> raw(m.VirtualPes());
-  for (size_t i = 0; i < raw.size(); ++i) raw[i] = static_cast<int64_t>(i * 2654435761u % 4000000) - 2000000;
+  for (size_t i = 0; i < raw.size(); ++i)
+    raw[i] = static_cast<int64_t>(i * 2654435761u % 4000000) - 2000000;
   Multi x(m, f, "x");
   x.LoadRaw(raw);
   EXPECT_EQ(x.ReadRaw(), raw);

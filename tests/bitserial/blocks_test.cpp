@@ -2,6 +2,8 @@
 // threads, gives the same bits, flags, cycle report and memory map as op by op on the whole
 // machine; a reduction on a block is refused; a program that branches on its data is caught;
 // of several failing blocks the first in block order reports its error.
+#include "bitserial/blocks.h"
+
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
@@ -12,7 +14,6 @@
 #include <thread>
 #include <vector>
 
-#include "bitserial/blocks.h"
 #include "bitserial/multi.h"
 #include "fixed/check.h"
 #include "fixed/format.h"
@@ -26,8 +27,8 @@ using fixed::Format;
 constexpr int64_t kPes = 4 * 8192 + 1000;
 
 struct Outcome {
-  std::vector<int64_t> r;       // a result per PE, all ops folded in
-  std::vector<uint8_t> flags;   // overflow | divideByZero << 1 | invalid << 2, per PE
+  std::vector<int64_t> r;      // a result per PE, all ops folded in
+  std::vector<uint8_t> flags;  // overflow | divideByZero << 1 | invalid << 2, per PE
   std::string report, memory;
 };
 
@@ -50,7 +51,8 @@ void Program(Machine& m, const std::vector<int64_t>& ra, const std::vector<int64
   Multi acc = Broadcast(m, fixed::FromDouble(1.5, fo));
   const Multi less = a < b;
   Where(less, [&] { acc = Sub(sum, q, fo, sat); }).Elsewhere([&] { acc = Max(root, shifted, fo); });
-  Multi r = Select(less, acc, Mul(acc, Uni{fixed::FromDouble(-2.25, Format::Signed(3, 2))}, fo), fo);
+  Multi r =
+      Select(less, acc, Mul(acc, Uni{fixed::FromDouble(-2.25, Format::Signed(3, 2))}, fo), fo);
   const std::vector<int64_t> raw = r.ReadRaw();
   for (int64_t i = 0; i < n; ++i) {
     out.r[first + i] = raw[i];
@@ -88,7 +90,8 @@ TEST(BitserialBlocks, SameBitsFlagsAndReportAsOpByOpForAnyBlockAndThreadCount) {
       Outcome blocked = Inputs(ra, rb);
       const BlockedRun run = RunLayerBlocks(Profile("wavetracer"), kPes, {blockLayers, threads},
                                             [&](Machine& m) { Program(m, ra, rb, blocked); });
-      const std::string what = fmt::format("{} layer(s) per block, {} thread(s)", blockLayers, threads);
+      const std::string what =
+          fmt::format("{} layer(s) per block, {} thread(s)", blockLayers, threads);
       EXPECT_EQ(run.blocks, (5 + blockLayers - 1) / blockLayers) << what;
       EXPECT_EQ(blocked.r, whole.r) << what;
       EXPECT_EQ(blocked.flags, whole.flags) << what;

@@ -99,7 +99,11 @@ inline Counts Compare(int n, Space sa, Space sb, Space so) {
 // format (n bits: its result never overflows out, which has `drop` more integer bits).
 inline Counts MinMax(int n, int drop, fixed::Policy p, Space sa, Space sb, Space so) {
   Counts c;
-  c.Add("flagOp", 2).Add(R(sa), 2 * n).Add(R(sb), 2 * n).Add("aluStep", 2 * n + 1 + drop).Add(W(so), n);
+  c.Add("flagOp", 2)
+      .Add(R(sa), 2 * n)
+      .Add(R(sb), 2 * n)
+      .Add("aluStep", 2 * n + 1 + drop)
+      .Add(W(so), n);
   return c += Extras(p, drop > 0, false, so, n);
 }
 // select(mask, a, b) with the mask in sb's space: the mask read and flag, then the pass.
@@ -162,7 +166,8 @@ inline Counts Sqrt(int n, int outWidth, fixed::Policy p, Space sa, Space so) {
   Counts c;
   c.Add("flagOp", 2 * h + 2).Add(R(sa), n).Add("accumulatorRead", h * h + 2 * h - 1);
   c.Add("readInternal", tri + h).Add("writeInternal", h);
-  c.Add("aluStep", tri + 3 * h + std::max<int64_t>(outWidth, h)).Add("accumulatorWrite", 2 * tri + 4 * h);
+  c.Add("aluStep", tri + 3 * h + std::max<int64_t>(outWidth, h))
+      .Add("accumulatorWrite", 2 * tri + 4 * h);
   c.Add(W(so), 2 * outWidth);
   if (Saturate(p) && outWidth < h) c += SaturatePass(so, outWidth);
   return c;
@@ -299,8 +304,10 @@ inline void Unpack(Tally& t, const fixed::FloatFormat& f, At x, bool negate) {
 // with subnormals the fraction flag too).
 inline void Classify(Tally& t, const fixed::FloatFormat& f) {
   t.Flags(2);
-  if (f.subnormals) t.Logic({At::Internal}).Flags(1);
-  else t.Logic({At::Internal});
+  if (f.subnormals)
+    t.Logic({At::Internal}).Flags(1);
+  else
+    t.Logic({At::Internal});
 }
 inline void Latch(Tally& t) { t.Flag(); }  // a flag latched by a pass that reads its bits anyway
 
@@ -459,8 +466,8 @@ inline Counts Div(const fixed::FloatFormat& f, At a, At b, At out) {
   const int steps = p + 2;
   t.Flag(2 * steps).Rd(Acc, int64_t{3} * p * steps).Rd(nb.frac, int64_t{m} * steps);
   t.Rd(nb.hidden, steps).Alu(int64_t{2 * p + 2} * steps).Wr(Acc, int64_t{2 * p + 1} * steps);
-  t.Wr(I, steps).Rd(I, steps);  // the quotient bits, written and read as the restore's mask
-  t.Rd(na.frac, 2);             // a's bit 0: the first step's dividend bit (add and restore)
+  t.Wr(I, steps).Rd(I, steps);         // the quotient bits, written and read as the restore's mask
+  t.Rd(na.frac, 2);                    // a's bit 0: the first step's dividend bit (add and restore)
   t.Rd(Acc, p).Alu(p).Flag().Wr(Acc);  // sticky: the remainder is not zero
   LeftStage(t, {p + 3, Acc, I}, 1);
   const int S = na.stages;
@@ -505,7 +512,7 @@ inline Counts Sqrt(const fixed::FloatFormat& f, At a, At out) {
   t.Flag(2 * nr).Rd(I, nr * (nr + 1) / 2).Alu((nr - 1) * nr + 6 * nr);
   t.Wr(Acc, (nr - 1) * nr + 5 * nr).Wr(I, nr).Rd(Acc, accReads);
   t.Rd(Acc, p + 3).Alu(p + 3).Flag().Wr(Acc);  // sticky
-  int xrRead = x - 1;                           // Y's planes above bit 0
+  int xrRead = x - 1;                          // Y's planes above bit 0
   if (kOdd) {
     t.Flag().Rd(a, e - 1).Alu(x).Wr(I, x);  // (Y >> 1) - 1 where odd
     xrRead = x;

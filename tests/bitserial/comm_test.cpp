@@ -63,7 +63,8 @@ void CheckShifts(const std::string& profile, int shapeIndex) {
         const int pe = static_cast<int>(v % pes);
         const int coord = (pe / stride) % shape.extent[axis];
         const int from = coord - d;  // the edge rule: outside the mesh gives 0
-        const int64_t want = (from < 0 || from >= shape.extent[axis]) ? 0 : raw[v - int64_t{d} * stride];
+        const int64_t want =
+            (from < 0 || from >= shape.extent[axis]) ? 0 : raw[v - int64_t{d} * stride];
         ASSERT_EQ(got[v], want) << shape.Name() << " axis " << axis << " d " << d << " pe " << v;
       }
     }

@@ -1,9 +1,8 @@
 // Hardware-fidelity tests 2 and 3: cycle counts equal each op's closed form (docs/
 // bitserial.md) at N and not N-1, do not depend on the data, scale with the layers, and the
 // MPP profile reproduces Batcher's published figures from the same engine code.
-#include <gtest/gtest.h>
-
 #include <fmt/format.h>
+#include <gtest/gtest.h>
 
 #include <functional>
 #include <random>
@@ -27,15 +26,19 @@ TEST(BitserialCycles, MppReproducesBatcher1980) {
   // 8-bit add = 25 cycles (6553 MOPS on 16384 PEs at 100 ns), 8x8 multiply = 88 (1861 MOPS).
   const Format s8 = Format::Signed(7, 0), u8 = Format::Unsigned(8, 0);
   for (const Format& f : {s8, u8}) {
-    ExpectFormula(Cycles("mpp", f, f, "add", [&](auto& a, auto& b) { return Add(a, b, f); }), 25, "add8");
-    ExpectFormula(Cycles("mpp", f, f, "mul", [&](auto& a, auto& b) { return Mul(a, b, f); }), 88, "mul8");
+    ExpectFormula(Cycles("mpp", f, f, "add", [&](auto& a, auto& b) { return Add(a, b, f); }), 25,
+                  "add8");
+    ExpectFormula(Cycles("mpp", f, f, "mul", [&](auto& a, auto& b) { return Mul(a, b, f); }), 88,
+                  "mul8");
   }
   // The published rates follow from the engine's cycles and the profile's geometry and clock
   // (16384 PEs at 100 ns): MOPS = PEs / (cycles / clock).
   const MachineProfile mpp = Profile("mpp");
   auto mops = [&](double cycles) { return mpp.physicalPes / (cycles / mpp.clockHz) / 1e6; };
-  EXPECT_NEAR(mops(Cycles("mpp", s8, s8, "add", [&](auto& a, auto& b) { return Add(a, b, s8); })), 6553, 1);
-  EXPECT_NEAR(mops(Cycles("mpp", s8, s8, "mul", [&](auto& a, auto& b) { return Mul(a, b, s8); })), 1861, 1);
+  EXPECT_NEAR(mops(Cycles("mpp", s8, s8, "add", [&](auto& a, auto& b) { return Add(a, b, s8); })),
+              6553, 1);
+  EXPECT_NEAR(mops(Cycles("mpp", s8, s8, "mul", [&](auto& a, auto& b) { return Mul(a, b, s8); })),
+              1861, 1);
   for (int n = 1; n <= 40; ++n) {
     const Format f = Format::Signed(n - 1, 0);
     ExpectFormula(Cycles("mpp", f, f, "add", [&](auto& a, auto& b) { return Add(a, b, f); }),
@@ -80,9 +83,9 @@ TEST(BitserialCycles, ClosedFormsUnderEveryPolicyAndPlacement) {
       for (Space sa : {I, E})
         for (Space sb : {I, E})
           for (Space so : {I, E}) {
-            const std::string where = fmt::format("n={} rounding {} overflow {} a {} b {} out {}", n,
-                                                  int(p.rounding), int(p.overflow), SpaceName(sa),
-                                                  SpaceName(sb), SpaceName(so));
+            const std::string where =
+                fmt::format("n={} rounding {} overflow {} a {} b {} out {}", n, int(p.rounding),
+                            int(p.overflow), SpaceName(sa), SpaceName(sb), SpaceName(so));
             // Runs `op` on fresh operands placed in sa/sb (the result lands in so: internal
             // memory is filled first for an external result) and compares the micro-ops.
             auto check = [&](const char* name, const Format& fa, const closed::Counts& want,
@@ -92,14 +95,15 @@ TEST(BitserialCycles, ClosedFormsUnderEveryPolicyAndPlacement) {
               std::mt19937_64 rng(n);
               std::vector<int64_t> ra(m.VirtualPes()), rb(m.VirtualPes()), rm(m.VirtualPes());
               for (size_t i = 0; i < ra.size(); ++i)
-                ra[i] = static_cast<int64_t>(rng()) >> (64 - n), rb[i] = static_cast<int64_t>(rng()) >> (64 - n),
-                rm[i] = rng() & 1;
+                ra[i] = static_cast<int64_t>(rng()) >> (64 - n),
+                rb[i] = static_cast<int64_t>(rng()) >> (64 - n), rm[i] = rng() & 1;
               a.LoadRaw(ra), b.LoadRaw(rb), mask.LoadRaw(rm);
               PeMemory& mem = m.Memory();
               const int64_t free = mem.Capacity(I) - mem.Used(I);
               if (so == E && free > 0) mem.Allocate("filler", free, I);
               op(a, b, mask);
-              EXPECT_EQ(ChargedMicroOps(m, name), want.n) << name << " " << fa.Name() << " " << where;
+              EXPECT_EQ(ChargedMicroOps(m, name), want.n)
+                  << name << " " << fa.Name() << " " << where;
               ++checked;
             };
             for (int drop = 0; drop <= 3; ++drop) {
@@ -109,8 +113,10 @@ TEST(BitserialCycles, ClosedFormsUnderEveryPolicyAndPlacement) {
                     [&](auto& a, auto& b, auto&) { Multi r = Add(a, b, out, p); });
               check("sub", f, closed::AddSub(n, drop, p, sa, sb, so),
                     [&](auto& a, auto& b, auto&) { Multi r = Sub(a, b, out, p); });
-              check("neg", f, closed::Neg(n, drop, p, sa, so), [&](auto& a, auto&, auto&) { Multi r = Neg(a, out, p); });
-              check("abs", f, closed::Abs(n, drop, p, sa, so), [&](auto& a, auto&, auto&) { Multi r = Abs(a, out, p); });
+              check("neg", f, closed::Neg(n, drop, p, sa, so),
+                    [&](auto& a, auto&, auto&) { Multi r = Neg(a, out, p); });
+              check("abs", f, closed::Abs(n, drop, p, sa, so),
+                    [&](auto& a, auto&, auto&) { Multi r = Abs(a, out, p); });
               check("min", f, closed::MinMax(n, drop, p, sa, sb, so),
                     [&](auto& a, auto& b, auto&) { Multi r = Min(a, b, out, p); });
               check("max", f, closed::MinMax(n, drop, p, sa, sb, so),
@@ -130,7 +136,8 @@ TEST(BitserialCycles, ClosedFormsUnderEveryPolicyAndPlacement) {
               check("mulUni", f, closed::MulUni(n, 4, drop, p, sa, so),
                     [&](auto& a, auto&, auto&) { Multi r = Mul(a, Uni{constant}, uniOut, p); });
             }
-            check("compare", f, closed::Compare(n, sa, sb, so), [&](auto& a, auto& b, auto&) { Multi r = a < b; });
+            check("compare", f, closed::Compare(n, sa, sb, so),
+                  [&](auto& a, auto& b, auto&) { Multi r = a < b; });
             check("div", integer, closed::Div(n, p, sa, sb, so),
                   [&](auto& a, auto& b, auto&) { Multi r = Div(a, b, integer, p); });
             const int h = n / 2;
@@ -139,9 +146,12 @@ TEST(BitserialCycles, ClosedFormsUnderEveryPolicyAndPlacement) {
             check("sqrt", integer, closed::Sqrt(n, h - 1, p, sa, so),
                   [&](auto& a, auto&, auto&) { Multi r = Sqrt(a, Format::Signed(h - 2, 0), p); });
             if (so == sa) {  // reductions have no multi result; a mesh shift writes in a's space
-              check("reduceSum", f, closed::Reduce(n, false, sa), [&](auto& a, auto&, auto&) { ReduceSum(a); });
-              check("reduceMax", f, closed::Reduce(n, true, sa), [&](auto& a, auto&, auto&) { ReduceMax(a); });
-              check("reduceMin", f, closed::Reduce(n, true, sa), [&](auto& a, auto&, auto&) { ReduceMin(a); });
+              check("reduceSum", f, closed::Reduce(n, false, sa),
+                    [&](auto& a, auto&, auto&) { ReduceSum(a); });
+              check("reduceMax", f, closed::Reduce(n, true, sa),
+                    [&](auto& a, auto&, auto&) { ReduceMax(a); });
+              check("reduceMin", f, closed::Reduce(n, true, sa),
+                    [&](auto& a, auto&, auto&) { ReduceMin(a); });
               check("meshShift", f, closed::MeshShift(n, 3, sa),
                     [&](auto& a, auto&, auto&) { Multi r = MeshShift(a, 1, -3); });
             }
@@ -178,8 +188,10 @@ TEST(BitserialCycles, CountsDoNotDependOnDataAndScaleWithLayers) {
     std::mt19937_64 rng(data);
     std::vector<int64_t> ra(m.VirtualPes()), rb(m.VirtualPes());
     for (size_t i = 0; i < ra.size(); ++i) {
-      const int64_t r1 = static_cast<int64_t>(rng()) >> (64 - n), r2 = static_cast<int64_t>(rng()) >> (64 - n);
-      const int64_t fixedValue[] = {0, -1, f.MaxRaw().convert_to<int64_t>(), f.MinRaw().convert_to<int64_t>()};
+      const int64_t r1 = static_cast<int64_t>(rng()) >> (64 - n),
+                    r2 = static_cast<int64_t>(rng()) >> (64 - n);
+      const int64_t fixedValue[] = {0, -1, f.MaxRaw().convert_to<int64_t>(),
+                                    f.MinRaw().convert_to<int64_t>()};
       ra[i] = data < 4 ? fixedValue[data] : r1;
       rb[i] = data < 4 ? fixedValue[3 - data] : r2;
     }
@@ -195,7 +207,8 @@ TEST(BitserialCycles, CountsDoNotDependOnDataAndScaleWithLayers) {
   Machine m(Profile("wavetracer"), 384 * 384);
   Multi a(m, f, "a"), b(m, f, "b");
   Multi r = Mul(a, b, closed::MulOut(n, 2), p);
-  closed::Counts want = closed::Mul(n, 2, p, Space::Internal, Space::Internal, Space::Internal, false);
+  closed::Counts want =
+      closed::Mul(n, 2, p, Space::Internal, Space::Internal, Space::Internal, false);
   for (auto& [op, k] : want.n) k *= 18;
   EXPECT_EQ(ChargedMicroOps(m, "mul"), want.n);
 }
@@ -214,9 +227,10 @@ TEST(BitserialCycles, ProfilesAreDataAndCheckedByName) {
   p.Override("externalBitsPerPe=4096");
   EXPECT_EQ(p.externalBitsPerPe, 4096);
   EXPECT_THROW(Profile("cray"), UserError);
-  std::map<std::string, std::pair<double, std::string>> table = {
-      {"clockHz", {1e6, ""}}, {"physicalPes", {64, ""}}, {"internalBitsPerPe", {8, ""}},
-      {"externalBitsPerPe", {8, ""}}};
+  std::map<std::string, std::pair<double, std::string>> table = {{"clockHz", {1e6, ""}},
+                                                                 {"physicalPes", {64, ""}},
+                                                                 {"internalBitsPerPe", {8, ""}},
+                                                                 {"externalBitsPerPe", {8, ""}}};
   try {
     ProfileFromTable("partial", table);
     FAIL() << "a profile without micro-op costs was accepted";
@@ -229,10 +243,13 @@ TEST(BitserialCycles, ProfilesAreDataAndCheckedByName) {
     const MachineProfile base = Profile("wavetracer");
     auto tableOf = [&](double pes) {
       std::map<std::string, std::pair<double, std::string>> t = {
-          {"clockHz", {base.clockHz, ""}}, {"physicalPes", {pes, ""}},
+          {"clockHz", {base.clockHz, ""}},
+          {"physicalPes", {pes, ""}},
           {"internalBitsPerPe", {double(base.internalBitsPerPe), ""}},
-          {"externalBitsPerPe", {double(base.externalBitsPerPe), ""}}, {"floatSubnormals", {1, ""}}};
-      for (int i = 0; i < kMicroOpCount; ++i) t[MicroOpName(static_cast<MicroOp>(i))] = {base.cost[i], ""};
+          {"externalBitsPerPe", {double(base.externalBitsPerPe), ""}},
+          {"floatSubnormals", {1, ""}}};
+      for (int i = 0; i < kMicroOpCount; ++i)
+        t[MicroOpName(static_cast<MicroOp>(i))] = {base.cost[i], ""};
       return t;
     };
     for (double pes : {576.0, 64.0, 0.0, -512.0}) {
@@ -248,7 +265,8 @@ TEST(BitserialCycles, ProfilesAreDataAndCheckedByName) {
   // Every assumed WaveTracer cost says so.
   MachineProfile wt = Profile("wavetracer");
   for (int i = 0; i < kMicroOpCount; ++i)
-    EXPECT_NE(wt.note[i].find("assumed"), std::string::npos) << MicroOpName(static_cast<MicroOp>(i));
+    EXPECT_NE(wt.note[i].find("assumed"), std::string::npos)
+        << MicroOpName(static_cast<MicroOp>(i));
 }
 
 }  // namespace
@@ -263,8 +281,10 @@ TEST(BitserialCycles, CyclesCommandPrintsBatchersFigures) {
   const char* add[] = {"zephyr", "cycles", "--profile", "mpp", "--op", "add", "--bits", "8"};
   testing::internal::CaptureStdout();
   EXPECT_EQ(RunZephyr(8, add), 0);
-  EXPECT_NE(testing::internal::GetCapturedStdout().find(": 25 cycles per layer"), std::string::npos);
-  const char* mul[] = {"zephyr", "cycles", "--profile", "mpp", "--op", "mul", "--bits", "8", "--json"};
+  EXPECT_NE(testing::internal::GetCapturedStdout().find(": 25 cycles per layer"),
+            std::string::npos);
+  const char* mul[] = {"zephyr", "cycles", "--profile", "mpp",   "--op",
+                       "mul",    "--bits", "8",         "--json"};
   testing::internal::CaptureStdout();
   EXPECT_EQ(RunZephyr(9, mul), 0);
   EXPECT_NE(testing::internal::GetCapturedStdout().find("\"cycles\": 88.0"), std::string::npos);
@@ -282,10 +302,14 @@ TEST(BitserialCycles, CyclesCommandFollowsPolicyAndPlacement) {
   for (const char* op : {"add", "mul", "div", "sqrt"})
     for (const Policy& p : testutil::kPolicies)
       for (bool external : {false, true}) {
-        std::vector<std::string> args = {"zephyr", "cycles", "--op", op, "--bits", "16", "--frac", "8",
-                                         "--rounding", p.rounding == fixed::Rounding::Nearest ? "nearest" : "floor",
-                                         "--overflow", p.overflow == fixed::OverflowPolicy::Saturate ? "saturate" : "wrap",
-                                         "--json"};
+        std::vector<std::string> args = {
+            "zephyr",     "cycles",
+            "--op",       op,
+            "--bits",     "16",
+            "--frac",     "8",
+            "--rounding", p.rounding == fixed::Rounding::Nearest ? "nearest" : "floor",
+            "--overflow", p.overflow == fixed::OverflowPolicy::Saturate ? "saturate" : "wrap",
+            "--json"};
         if (external) args.push_back("--external");
         std::vector<const char*> argv;
         for (const std::string& a : args) argv.push_back(a.c_str());
@@ -293,13 +317,17 @@ TEST(BitserialCycles, CyclesCommandFollowsPolicyAndPlacement) {
         ASSERT_EQ(RunZephyr(int(argv.size()), argv.data()), 0);
         const auto j = nlohmann::json::parse(testing::internal::GetCapturedStdout());
         Machine m(Profile("wavetracer"));
-        const std::optional<Space> s = external ? std::optional<Space>(Space::External) : std::nullopt;
+        const std::optional<Space> s =
+            external ? std::optional<Space>(Space::External) : std::nullopt;
         Multi a(m, f, "a", s), b(m, f, "b", s);
         const std::string name = op;
-        Multi r = name == "add" ? Add(a, b, f, p) : name == "mul" ? Mul(a, b, f, p)
-                : name == "div" ? Div(a, b, f, p) : Sqrt(a, f, p);
+        Multi r = name == "add"   ? Add(a, b, f, p)
+                  : name == "mul" ? Mul(a, b, f, p)
+                  : name == "div" ? Div(a, b, f, p)
+                                  : Sqrt(a, f, p);
         EXPECT_EQ(j["cycles"].get<double>(), m.Report().OpCycles(name))
-            << op << " rounding " << int(p.rounding) << " overflow " << int(p.overflow) << " external " << external;
+            << op << " rounding " << int(p.rounding) << " overflow " << int(p.overflow)
+            << " external " << external;
         if (name == "div" && p.rounding == fixed::Rounding::Nearest && !external &&
             p.overflow == fixed::OverflowPolicy::Wrap) {
           EXPECT_EQ(j["cycles"].get<double>(), 2899);
@@ -326,7 +354,8 @@ TEST(BitserialCycles, AUniDividendCostsItsMultiTwinLessItsReadsAndMagnitude) {
         const int64_t raw = isSigned ? -(int64_t(1) << (n - 2)) + 3 : (int64_t(1) << (n - 1)) + 3;
         const fixed::Fixed value{f, raw};
         Machine mm(Profile("wavetracer")), mu(Profile("wavetracer"));
-        Multi am(mm, f, "a", Space::Internal), bm(mm, f, "b", Space::Internal), bu(mu, f, "b", Space::Internal);
+        Multi am(mm, f, "a", Space::Internal), bm(mm, f, "b", Space::Internal),
+            bu(mu, f, "b", Space::Internal);
         std::vector<int64_t> ra(mm.VirtualPes(), raw), rb(mm.VirtualPes());
         for (size_t i = 0; i < rb.size(); ++i) rb[i] = int64_t(i % 7) + 1;
         am.LoadRaw(ra), bm.LoadRaw(rb), bu.LoadRaw(rb);
@@ -352,7 +381,8 @@ TEST(BitserialCycles, AUniDividendCostsItsMultiTwinLessItsReadsAndMagnitude) {
           it = it->second == 0 ? want.erase(it) : std::next(it);
         for (auto it = got.begin(); it != got.end();)
           it = it->second == 0 ? got.erase(it) : std::next(it);
-        EXPECT_EQ(got, want) << f.Name() << " rounding " << int(p.rounding) << " overflow " << int(p.overflow);
+        EXPECT_EQ(got, want) << f.Name() << " rounding " << int(p.rounding) << " overflow "
+                             << int(p.overflow);
         ++checked;
       }
   EXPECT_EQ(checked, 4 * 2 * 4);
@@ -404,7 +434,8 @@ TEST(BitserialCycleReport, AddSumsRunsAndKeepsEach) {
   EXPECT_EQ(sum.TotalCycles(), first.TotalCycles() + second.TotalCycles());
   EXPECT_EQ(sum.ModelledSeconds(), first.ModelledSeconds() + second.ModelledSeconds());
   for (int c = 0; c < kCycleClassCount; ++c)
-    EXPECT_EQ(sum.ClassCycles(CycleClass(c)), first.ClassCycles(CycleClass(c)) + second.ClassCycles(CycleClass(c)));
+    EXPECT_EQ(sum.ClassCycles(CycleClass(c)),
+              first.ClassCycles(CycleClass(c)) + second.ClassCycles(CycleClass(c)));
   EXPECT_EQ(sum.OpCalls("add"), 3);
   EXPECT_EQ(sum.OpCalls("hostRead"), 1);
   EXPECT_EQ(sum.OpCycles("add"), first.OpCycles("add") + second.OpCycles("add"));

@@ -4,8 +4,8 @@
 // randomly over all 8192 PEs for widths 1..64 (and one wider), under activity masks, on
 // every compiled Highway target; their cycle counts equal the closed forms of
 // docs/bitserial.md at N and not N-1, whatever the data.
-#include <gtest/gtest.h>
 #include <fmt/format.h>
+#include <gtest/gtest.h>
 #include <hwy/targets.h>
 
 #include <functional>
@@ -69,10 +69,10 @@ void CheckPes(Machine& m, const Multi& r, const Expected& e, const std::string& 
     ++failures;
     ADD_FAILURE() << what << " PE " << pe << ": " << fixed::ToString(a[pe])
                   << (b ? " / " + fixed::ToString((*b)[pe]) : std::string(" sqrt")) << " -> got "
-                  << fixed::ToString(r.At(pe)) << " flags " << m.Overflow(pe)
-                  << m.DivideByZero(pe) << m.Invalid(pe) << ", want "
-                  << fixed::ToString(e.value[pe]) << " flags " << st.overflow << st.divideByZero
-                  << st.invalid << " [target " << m.Kernels().target << "]";
+                  << fixed::ToString(r.At(pe)) << " flags " << m.Overflow(pe) << m.DivideByZero(pe)
+                  << m.Invalid(pe) << ", want " << fixed::ToString(e.value[pe]) << " flags "
+                  << st.overflow << st.divideByZero << st.invalid << " [target "
+                  << m.Kernels().target << "]";
   }
 }
 
@@ -93,7 +93,8 @@ TEST(BitserialDivSqrt, ExhaustiveSmallWidthsEveryTarget) {
   };
   std::vector<Case> divs, sqrts;
   const std::vector<Format> formats = SmallFormats();
-  const std::vector<Format> outs = {Format::Signed(1, 2), Format::Unsigned(2, 4), Format::Signed(5, 0)};
+  const std::vector<Format> outs = {Format::Signed(1, 2), Format::Unsigned(2, 4),
+                                    Format::Signed(5, 0)};
   for (const Format& fa : formats)
     for (const Format& fb : formats) {
       std::vector<Fixed> a, b;
@@ -136,11 +137,20 @@ std::vector<Fixed> Values(const Format& f, int n, std::mt19937_64& rng) {
     bits &= (fixed::BigInt(1) << f.Width()) - 1;
     Fixed x = Fixed::FromBits(f, bits);
     switch (rng() % 16) {
-      case 0: x.raw = 0; break;
-      case 1: x.raw = f.MinRaw(); break;
-      case 2: x.raw = f.MaxRaw(); break;
-      case 3: x.raw = x.raw >> (rng() % f.Width()); break;  // small magnitudes
-      default: break;
+      case 0:
+        x.raw = 0;
+        break;
+      case 1:
+        x.raw = f.MinRaw();
+        break;
+      case 2:
+        x.raw = f.MaxRaw();
+        break;
+      case 3:
+        x.raw = x.raw >> (rng() % f.Width());
+        break;  // small magnitudes
+      default:
+        break;
     }
     v.push_back(x);
   }
@@ -162,8 +172,8 @@ void RandomRun(Machine& m, int w, std::mt19937_64& rng, bool allPolicies) {
   };
   auto sqrt = [&](const Multi& x, const std::vector<Fixed>& xv, Format out, Policy p) {
     m.ClearFlags();
-    CheckPes(m, Sqrt(x, out, p), ExpectSqrt(xv, out, p), Tag("sqrt", x.Format(), x.Format(), out, p),
-             xv, nullptr);
+    CheckPes(m, Sqrt(x, out, p), ExpectSqrt(xv, out, p),
+             Tag("sqrt", x.Format(), x.Format(), out, p), xv, nullptr);
   };
   for (int k = 0; k < 4; ++k) {
     if (!allPolicies && k != w % 4) continue;
@@ -208,7 +218,8 @@ TEST(BitserialDivSqrt, ActivityMaskKeepsInactivePes) {
   Where(mask, [&] { t = Div(ma, mb, f, sat); }).Elsewhere([&] { t = Sqrt(ma, f, sat); });
   for (int pe = 0; pe < 8192; ++pe) {
     fixed::Status st;
-    Fixed want = maskRaw[pe] ? fixed::Div(a[pe], b[pe], f, sat, &st) : fixed::Sqrt(a[pe], f, sat, &st);
+    Fixed want =
+        maskRaw[pe] ? fixed::Div(a[pe], b[pe], f, sat, &st) : fixed::Sqrt(a[pe], f, sat, &st);
     ASSERT_EQ(t.At(pe), want) << pe;
     ASSERT_EQ(m.Overflow(pe), st.overflow) << pe;
     ASSERT_EQ(m.DivideByZero(pe), st.divideByZero) << pe;
@@ -242,12 +253,14 @@ TEST(BitserialDivSqrt, ClosedFormCycles) {
     const std::string tag = " n=" + std::to_string(n);
     auto div = [&](auto& a, auto& b) { return Div(a, b, f); };
     auto sqrt = [&](auto& a, auto&) { return Sqrt(a, f); };
-    ExpectFormula(Cycles("wavetracer", f, f, "div", div), 6 * n * n + 22 * n + 16, "wavetracer div" + tag);
+    ExpectFormula(Cycles("wavetracer", f, f, "div", div), 6 * n * n + 22 * n + 16,
+                  "wavetracer div" + tag);
     ExpectFormula(Cycles("wavetracer", f, f, "sqrt", sqrt), 3 * h * h + 11 * h + 4 * n + 1,
                   "wavetracer sqrt" + tag);
     if (n <= 40) {
       ExpectFormula(Cycles("mpp", f, f, "div", div), n * n + 14 * n + 13, "mpp div" + tag);
-      ExpectFormula(Cycles("mpp", f, f, "sqrt", sqrt), h * (h - 1) / 2 + 4 * h + 3 * n + 2, "mpp sqrt" + tag);
+      ExpectFormula(Cycles("mpp", f, f, "sqrt", sqrt), h * (h - 1) / 2 + 4 * h + 3 * n + 2,
+                    "mpp sqrt" + tag);
     }
   }
 }
@@ -267,7 +280,7 @@ TEST(BitserialDivSqrt, CyclesDoNotDependOnDataAndScaleWithLayers) {
     std::vector<Fixed> va = a, vb = b;
     if (data < 3) {
       const fixed::BigInt fill[] = {0, f.MinRaw(), f.MaxRaw()};
-      for (auto& x : vb) x.raw = fill[data];           // all zero, all most negative, all max
+      for (auto& x : vb) x.raw = fill[data];  // all zero, all most negative, all max
       for (auto& x : va) x.raw = fill[(data + 1) % 3];
     }
     Multi ma(m, f, "a"), mb(m, f, "b");
@@ -289,7 +302,8 @@ TEST(BitserialDivSqrt, CyclesCommandPrintsTheClosedForms) {
   const char* div[] = {"zephyr", "cycles", "--profile", "mpp", "--op", "div", "--bits", "8"};
   testing::internal::CaptureStdout();
   EXPECT_EQ(RunZephyr(8, div), 0);
-  EXPECT_NE(testing::internal::GetCapturedStdout().find(": 189 cycles per layer"), std::string::npos);
+  EXPECT_NE(testing::internal::GetCapturedStdout().find(": 189 cycles per layer"),
+            std::string::npos);
   const char* sqrt[] = {"zephyr", "cycles", "--op", "sqrt", "--bits", "16", "--json"};
   testing::internal::CaptureStdout();
   EXPECT_EQ(RunZephyr(7, sqrt), 0);

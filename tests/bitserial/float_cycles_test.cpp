@@ -51,8 +51,16 @@ std::vector<FloatFormat> AllFormats() {
 // 2p = 32 | 34: e8m15, e8m16), each with and without subnormals.
 std::vector<FloatFormat> BoundaryFormats() {
   std::vector<FloatFormat> r;
-  for (auto [e, m] : {std::pair{2, 1}, {2, 52}, {11, 1}, {5, 10}, {8, 23}, {11, 52}, {5, 4},
-                      {5, 5}, {8, 15}, {8, 16}})
+  for (auto [e, m] : {std::pair{2, 1},
+                      {2, 52},
+                      {11, 1},
+                      {5, 10},
+                      {8, 23},
+                      {11, 52},
+                      {5, 4},
+                      {5, 5},
+                      {8, 15},
+                      {8, 16}})
     for (bool sub : {true, false}) r.push_back({e, m, sub});
   return r;
 }
@@ -91,24 +99,38 @@ std::map<std::string, int64_t> Engine(const std::string& profile, const std::str
   rig.ResultIn(so);
   // Binary ops with either side uni (not both).
   auto bin = [&](auto fn) {
-    if (pa == Place::Uni) fn(u, *b);
-    else if (pb == Place::Uni) fn(*a, u);
-    else fn(*a, *b);
+    if (pa == Place::Uni)
+      fn(u, *b);
+    else if (pb == Place::Uni)
+      fn(*a, u);
+    else
+      fn(*a, *b);
   };
   std::string charged = op;
-  if (op == "fadd") bin([](auto& x, auto& y) { Add(x, y); });
-  else if (op == "fsub") bin([](auto& x, auto& y) { Sub(x, y); });
-  else if (op == "fmul") bin([](auto& x, auto& y) { Mul(x, y); });
-  else if (op == "fdiv") bin([](auto& x, auto& y) { Div(x, y); });
-  else if (op == "fmin") bin([](auto& x, auto& y) { Min(x, y); });
-  else if (op == "fmax") bin([](auto& x, auto& y) { Max(x, y); });
-  else if (op == "fsqrt") Sqrt(*a);
+  if (op == "fadd")
+    bin([](auto& x, auto& y) { Add(x, y); });
+  else if (op == "fsub")
+    bin([](auto& x, auto& y) { Sub(x, y); });
+  else if (op == "fmul")
+    bin([](auto& x, auto& y) { Mul(x, y); });
+  else if (op == "fdiv")
+    bin([](auto& x, auto& y) { Div(x, y); });
+  else if (op == "fmin")
+    bin([](auto& x, auto& y) { Min(x, y); });
+  else if (op == "fmax")
+    bin([](auto& x, auto& y) { Max(x, y); });
+  else if (op == "fsqrt")
+    Sqrt(*a);
   else {
     charged = "fcompare";
-    if (op == "fless") bin([](auto& x, auto& y) { Less(x, y); });
-    else if (op == "flessEqual") bin([](auto& x, auto& y) { LessEqual(x, y); });
-    else if (op == "fequal") bin([](auto& x, auto& y) { Equal(x, y); });
-    else ADD_FAILURE() << op;
+    if (op == "fless")
+      bin([](auto& x, auto& y) { Less(x, y); });
+    else if (op == "flessEqual")
+      bin([](auto& x, auto& y) { LessEqual(x, y); });
+    else if (op == "fequal")
+      bin([](auto& x, auto& y) { Equal(x, y); });
+    else
+      ADD_FAILURE() << op;
   }
   if (cycles) *cycles = rig.m.Report().OpCycles(charged);
   return ChargedMicroOps(rig.m, charged);
@@ -174,8 +196,7 @@ TEST(BitserialFloatCycles, BoundaryFormatsEveryPlacementBothProfiles) {
               if (op == "fsqrt" && (pb != Place::Internal || pa == Place::Uni)) continue;
               if (so == Space::External && !external) continue;
               const std::string what = fmt::format("{} {} {} a {} b {} out {}", profile, op,
-                                                   f.Name(), NameOf(pa), NameOf(pb),
-                                                   SpaceName(so));
+                                                   f.Name(), NameOf(pa), NameOf(pb), SpaceName(so));
               double cycles = 0;
               const auto want = Form(op, f, pa, pb, so);
               EXPECT_EQ(Engine(profile, op, f, pa, pb, so, &cycles), want.n) << what;
@@ -257,10 +278,9 @@ TEST(BitserialFloatCycles, ConversionsEveryFixedSidePolicyAndPlacement) {
               const int w = fx.Width(), widest = 125 - f.Precision();
               if (w > 2 && w < widest && &policy != &kPolicies[w % 4]) continue;
               if (!full && w % 5 != 1 && w != widest) continue;
-              const std::string what =
-                  fmt::format("{} ftofixed {} -> {} policy {}/{} a {} out {}", profile, f.Name(),
-                              fx.Name(), int(policy.rounding), int(policy.overflow), NameOf(pa),
-                              SpaceName(so));
+              const std::string what = fmt::format(
+                  "{} ftofixed {} -> {} policy {}/{} a {} out {}", profile, f.Name(), fx.Name(),
+                  int(policy.rounding), int(policy.overflow), NameOf(pa), SpaceName(so));
               double cycles = 0;
               const auto want = closed::fp::ToFixed(f, a, fx, policy, so);
               EXPECT_EQ(EngineConversion(profile, true, f, fx, policy, pa, so, &cycles), want.n)
@@ -278,9 +298,9 @@ TEST(BitserialFloatCycles, ConversionsEveryFixedSidePolicyAndPlacement) {
 // (FloatOpCycles) and as the closed forms give it, on both profiles.
 TEST(BitserialFloatCycles, TheDocsTableOfCycleCounts) {
   const std::map<std::string, std::pair<double, double>> table = {
-      {"fadd", {2809, 380}},     {"fsub", {2812, 382}},     {"fmul", {4476, 818}},
-      {"fdiv", {7498, 1022}},    {"fsqrt", {4801, 631}},    {"fmin", {375, 243}},
-      {"fmax", {375, 243}},      {"fcompare", {185, 115}},  {"ftofixed", {1981, 319}},
+      {"fadd", {2809, 380}},      {"fsub", {2812, 382}},    {"fmul", {4476, 818}},
+      {"fdiv", {7498, 1022}},     {"fsqrt", {4801, 631}},   {"fmin", {375, 243}},
+      {"fmax", {375, 243}},       {"fcompare", {185, 115}}, {"ftofixed", {1981, 319}},
       {"ffromfixed", {1586, 133}}};
   const fixed::Format s31 = fixed::Format::Signed(31, 0);
   for (const std::string profile : {"wavetracer", "mpp"}) {
@@ -323,7 +343,7 @@ TEST(BitserialFloatCycles, MppPublishedFloatRows) {
               r.cycles)
         << r.op;
     EXPECT_EQ(std::round(pes / (c * cycle) / 1e6), r.mops) << r.op;  // MOPS, as the docs say
-    const double published = pes / (r.batcherMops * 1e6 * cycle);   // Batcher's cycles
+    const double published = pes / (r.batcherMops * 1e6 * cycle);    // Batcher's cycles
     EXPECT_NEAR(c, published, 0.1 * published) << r.op;
     EXPECT_EQ(FloatOpCycles(mpp, r.op, ieee), r.withSubnormals) << r.op;
     EXPECT_EQ(CyclesOf(Form(r.op, ieee, Place::Internal, Place::Internal, Space::Internal), mpp),

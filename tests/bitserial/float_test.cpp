@@ -1,6 +1,8 @@
 // Bit-serial floating point (bitserial/float.h) against the exact reference (fixed/
 // float.h), and the reference against the host's IEEE binary32: exhaustive for tiny
 // formats, edge-biased random pairs for binary32, on every compiled Highway target.
+#include "bitserial/float.h"
+
 #include <gtest/gtest.h>
 
 #include <bit>
@@ -10,7 +12,6 @@
 #include <optional>
 #include <random>
 
-#include "bitserial/float.h"
 #include "fixed/check.h"
 #include "fixed/float.h"
 #include "hosts/cmd/command.h"
@@ -58,11 +59,17 @@ const std::vector<NamedOp>& BinaryOps() {
       {"sqrt", [](auto& a, auto&) { return Sqrt(a); },
        [](const FloatFormat& f, uint64_t a, uint64_t) { return fixed::FloatSqrt(f, a); }},
       {"less", [](auto& a, auto& b) { return AsFloat(Less(a, b)); },
-       [](const FloatFormat& f, uint64_t a, uint64_t b) -> uint64_t { return fixed::FloatLess(f, a, b); }},
+       [](const FloatFormat& f, uint64_t a, uint64_t b) -> uint64_t {
+         return fixed::FloatLess(f, a, b);
+       }},
       {"lessEqual", [](auto& a, auto& b) { return AsFloat(LessEqual(a, b)); },
-       [](const FloatFormat& f, uint64_t a, uint64_t b) -> uint64_t { return fixed::FloatLessEqual(f, a, b); }},
+       [](const FloatFormat& f, uint64_t a, uint64_t b) -> uint64_t {
+         return fixed::FloatLessEqual(f, a, b);
+       }},
       {"equal", [](auto& a, auto& b) { return AsFloat(Equal(a, b)); },
-       [](const FloatFormat& f, uint64_t a, uint64_t b) -> uint64_t { return fixed::FloatEqual(f, a, b); }},
+       [](const FloatFormat& f, uint64_t a, uint64_t b) -> uint64_t {
+         return fixed::FloatEqual(f, a, b);
+       }},
   };
   return ops;
 }
@@ -97,14 +104,16 @@ TEST(BitserialFloat, ExhaustiveTinyFormatsEveryTarget) {
       const uint64_t n = uint64_t{1} << f.Width();
       for (uint64_t i = 0; i < n; ++i)
         for (uint64_t j = 0; j < n; ++j) a.push_back(i), b.push_back(j);
-      for (const NamedOp& op : BinaryOps()) EXPECT_EQ(Mismatches(f, op, a, b), 0) << f.Name() << " " << op.name;
+      for (const NamedOp& op : BinaryOps())
+        EXPECT_EQ(Mismatches(f, op, a, b), 0) << f.Name() << " " << op.name;
     }
   });
 }
 
 // Edge-biased binary32 patterns: special exponents and fractions, near ties, operands of
 // nearly equal magnitude (cancellation), and uniform random bits.
-std::vector<uint64_t> EdgeBiased(std::mt19937_64& rng, size_t count, std::vector<uint64_t>* partner) {
+std::vector<uint64_t> EdgeBiased(std::mt19937_64& rng, size_t count,
+                                 std::vector<uint64_t>* partner) {
   std::vector<uint64_t> a;
   auto pick = [&]() -> uint32_t {
     const uint32_t sign = (rng() & 1) << 31;
@@ -118,10 +127,19 @@ std::vector<uint64_t> EdgeBiased(std::mt19937_64& rng, size_t count, std::vector
     const uint32_t x = rng() % 4 ? pick() : static_cast<uint32_t>(rng());
     uint32_t y;
     switch (rng() % 5) {
-      case 0: y = x ^ 0x80000000u ^ static_cast<uint32_t>(rng() % 4); break;  // cancellation
-      case 1: y = (x & 0x80000000u) | ((x & 0x7fffffffu) + static_cast<uint32_t>(rng() % 64 << 23) - (32u << 23)); break;
-      case 2: y = static_cast<uint32_t>(rng()); break;
-      default: y = pick(); break;
+      case 0:
+        y = x ^ 0x80000000u ^ static_cast<uint32_t>(rng() % 4);
+        break;  // cancellation
+      case 1:
+        y = (x & 0x80000000u) |
+            ((x & 0x7fffffffu) + static_cast<uint32_t>(rng() % 64 << 23) - (32u << 23));
+        break;
+      case 2:
+        y = static_cast<uint32_t>(rng());
+        break;
+      default:
+        y = pick();
+        break;
     }
     a.push_back(x);
     partner->push_back(y);
@@ -218,7 +236,8 @@ TEST(BitserialFloat, MppReproducesBatcher1980FloatRows) {
 TEST(BitserialFloat, CyclesCommandPrintsTheMppFloatRows) {
   // The same rows through `zephyr cycles` (--bits 32: binary32 as the profile keeps it).
   for (auto [op, published] : {std::pair{"fadd", 381.0}, std::pair{"fmul", 759.0}}) {
-    const char* args[] = {"zephyr", "cycles", "--profile", "mpp", "--op", op, "--bits", "32", "--json"};
+    const char* args[] = {"zephyr", "cycles", "--profile", "mpp",   "--op",
+                          op,       "--bits", "32",        "--json"};
     testing::internal::CaptureStdout();
     EXPECT_EQ(RunZephyr(9, args), 0);
     const nlohmann::json j = nlohmann::json::parse(testing::internal::GetCapturedStdout());
@@ -276,8 +295,8 @@ int64_t ToFloatMismatches(const fixed::Format& in, const std::vector<int64_t>& r
     const int64_t pe = static_cast<int64_t>(i);
     const uint64_t want = fixed::FloatFromFixed(x.At(pe), f), got = r.At(pe);
     if (got != want && ++bad <= 5)
-      ADD_FAILURE() << in.Name() << " -> " << f.Name() << " raw " << raw[i] << std::hex
-                    << ": got " << got << " want " << want << " (" << m.Kernels().target << ")";
+      ADD_FAILURE() << in.Name() << " -> " << f.Name() << " raw " << raw[i] << std::hex << ": got "
+                    << got << " want " << want << " (" << m.Kernels().target << ")";
   }
   return bad;
 }
@@ -298,7 +317,9 @@ TEST(BitserialFloat, ConversionsExhaustiveTinyFormatsEveryTarget) {
       for (const fixed::Format& in : SmallFixed()) {
         std::vector<int64_t> raw;
         for (int64_t v = 0; v < (int64_t{1} << in.Width()); ++v)
-          raw.push_back(in.isSigned && v >= (int64_t{1} << (in.Width() - 1)) ? v - (int64_t{1} << in.Width()) : v);
+          raw.push_back(in.isSigned && v >= (int64_t{1} << (in.Width() - 1))
+                            ? v - (int64_t{1} << in.Width())
+                            : v);
         EXPECT_EQ(ToFloatMismatches(in, raw, f), 0);
       }
     }
@@ -311,8 +332,7 @@ TEST(BitserialFloat, ConversionsBinary32EdgeBiased) {
   std::vector<uint64_t> partner;
   std::vector<uint64_t> values = EdgeBiased(rng, 100000, &partner);
   // Values near the fixed formats' ranges and units: exponents 100..170.
-  for (int i = 0; i < 20000; ++i)
-    values[i] = (rng() & 0x807fffffu) | ((100 + rng() % 70) << 23);
+  for (int i = 0; i < 20000; ++i) values[i] = (rng() & 0x807fffffu) | ((100 + rng() % 70) << 23);
   const fixed::Format outs[] = {fixed::Format::Signed(15, 16), fixed::Format::Signed(31, 0),
                                 fixed::Format::Unsigned(8, 8)};
   for (const fixed::Format& out : outs)
@@ -358,7 +378,8 @@ TEST(BitserialFloat, ConversionCyclesDoNotDependOnTheData) {
     EXPECT_EQ(c1, toFixed);
     EXPECT_EQ(c2, toFloat);
   }
-  EXPECT_EQ(toFixed, FloatOpCycles(Profile("wavetracer"), "ftofixed", f, Space::Internal, fx, kPolicies[3]));
+  EXPECT_EQ(toFixed,
+            FloatOpCycles(Profile("wavetracer"), "ftofixed", f, Space::Internal, fx, kPolicies[3]));
   EXPECT_EQ(toFloat, FloatOpCycles(Profile("wavetracer"), "ffromfixed", f, Space::Internal, fx));
 }
 
@@ -380,10 +401,14 @@ std::map<std::string, int64_t> FloatMicroOps(const std::string& op, const FloatF
   Machine m(Profile("wavetracer"));
   MultiFloat a(m, f, "a"), b(m, f, "b");
   m.Report().Clear();
-  if (op == "fcompare") Less(a, b);
-  else if (op == "fmin") Min(a, b);
-  else if (op == "fdiv") Div(a, b);
-  else if (op == "fsqrt") Sqrt(a);
+  if (op == "fcompare")
+    Less(a, b);
+  else if (op == "fmin")
+    Min(a, b);
+  else if (op == "fdiv")
+    Div(a, b);
+  else if (op == "fsqrt")
+    Sqrt(a);
   return testutil::ChargedMicroOps(m, op);
 }
 
@@ -394,15 +419,17 @@ TEST(BitserialFloat, CompareAndMinMaxClosedForms) {
     // Compare: both exponents scanned (hidden bit, all ones), one subtraction of the
     // magnitudes latching equality and "fraction not zero" along, then 30 flag operations
     // (16 of them reading a sign plane) and the result bit written.
-    const std::map<std::string, int64_t> less = {
-        {"readInternal", 4 * e + 2 * m + 6}, {"aluStep", 3 * e + m + 23}, {"flagOp", 30},
-        {"writeInternal", 1}};
+    const std::map<std::string, int64_t> less = {{"readInternal", 4 * e + 2 * m + 6},
+                                                 {"aluStep", 3 * e + m + 23},
+                                                 {"flagOp", 30},
+                                                 {"writeInternal", 1}};
     EXPECT_EQ(FloatMicroOps("fcompare", f), less) << f.Name();
     // Min: the same ordering, the pick, one selecting pass over both operands' w bits and
     // one masked pass writing the canonical NaN where both are NaN.
-    const std::map<std::string, int64_t> min = {
-        {"readInternal", 6 * e + 4 * m + 8}, {"aluStep", 5 * e + 3 * m + 23}, {"flagOp", 31},
-        {"writeInternal", 2 * w}};
+    const std::map<std::string, int64_t> min = {{"readInternal", 6 * e + 4 * m + 8},
+                                                {"aluStep", 5 * e + 3 * m + 23},
+                                                {"flagOp", 31},
+                                                {"writeInternal", 2 * w}};
     EXPECT_EQ(FloatMicroOps("fmin", f), min) << f.Name();
   }
 }
@@ -443,8 +470,8 @@ TEST(BitserialFloat, CyclesCommandKnowsEveryFloatOp) {
   // `zephyr cycles --op OP` prints the cycles FloatOpCycles counts, for every float op; the
   // conversions take the fixed side from --bits/--frac.
   for (const std::string& op : FloatOpNames()) {
-    const char* args[] = {"zephyr", "cycles", "--op", op.c_str(), "--float", "e5m10",
-                          "--bits", "16", "--frac", "4", "--json"};
+    const char* args[] = {"zephyr", "cycles", "--op",   op.c_str(), "--float", "e5m10",
+                          "--bits", "16",     "--frac", "4",        "--json"};
     testing::internal::CaptureStdout();
     EXPECT_EQ(RunZephyr(11, args), 0) << op;
     const nlohmann::json j = nlohmann::json::parse(testing::internal::GetCapturedStdout());

@@ -55,30 +55,41 @@ TEST(BitserialLayers, OpsOnEighteenLayersMatchFixedOnEveryTarget) {
           ADD_FAILURE() << name << " at PE " << pe << " (layer " << pe / 8192 << "): got "
                         << fixed::ToString(r.At(pe)) << " flags " << m.Overflow(pe)
                         << m.DivideByZero(pe) << m.Invalid(pe) << ", want " << fixed::ToString(want)
-                        << " flags " << st.overflow << st.divideByZero << st.invalid
-                        << " [target " << m.Kernels().target << "]";
+                        << " flags " << st.overflow << st.divideByZero << st.invalid << " [target "
+                        << m.Kernels().target << "]";
         }
       }
       return overflows;
     };
-    check("add", [&] { return Add(a, b, Format::Signed(9, 12)); },
-          [&](auto& x, auto& y, auto* s) { return fixed::Add(x, y, Format::Signed(9, 12), wrap, s); });
-    check("sub", [&] { return Sub(a, b, fo, nearestSat); },
-          [&](auto& x, auto& y, auto* s) { return fixed::Sub(x, y, fo, nearestSat, s); });
-    check("mul", [&] { return Mul(a, b, fo, nearestSat); },
-          [&](auto& x, auto& y, auto* s) { return fixed::Mul(x, y, fo, nearestSat, s); });
-    check("square", [&] { return Square(a, fo, wrap); },
-          [&](auto& x, auto&, auto* s) { return fixed::Mul(x, x, fo, wrap, s); });
-    check("mulUni", [&] { return Mul(a, Uni{constant}, fo, nearestSat); },
-          [&](auto& x, auto&, auto* s) { return fixed::Mul(x, constant, fo, nearestSat, s); });
+    check(
+        "add", [&] { return Add(a, b, Format::Signed(9, 12)); },
+        [&](auto& x, auto& y, auto* s) {
+          return fixed::Add(x, y, Format::Signed(9, 12), wrap, s);
+        });
+    check(
+        "sub", [&] { return Sub(a, b, fo, nearestSat); },
+        [&](auto& x, auto& y, auto* s) { return fixed::Sub(x, y, fo, nearestSat, s); });
+    check(
+        "mul", [&] { return Mul(a, b, fo, nearestSat); },
+        [&](auto& x, auto& y, auto* s) { return fixed::Mul(x, y, fo, nearestSat, s); });
+    check(
+        "square", [&] { return Square(a, fo, wrap); },
+        [&](auto& x, auto&, auto* s) { return fixed::Mul(x, x, fo, wrap, s); });
+    check(
+        "mulUni", [&] { return Mul(a, Uni{constant}, fo, nearestSat); },
+        [&](auto& x, auto&, auto* s) { return fixed::Mul(x, constant, fo, nearestSat, s); });
     // Division and square root into formats their results overflow on some PEs, under both
     // overflow policies (the flag, the saturated and the wrapped bits on every layer).
     const Format narrow = Format::Signed(2, 9);
     for (const Policy& p : {nearestSat, wrap}) {
-      EXPECT_GT(check("div", [&] { return Div(a, b, fo, p); },
-                      [&](auto& x, auto& y, auto* s) { return fixed::Div(x, y, fo, p, s); }), 0);
-      EXPECT_GT(check("sqrt", [&] { return Sqrt(a, narrow, p); },
-                      [&](auto& x, auto&, auto* s) { return fixed::Sqrt(x, narrow, p, s); }), 0);
+      EXPECT_GT(check(
+                    "div", [&] { return Div(a, b, fo, p); },
+                    [&](auto& x, auto& y, auto* s) { return fixed::Div(x, y, fo, p, s); }),
+                0);
+      EXPECT_GT(check(
+                    "sqrt", [&] { return Sqrt(a, narrow, p); },
+                    [&](auto& x, auto&, auto* s) { return fixed::Sqrt(x, narrow, p, s); }),
+                0);
     }
   });
 }

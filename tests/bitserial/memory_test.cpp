@@ -44,11 +44,14 @@ TEST(BitserialMemory, FirstFitAtItsBoundaries) {
     // Layout: a(1) b(g1) c(1) d(g2) e(rest), g1 < g2, then b and d freed: two gaps.
     const int64_t g1 = std::max<int64_t>(1, cap / 8), g2 = g1 + 1, rest = cap - 2 - g1 - g2;
     ASSERT_GE(rest, 1) << at;
-    const Allocation a = mem.Allocate("a", 1, Space::Internal), b = mem.Allocate("b", g1, Space::Internal),
-                     c = mem.Allocate("c", 1, Space::Internal), d = mem.Allocate("d", g2, Space::Internal),
+    const Allocation a = mem.Allocate("a", 1, Space::Internal),
+                     b = mem.Allocate("b", g1, Space::Internal),
+                     c = mem.Allocate("c", 1, Space::Internal),
+                     d = mem.Allocate("d", g2, Space::Internal),
                      e = mem.Allocate("e", rest, Space::Internal);
     EXPECT_EQ(e.address + e.bits, cap) << at;  // the last bit is usable...
-    EXPECT_FALSE(ErrorOf([&] { mem.Allocate("over", 1, Space::Internal); }).empty()) << at;  // ...the next not
+    EXPECT_FALSE(ErrorOf([&] { mem.Allocate("over", 1, Space::Internal); }).empty())
+        << at;  // ...the next not
     mem.Free(b.id), mem.Free(d.id);
     // One bit more than both gaps fits nowhere.
     EXPECT_FALSE(ErrorOf([&] { mem.Allocate("tooBig", g2 + 1, Space::Internal); }).empty()) << at;

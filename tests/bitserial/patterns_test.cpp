@@ -105,8 +105,8 @@ std::vector<Pattern> Patterns(const Format& f, uint64_t seed) {
                [=](int64_t pe, int64_t) { return Reduce(Hash(seed * 7919 + pe), f); }});
   // One PE different, at a word's first and last bit, a 512-PE vector's edges, the middle
   // and the last PE.
-  for (int64_t at : {int64_t{0}, int64_t{63}, int64_t{64}, int64_t{511}, int64_t{512}, int64_t{-2},
-                     int64_t{-1}})
+  for (int64_t at :
+       {int64_t{0}, int64_t{63}, int64_t{64}, int64_t{511}, int64_t{512}, int64_t{-2}, int64_t{-1}})
     r.push_back({at == -1   ? "one PE different: the last"
                  : at == -2 ? "one PE different: the middle one"
                             : fmt::format("one PE different: PE {}", at),
@@ -229,8 +229,8 @@ std::vector<Binary> BinaryOps() {
        refAdd(s17, floorWrap)},
       {"add s15.0 + s15.0 -> s15.0 wrap (overflow)", s16, s16, s16, floorWrap, add(s16, floorWrap),
        refAdd(s16, floorWrap)},
-      {"add s3.12 + u9.0 -> s2.12 nearest saturate", s3_12, u9, s2_12, nearSat,
-       add(s2_12, nearSat), refAdd(s2_12, nearSat)},
+      {"add s3.12 + u9.0 -> s2.12 nearest saturate", s3_12, u9, s2_12, nearSat, add(s2_12, nearSat),
+       refAdd(s2_12, nearSat)},
       {"add s63.0 + s63.0 -> s63.0 wrap", s64, s64, s64, floorWrap, add(s64, floorWrap),
        refAdd(s64, floorWrap)},
       {"sub s3.12 - s15.0 -> s4.10 nearest wrap", s3_12, s16, s4_10, nearWrap, sub(s4_10, nearWrap),
@@ -295,8 +295,8 @@ TEST(BitserialPatterns, MulByUniAndSquareEqualFixedForEveryPatternGeometryAndTar
               Reference(a, fa, a, fa, [&](const Fixed& v, const Fixed&, fixed::Status* s) {
                 return fixed::Mul(v, c, out, p, s);
               });
-          const std::string what = fmt::format("mul-uni {} x {}; {}; {}", fa.Name(),
-                                               fixed::ToString(c), x.name, g.name);
+          const std::string what =
+              fmt::format("mul-uni {} x {}; {}; {}", fa.Name(), fixed::ToString(c), x.name, g.name);
           EveryTarget(g, [&](Machine& m) {
             Multi ma(m, fa, "a");
             ma.LoadRaw(a);
@@ -337,8 +337,7 @@ TEST(BitserialPatterns, FloatMulAndAddEqualTheReferenceForEveryPatternGeometryAn
         MultiFloat x(m, f, "a"), y(m, f, "b");
         x.Load(ua), y.Load(ub);
         const std::vector<uint64_t> gotMul = Mul(x, y).Read(), gotAdd = Add(x, y).Read();
-        const std::string what =
-            fmt::format("{}; {} [{}]", pa[i].name, g.name, m.Kernels().target);
+        const std::string what = fmt::format("{}; {} [{}]", pa[i].name, g.name, m.Kernels().target);
         EXPECT_EQ(gotMul, mul) << "fmul " << what;
         EXPECT_EQ(gotAdd, add) << "fadd " << what;
       });

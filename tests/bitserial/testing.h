@@ -35,8 +35,8 @@ inline void ForEachTarget(const std::function<void()>& body) {
 // Formats of width <= 6, signed and unsigned, with different splits.
 inline std::vector<fixed::Format> SmallFormats() {
   using fixed::Format;
-  return {Format::Signed(2, 3), Format::Unsigned(3, 3), Format::Signed(0, 2), Format::Unsigned(1, 0),
-          Format::Signed(4, 0), Format::Unsigned(0, 5)};
+  return {Format::Signed(2, 3),   Format::Unsigned(3, 3), Format::Signed(0, 2),
+          Format::Unsigned(1, 0), Format::Signed(4, 0),   Format::Unsigned(0, 5)};
 }
 
 // Every pair of values of fa and fb (at most 4096 for widths <= 6), one pair per PE.

@@ -52,7 +52,8 @@ const std::vector<UniOp>& Ops() {
        [](auto& x, auto& y, Format o, Policy p) { return Div(x, y, o, p); }},
       {"less", "compare", Both([](auto& x, auto& y, Format, Policy) { return Less(x, y); }),
        [](auto& x, auto& y, Format, Policy) { return Less(x, y); }},
-      {"lessEqual", "compare", Both([](auto& x, auto& y, Format, Policy) { return LessEqual(x, y); }),
+      {"lessEqual", "compare",
+       Both([](auto& x, auto& y, Format, Policy) { return LessEqual(x, y); }),
        [](auto& x, auto& y, Format, Policy) { return LessEqual(x, y); }},
       {"equal", "compare", Both([](auto& x, auto& y, Format, Policy) { return Equal(x, y); }),
        [](auto& x, auto& y, Format, Policy) { return Equal(x, y); }},
@@ -68,16 +69,19 @@ TEST(BitserialUni, EveryBinaryOpAndComparisonEqualsTheBroadcastEveryTarget) {
         for (bool right : {true, false})
           for (int bits = 0; bits < (1 << fu.Width()); ++bits) {
             const fixed::Fixed u = fixed::Fixed::FromBits(fu, bits);
-            Machine m1(Profile("wavetracer"), 1 << fa.Width()), m2(Profile("wavetracer"), 1 << fa.Width());
+            Machine m1(Profile("wavetracer"), 1 << fa.Width()),
+                m2(Profile("wavetracer"), 1 << fa.Width());
             std::vector<fixed::Fixed> values;
-            for (int v = 0; v < (1 << fa.Width()); ++v) values.push_back(fixed::Fixed::FromBits(fa, v));
+            for (int v = 0; v < (1 << fa.Width()); ++v)
+              values.push_back(fixed::Fixed::FromBits(fa, v));
             Multi a1(m1, fa, "a"), a2(m2, fa, "a");
             a1.Load(values), a2.Load(values);
             const Multi r1 = op.withUni(a1, Uni{u}, out, p, right);
             const Multi b2 = Broadcast(m2, u);
             const Multi r2 = right ? op.withMulti(a2, b2, out, p) : op.withMulti(b2, a2, out, p);
             for (int64_t pe = 0; pe < m1.VirtualPes(); ++pe) {
-              ASSERT_EQ(r1.At(pe).raw, r2.At(pe).raw) << op.name << " " << fixed::ToString(u) << " pe " << pe;
+              ASSERT_EQ(r1.At(pe).raw, r2.At(pe).raw)
+                  << op.name << " " << fixed::ToString(u) << " pe " << pe;
               ASSERT_EQ(m1.Overflow(pe), m2.Overflow(pe)) << op.name;
               ASSERT_EQ(m1.DivideByZero(pe), m2.DivideByZero(pe)) << op.name;
             }
@@ -91,8 +95,10 @@ std::map<std::string, int64_t> Counts(const UniOp& op, bool uni, int n) {
   Multi a(m, f, "a"), b(m, f, "b");
   const fixed::Fixed u = fixed::Fixed::FromBits(f, 0x5);
   m.Report().Clear();
-  if (uni) op.withUni(a, Uni{u}, f, {}, true);
-  else op.withMulti(a, b, f, {});
+  if (uni)
+    op.withUni(a, Uni{u}, f, {}, true);
+  else
+    op.withMulti(a, b, f, {});
   return ChargedMicroOps(m, op.charged);
 }
 
@@ -155,18 +161,17 @@ TEST(BitserialUni, FloatOpsEqualTheBroadcastEveryTarget) {
     FOp multi;
     UOp uni;
   };
-#define ZEPHYR_CASE(Op, Read)                                                                   \
-  Case {                                                                                        \
-    #Op, [&](const MultiFloat& a, const MultiFloat& b) { return Read(Op(a, b)); },             \
+#define ZEPHYR_CASE(Op, Read)                                                                \
+  Case {                                                                                     \
+#Op, [&](const MultiFloat& a, const MultiFloat& b) { return Read(Op(a, b)); },             \
         [&](const MultiFloat& a, const UniFloat& u, bool right) {                               \
           return right ? Read(Op(a, u)) : Read(Op(u, a));                                       \
-        }                                                                                       \
+        } \
   }
-  const std::vector<Case> cases = {ZEPHYR_CASE(Add, bits),  ZEPHYR_CASE(Sub, bits),
-                                   ZEPHYR_CASE(Mul, bits),  ZEPHYR_CASE(Div, bits),
-                                   ZEPHYR_CASE(Min, bits),  ZEPHYR_CASE(Max, bits),
-                                   ZEPHYR_CASE(Less, flag), ZEPHYR_CASE(LessEqual, flag),
-                                   ZEPHYR_CASE(Equal, flag)};
+  const std::vector<Case> cases = {
+      ZEPHYR_CASE(Add, bits),  ZEPHYR_CASE(Sub, bits),       ZEPHYR_CASE(Mul, bits),
+      ZEPHYR_CASE(Div, bits),  ZEPHYR_CASE(Min, bits),       ZEPHYR_CASE(Max, bits),
+      ZEPHYR_CASE(Less, flag), ZEPHYR_CASE(LessEqual, flag), ZEPHYR_CASE(Equal, flag)};
 #undef ZEPHYR_CASE
   auto check = [&](const FloatFormat& f, const std::vector<uint64_t>& values,
                    const std::vector<uint64_t>& unis) {
@@ -190,7 +195,8 @@ TEST(BitserialUni, FloatOpsEqualTheBroadcastEveryTarget) {
   std::mt19937_64 rng(5);
   std::vector<uint64_t> values(4096);
   for (auto& v : values) v = rng() & 0xffffffffu;
-  check(FloatFormat::Binary32(), values, {0x3f800000u, 0x80000000u, 0x7f800000u, 0x00000001u, 0xc2f6e979u});
+  check(FloatFormat::Binary32(), values,
+        {0x3f800000u, 0x80000000u, 0x7f800000u, 0x00000001u, 0xc2f6e979u});
 }
 
 TEST(BitserialUni, FloatUniReadsNoMemory) {

@@ -23,13 +23,16 @@ struct Case {
 };
 
 std::vector<Case> Cases() {
-  return {{"wavetracer", 0, {{64, 128}}, 1},      {"wavetracer", 0, {{384, 384}}, 18},
-          {"wavetracer", 1, {{32, 64, 16}}, 4},   {"mpp", 0, {{256, 128}}, 2},
+  return {{"wavetracer", 0, {{64, 128}}, 1},
+          {"wavetracer", 0, {{384, 384}}, 18},
+          {"wavetracer", 1, {{32, 64, 16}}, 4},
+          {"mpp", 0, {{256, 128}}, 2},
           {"wavetracer", 0, {{8192 * 3}}, 3}};
 }
 
 // out(c) = in(c - d·e_axis), 0 outside, on the virtual grid in PE order (x fastest).
-std::vector<int64_t> PlainShift(const std::vector<int64_t>& in, const MeshShape& s, int axis, int d) {
+std::vector<int64_t> PlainShift(const std::vector<int64_t>& in, const MeshShape& s, int axis,
+                                int d) {
   std::vector<int64_t> out(in.size(), 0);
   int64_t stride = 1;
   for (int i = 0; i < axis; ++i) stride *= s.extent[i];
@@ -102,12 +105,12 @@ TEST(BitserialVirtualMesh, ChargeIsTheBlockMappingsClosedForm) {
 TEST(BitserialVirtualMesh, RefusesShapesTheMappingCannotPlace) {
   Machine m(Profile("wavetracer"), 100 * 100);
   Multi x(m, Format::Unsigned(3, 0), "x");
-  EXPECT_THROW(MeshShift(x, MeshShape{{100, 100}}, 0, 1), UserError);   // not whole blocks
-  EXPECT_THROW(MeshShift(x, MeshShape{{100, 99}}, 0, 1), UserError);    // not the PE count
+  EXPECT_THROW(MeshShift(x, MeshShape{{100, 100}}, 0, 1), UserError);  // not whole blocks
+  EXPECT_THROW(MeshShift(x, MeshShape{{100, 99}}, 0, 1), UserError);   // not the PE count
   Machine m2(Profile("wavetracer"), 384 * 384);
   Multi y(m2, Format::Unsigned(3, 0), "y");
-  EXPECT_THROW(MeshShift(y, MeshShape{{384, 384}}, 2, 1), UserError);   // no such axis
-  EXPECT_THROW(MeshShift(y, MeshShape{{48, 48, 64}}, 0, 1), UserError); // rank 3 on a 2-D mesh
+  EXPECT_THROW(MeshShift(y, MeshShape{{384, 384}}, 2, 1), UserError);    // no such axis
+  EXPECT_THROW(MeshShift(y, MeshShape{{48, 48, 64}}, 0, 1), UserError);  // rank 3 on a 2-D mesh
   Machine block(Profile("wavetracer"), 384 * 384, 0, LayerBlock{0, 3});
   Multi z(block, Format::Unsigned(3, 0), "z");
   EXPECT_THROW(MeshShift(z, MeshShape{{384, 384}}, 0, 1), UserError);

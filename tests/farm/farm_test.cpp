@@ -9,8 +9,8 @@
 #include <nlohmann/json.hpp>
 
 #include "fixed/check.h"
-#include "hosts/farm/frame.h"
 #include "hosts/farm/checkpoint.h"
+#include "hosts/farm/frame.h"
 #include "hosts/farm/protocol.h"
 #include "tests/farm/mpi_launch.h"
 

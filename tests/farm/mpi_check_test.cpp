@@ -168,7 +168,8 @@ TEST(MpiCheck, NotEnoughRanksAndFrameSizeZeroAreClearErrors) {
   EXPECT_NE(one.output.find("needs at least 2 MPI ranks"), std::string::npos) << one.output;
   auto zero = RunZephyrProcess("mpi-check --frame 0 --out " + (dir / "x.pfm"));
   EXPECT_NE(zero.status, 0);
-  EXPECT_NE(zero.output.find("--frame: expected an integer 1..16384, got '0'"), std::string::npos) << zero.output;
+  EXPECT_NE(zero.output.find("--frame: expected an integer 1..16384, got '0'"), std::string::npos)
+      << zero.output;
 }
 
 TEST(MpiCheck, AMalformedResultIsRejectedNotTrusted) {

@@ -45,7 +45,8 @@ inline Launch RunCommand(const std::string& command) {
 inline Launch RunWithTimeout(const std::string& command, int seconds) {
   Launch r = RunCommand("timeout -k 5 " + std::to_string(seconds) + " " + command);
   if (r.status == 124 || r.status == 137)
-    r.output += "\n[test] killed: not finished within " + std::to_string(seconds) + " s: " + command;
+    r.output +=
+        "\n[test] killed: not finished within " + std::to_string(seconds) + " s: " + command;
   return r;
 }
 
@@ -83,17 +84,15 @@ class TempDir {
 // tmpfs counts whole 4 KiB pages of file data; empty files and directories cost none.
 class TinyDisk {
  public:
-  explicit TinyDisk(std::size_t bytes) {
-    mounted_ = ::geteuid() == 0 && Resize(bytes, "");
-  }
+  explicit TinyDisk(std::size_t bytes) { mounted_ = ::geteuid() == 0 && Resize(bytes, ""); }
   ~TinyDisk() {
     if (mounted_) RunCommand("umount " + dir_ / "");
   }
   bool Mounted() const { return mounted_; }
   // Grows or shrinks the disk in place (files stay).
   bool Resize(std::size_t bytes, const std::string& more = "remount,") {
-    return RunCommand("mount -t tmpfs -o " + more + "size=" + std::to_string(bytes) +
-                      " tmpfs " + dir_ / "")
+    return RunCommand("mount -t tmpfs -o " + more + "size=" + std::to_string(bytes) + " tmpfs " +
+                      dir_ / "")
                .status == 0;
   }
   std::string operator/(const std::string& file) const { return dir_ / file; }

@@ -1,5 +1,7 @@
 // fixed/ against its exact reference: exhaustive for every format of width <= 8, random
 // for widths 16..128, both overflow policies and both roundings.
+#include "fixed/format.h"
+
 #include <gtest/gtest-spi.h>
 #include <gtest/gtest.h>
 
@@ -9,7 +11,6 @@
 #include <thread>
 
 #include "fixed/check.h"
-#include "fixed/format.h"
 #include "fixed/reference.h"
 
 namespace zephyr::fixed {
@@ -54,15 +55,24 @@ std::string Describe(const Status& s) {
 
 using Binary = Fixed (*)(const Fixed&, const Fixed&, Format, Policy, Status*);
 using Unary = Fixed (*)(const Fixed&, Format, Policy, Status*);
-struct BinaryOp { const char* name; Binary impl; Binary reference; };
-struct UnaryOp { const char* name; Unary impl; Unary reference; };
+struct BinaryOp {
+  const char* name;
+  Binary impl;
+  Binary reference;
+};
+struct UnaryOp {
+  const char* name;
+  Unary impl;
+  Unary reference;
+};
 
-const BinaryOp kBinaryOps[] = {
-    {"Add", Add, ref::Add}, {"Sub", Sub, ref::Sub}, {"Mul", Mul, ref::Mul},
-    {"Div", Div, ref::Div}, {"Min", Min, ref::Min}, {"Max", Max, ref::Max}};
-const UnaryOp kUnaryOps[] = {
-    {"Neg", Neg, ref::Neg}, {"Abs", Abs, ref::Abs}, {"Sqrt", Sqrt, ref::Sqrt},
-    {"Convert", Convert, ref::Convert}};
+const BinaryOp kBinaryOps[] = {{"Add", Add, ref::Add}, {"Sub", Sub, ref::Sub},
+                               {"Mul", Mul, ref::Mul}, {"Div", Div, ref::Div},
+                               {"Min", Min, ref::Min}, {"Max", Max, ref::Max}};
+const UnaryOp kUnaryOps[] = {{"Neg", Neg, ref::Neg},
+                             {"Abs", Abs, ref::Abs},
+                             {"Sqrt", Sqrt, ref::Sqrt},
+                             {"Convert", Convert, ref::Convert}};
 
 std::string Operands(const Fixed& a, const Fixed* b, Format out, Policy p) {
   std::string s = "(" + ToString(a);
@@ -115,8 +125,7 @@ void CheckUnary(const UnaryOp& op, const Fixed& a, Format out, Policy p, Failure
   Status s1, s2;
   Fixed got = op.impl(a, out, p, &s1);
   Fixed want = op.reference(a, out, p, &s2);
-  failures.Add(SameResult(std::string(op.name) + Operands(a, nullptr, out, p), got, s1, want,
-                          s2));
+  failures.Add(SameResult(std::string(op.name) + Operands(a, nullptr, out, p), got, s1, want, s2));
 }
 
 // ---- The test helpers themselves must be able to fail -----------------------------------
@@ -174,7 +183,8 @@ TEST(FixedExhaustive, MixedFormatPairsWidthUpTo5) {
         for (BigInt y = fb.MinRaw(); y <= fb.MaxRaw(); ++y, ++k) {
           Fixed a{fa, x}, b{fb, y};
           Format out = formats[(k * 11) % formats.size()];
-          for (const BinaryOp& op : kBinaryOps) CheckBinary(op, a, b, out, kPolicies[k % 4], failures);
+          for (const BinaryOp& op : kBinaryOps)
+            CheckBinary(op, a, b, out, kPolicies[k % 4], failures);
           if (Compare(a, b) != ref::Compare(a, b))
             failures.Add(::testing::AssertionFailure() << "Compare" << Operands(a, &b, out, {}));
         }
@@ -196,16 +206,16 @@ TEST(FixedExhaustive, UnaryOpsShiftsAndConversionsWidthUpTo8) {
           for (int k : {-3, -1, 1, 2}) {
             Status s1, s2;
             failures.Add(SameResult("Shift " + std::to_string(k) + Operands(a, nullptr, out, p),
-                                    Shift(a, k, out, p, &s1), s1,
-                                    ref::Shift(a, k, out, p, &s2), s2));
+                                    Shift(a, k, out, p, &s1), s1, ref::Shift(a, k, out, p, &s2),
+                                    s2));
           }
         }
       if (ToDouble(a) != ref::ToDouble(a))
         failures.Add(::testing::AssertionFailure() << "ToDouble " << ToString(a));
       // Round trip through double is exact for these widths.
       Status s;
-      failures.Add(SameResult("FromDouble(ToDouble)", FromDouble(ToDouble(a), f, {}, &s), s, a,
-                              Status{}));
+      failures.Add(
+          SameResult("FromDouble(ToDouble)", FromDouble(ToDouble(a), f, {}, &s), s, a, Status{}));
     }
   });
   failures.Report();
@@ -228,12 +238,18 @@ class Sampler {
     for (int i = 0; i < w; i += 64) bits = (bits << 64) | BigInt(rng_());
     bits &= (BigInt(1) << w) - 1;
     switch (rng_() % 8) {
-      case 0: bits >>= static_cast<int>(rng_() % w); break;                    // small
-      case 1: return Fixed{f, f.MaxRaw() - BigInt(rng_() % 4)};                // near max
-      case 2: return Fixed{f, f.MinRaw() + BigInt(rng_() % 4)};                // near min
-      case 3: return Fixed{f, BigInt(static_cast<int>(rng_() % 7) - 3) * (f.isSigned ? 1 : 0) +
-                                  (f.isSigned ? 0 : BigInt(rng_() % 4))};     // near zero
-      default: break;
+      case 0:
+        bits >>= static_cast<int>(rng_() % w);
+        break;  // small
+      case 1:
+        return Fixed{f, f.MaxRaw() - BigInt(rng_() % 4)};  // near max
+      case 2:
+        return Fixed{f, f.MinRaw() + BigInt(rng_() % 4)};  // near min
+      case 3:
+        return Fixed{f, BigInt(static_cast<int>(rng_() % 7) - 3) * (f.isSigned ? 1 : 0) +
+                            (f.isSigned ? 0 : BigInt(rng_() % 4))};  // near zero
+      default:
+        break;
     }
     return Fixed::FromBits(f, bits);
   }
@@ -255,7 +271,8 @@ TEST_P(FixedRandom, EveryOperationAgainstReference) {
     for (int i = static_cast<int>(part); i < kPairs; i += 4) {
       Format fa = sampler.RandomFormat(width), fb = sampler.RandomFormat(width);
       // Results: the same width, or a narrower/wider one to provoke overflow and rounding.
-      int outWidth = std::max(1, std::min(kMaxWidth, width + static_cast<int>(sampler.Next() % 17) - 8));
+      int outWidth =
+          std::max(1, std::min(kMaxWidth, width + static_cast<int>(sampler.Next() % 17) - 8));
       Format out = sampler.RandomFormat(outWidth);
       Fixed a = sampler.RandomValue(fa), b = sampler.RandomValue(fb);
       Policy p = sampler.RandomPolicy();
@@ -263,8 +280,8 @@ TEST_P(FixedRandom, EveryOperationAgainstReference) {
       for (const UnaryOp& op : kUnaryOps) CheckUnary(op, a, out, p, failures);
       int k = static_cast<int>(sampler.Next() % 21) - 10;
       Status s1, s2;
-      failures.Add(SameResult("Shift" + Operands(a, nullptr, out, p), Shift(a, k, out, p, &s1),
-                              s1, ref::Shift(a, k, out, p, &s2), s2));
+      failures.Add(SameResult("Shift" + Operands(a, nullptr, out, p), Shift(a, k, out, p, &s1), s1,
+                              ref::Shift(a, k, out, p, &s2), s2));
       if (Compare(a, b) != ref::Compare(a, b))
         failures.Add(::testing::AssertionFailure() << "Compare" << Operands(a, &b, out, p));
       if (ToDouble(a) != ref::ToDouble(a))

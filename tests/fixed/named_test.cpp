@@ -10,9 +10,9 @@ namespace {
 
 enum class Colour { kRed, kGreen, kBlue };
 constexpr NamedValues<Colour, 4> kColours{{{{Colour::kRed, "red"},
-                                           {Colour::kGreen, "green"},
-                                           {Colour::kBlue, "blue"},
-                                           {Colour::kRed, "rouge"}}}};
+                                            {Colour::kGreen, "green"},
+                                            {Colour::kBlue, "blue"},
+                                            {Colour::kRed, "rouge"}}}};
 
 TEST(NamedValues, EveryNameGivesItsValueAndEveryValueItsFirstName) {
   for (const Named<Colour>& e : kColours.entries) {
@@ -26,7 +26,7 @@ TEST(NamedValues, EveryNameGivesItsValueAndEveryValueItsFirstName) {
 
 TEST(NamedValues, AnUnknownNameIsRefusedWithTheListAndWhatItWasFor) {
   EXPECT_EQ(kColours.List(), "red, green or blue");  // one name per value, no alias
-  EXPECT_FALSE(kColours.Find("Red").has_value());     // exact: no case folding
+  EXPECT_FALSE(kColours.Find("Red").has_value());    // exact: no case folding
   EXPECT_FALSE(kColours.Find("").has_value());
   try {
     kColours.Parse("mauve", "the set-up's colour");

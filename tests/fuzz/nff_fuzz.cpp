@@ -36,7 +36,8 @@ const std::filesystem::path& Scratch() {
     std::ofstream(d / "scene.nff") << "v\n";
     std::filesystem::create_directory(d / "dir");
     ::mkfifo((d / "fifo").c_str(), 0600);
-    ::mknod((d / "dev").c_str(), S_IFCHR | 0600, makedev(1, 7));  // /dev/full's numbers; may be refused
+    ::mknod((d / "dev").c_str(), S_IFCHR | 0600,
+            makedev(1, 7));  // /dev/full's numbers; may be refused
     std::filesystem::create_symlink(d / "loop-b", d / "loop-a");
     std::filesystem::create_symlink(d / "loop-a", d / "loop-b");
     std::filesystem::create_symlink(d / "missing", d / "dangling");
@@ -70,8 +71,10 @@ void CheckThePreflight(std::string_view text) {
   } catch (const zephyr::UserError&) {
   }
   // The probe leaves nothing behind, and every special file is still what it was.
-  if (std::distance(std::filesystem::directory_iterator(Scratch()), {}) != ptrdiff_t(before)) __builtin_trap();
-  if (!std::filesystem::is_directory(Scratch() / "dir") || !std::filesystem::is_fifo(Scratch() / "fifo"))
+  if (std::distance(std::filesystem::directory_iterator(Scratch()), {}) != ptrdiff_t(before))
+    __builtin_trap();
+  if (!std::filesystem::is_directory(Scratch() / "dir") ||
+      !std::filesystem::is_fifo(Scratch() / "fifo"))
     __builtin_trap();
 }
 
@@ -100,7 +103,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
           for (int x : {0, c.width / 2, c.width - 1}) tracer->TracePixel(x, y, stats);
         }
       } catch (const zephyr::UserError&) {
-        if (precision == zephyr::Precision::kDouble) __builtin_trap();  // the reader held it to double
+        if (precision == zephyr::Precision::kDouble)
+          __builtin_trap();  // the reader held it to double
       }
     }
     try {

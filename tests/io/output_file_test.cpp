@@ -4,6 +4,8 @@
 // Durability as an ordering: Commit's system calls traced as they are made (hosts/io/test_seam.h)
 // — write (the flush), mode, fsync, close, rename, the directory's fsync — with what each
 // finds on disk; each failed in turn; the process killed before each.
+#include "hosts/io/output_file.h"
+
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <sys/stat.h>
@@ -16,7 +18,6 @@
 #include <fstream>
 
 #include "fixed/check.h"
-#include "hosts/io/output_file.h"
 #include "hosts/io/test_seam.h"
 #include "hosts/trace/image.h"
 #include "tests/farm/mpi_launch.h"
@@ -58,7 +59,8 @@ TEST(OutputFile, AFullDiskKeepsTheOldFileAndLeavesNoTemporary) {
   testing::TinyDisk disk(16 * 1024);
   if (!disk.Mounted()) GTEST_SKIP() << "needs root to mount a tmpfs";
   Image image(64, 64);
-  for (std::size_t i = 0; i < image.pixels.size(); ++i) image.pixels[i] = {(i % 7) / 7.0, 0.5, 0.25};
+  for (std::size_t i = 0; i < image.pixels.size(); ++i)
+    image.pixels[i] = {(i % 7) / 7.0, 0.5, 0.25};
   const std::string png = disk / "o.png";
   WritePng(png, image);
   const std::string good = ReadFile(png);

@@ -25,7 +25,8 @@ using testing::TempDir;
 std::string Scene(const TempDir& dir) { return testing::SmallSphereScene(dir); }
 
 std::string SeqImage(const TempDir& dir, const std::string& scene) {
-  auto r = RunZephyrProcess("render --no-progress --method seq " + scene + " --out " + (dir / "seq.png"));
+  auto r = RunZephyrProcess("render --no-progress --method seq " + scene + " --out " +
+                            (dir / "seq.png"));
   EXPECT_EQ(r.status, 0) << r.output;
   return ReadFile(dir / "seq.png");
 }
@@ -45,12 +46,13 @@ TEST(RenderOutputs, OverwritingTheSceneOrAnotherOutputIsRefused) {
   const std::string sceneText = ReadFile(scene);
   const std::string base = "render --no-progress --method simd " + scene;
   ExpectRefusedUpFront(RunZephyrProcess(base + " --out " + scene), "is the scene file");
-  ExpectRefusedUpFront(RunZephyrProcess(base + " --out " + (dir / "x") + " --report " + (dir / "x")),
-                       "--out and --report name the same file");
-  std::filesystem::create_directory(dir / "sub");
   ExpectRefusedUpFront(
-      RunZephyrProcess(base + " --out " + (dir / "x.png") + " --dump-primary " + (dir / "sub/../x.png")),
-      "--out and --dump-primary name the same file");
+      RunZephyrProcess(base + " --out " + (dir / "x") + " --report " + (dir / "x")),
+      "--out and --report name the same file");
+  std::filesystem::create_directory(dir / "sub");
+  ExpectRefusedUpFront(RunZephyrProcess(base + " --out " + (dir / "x.png") + " --dump-primary " +
+                                        (dir / "sub/../x.png")),
+                       "--out and --dump-primary name the same file");
   EXPECT_EQ(ReadFile(scene), sceneText) << "the scene was overwritten";
   for (const char* flag : {"--out", "--report", "--dump-primary"})
     ExpectRefusedUpFront(RunZephyrProcess(base + " " + flag + " ''"), "empty path");
@@ -61,11 +63,13 @@ TEST(RenderOutputs, OverwritingTheSceneOrAnotherOutputIsRefused) {
 TEST(RenderOutputs, PathsThatCannotBeWrittenAreRefusedBeforeTheRender) {
   TempDir dir;
   const std::string scene = Scene(dir);
-  const std::string base = "render --no-progress --method simd " + scene + " --out " + (dir / "o.png");
+  const std::string base =
+      "render --no-progress --method simd " + scene + " --out " + (dir / "o.png");
   std::filesystem::create_directory(dir / "d");
   ExpectRefusedUpFront(RunZephyrProcess("render --method seq " + scene + " --out " + (dir / "d")),
                        "is a directory");
-  ExpectRefusedUpFront(RunZephyrProcess(base + " --report " + (dir / "missing/r.json")), "does not exist");
+  ExpectRefusedUpFront(RunZephyrProcess(base + " --report " + (dir / "missing/r.json")),
+                       "does not exist");
   ExpectRefusedUpFront(RunZephyrProcess(base + " --dump-primary /dev/full"), "not a regular file");
   EXPECT_FALSE(std::filesystem::exists(dir / "o.png")) << "an image was left behind";
 }
@@ -73,13 +77,19 @@ TEST(RenderOutputs, PathsThatCannotBeWrittenAreRefusedBeforeTheRender) {
 TEST(RenderWidths, WidthsBelowWhatThePassNeedsAreRefusedWithTheMinimum) {
   TempDir dir;
   const std::string scene = Scene(dir);
-  const std::string base = "render --no-progress --method simd " + scene + " --out " + (dir / "o.png");
+  const std::string base =
+      "render --no-progress --method simd " + scene + " --out " + (dir / "o.png");
   ExpectRefusedUpFront(RunZephyrProcess(base + " --frac-bits 0"),
-                       "--frac-bits: expected an integer 4..56, got '0' (the SIMD pass's error bounds are tested from 4 bits");
-  ExpectRefusedUpFront(RunZephyrProcess(base + " --frac-bits 3"), "--frac-bits: expected an integer 4..56, got '3'");
-  ExpectRefusedUpFront(RunZephyrProcess(base + " --dir-frac-bits 0"), "--dir-frac-bits: expected an integer 4..60, got '0'");
-  ExpectRefusedUpFront(RunZephyrProcess(base + " --int-bits 0"), "--int-bits: expected an integer 2..40, got '0'");
-  ExpectRefusedUpFront(RunZephyrProcess("accuracy " + scene + " --int-bits 1"), "--int-bits: expected an integer 2..40, got '1'");
+                       "--frac-bits: expected an integer 4..56, got '0' (the SIMD pass's error "
+                       "bounds are tested from 4 bits");
+  ExpectRefusedUpFront(RunZephyrProcess(base + " --frac-bits 3"),
+                       "--frac-bits: expected an integer 4..56, got '3'");
+  ExpectRefusedUpFront(RunZephyrProcess(base + " --dir-frac-bits 0"),
+                       "--dir-frac-bits: expected an integer 4..60, got '0'");
+  ExpectRefusedUpFront(RunZephyrProcess(base + " --int-bits 0"),
+                       "--int-bits: expected an integer 2..40, got '0'");
+  ExpectRefusedUpFront(RunZephyrProcess("accuracy " + scene + " --int-bits 1"),
+                       "--int-bits: expected an integer 2..40, got '1'");
   EXPECT_FALSE(std::filesystem::exists(dir / "o.png"));
   auto atMinimum = RunZephyrProcess(base + " --frac-bits 4 --int-bits 2");  // N and N-1
   EXPECT_EQ(atMinimum.status, 0) << atMinimum.output;
@@ -91,14 +101,19 @@ TEST(RenderOutputs, DistAndHeteroCheckEverythingBeforeTheFirstFrame) {
   TempDir dir;
   const std::string scene = Scene(dir);
   const std::string out = dir / "o.png";
-  const std::string hetero = "render --no-progress --method hetero --frame 16 " + scene + " --out " + out;
-  ExpectRefusedUpFront(RunMpi(2, hetero + " --report " + out + ".frames"), "is the checkpoint of --out");
-  ExpectRefusedUpFront(RunMpi(2, hetero + " --frac-bits 0"), "--frac-bits: expected an integer 4..56, got '0'");
+  const std::string hetero =
+      "render --no-progress --method hetero --frame 16 " + scene + " --out " + out;
+  ExpectRefusedUpFront(RunMpi(2, hetero + " --report " + out + ".frames"),
+                       "is the checkpoint of --out");
+  ExpectRefusedUpFront(RunMpi(2, hetero + " --frac-bits 0"),
+                       "--frac-bits: expected an integer 4..56, got '0'");
   ExpectRefusedUpFront(RunMpi(2, hetero + " --resume"), "nothing to resume");
-  ExpectRefusedUpFront(RunMpi(2, "render --method dist " + scene + " --out " + out + " --dump-primary " + (dir / "p.csv")),
+  ExpectRefusedUpFront(RunMpi(2, "render --method dist " + scene + " --out " + out +
+                                     " --dump-primary " + (dir / "p.csv")),
                        "--method dist has no primary hits");
   EXPECT_FALSE(std::filesystem::exists(out));
-  auto simd = RunZephyrProcess("render --no-progress --method simd " + scene + " --dump-primary " + (dir / "simd.csv"));
+  auto simd = RunZephyrProcess("render --no-progress --method simd " + scene + " --dump-primary " +
+                               (dir / "simd.csv"));
   ASSERT_EQ(simd.status, 0) << simd.output;
   auto r = RunMpi(3, hetero + " --dump-primary " + (dir / "hetero.csv"));
   ASSERT_EQ(r.status, 0) << r.output;

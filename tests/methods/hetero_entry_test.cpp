@@ -1,12 +1,13 @@
-// hetero's compact matrix entry (hosts/methods/hetero_entry.h): what the parent puts is what the child
-// gets, the recomputed direction is the SIMD pass's own, and malformed entries are rejected.
+// hetero's compact matrix entry (hosts/methods/hetero_entry.h): what the parent puts is what the
+// child gets, the recomputed direction is the SIMD pass's own, and malformed entries are rejected.
+#include "hosts/methods/hetero_entry.h"
+
 #include <gtest/gtest.h>
 
 #include <cstring>
 #include <limits>
 
 #include "fixed/check.h"
-#include "hosts/methods/hetero_entry.h"
 #include "hosts/simd/pass.h"
 
 namespace zephyr {

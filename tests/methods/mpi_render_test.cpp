@@ -142,7 +142,8 @@ void CheckHeteroSkips(const TempDir& dir, const std::string& scene, bool object0
   for (int id = 0; id < columns * rows; ++id)
     if (!expected.count(id)) sentPixels += 8 * (id / columns == rows - 1 ? 6 : 8);
   const std::uint64_t sent = columns * rows - expected.size();
-  EXPECT_EQ(j["traffic"]["parentToChildren"]["work"]["payloadBytes"], 16 * sent + hetero::kEntryBytes * sentPixels);
+  EXPECT_EQ(j["traffic"]["parentToChildren"]["work"]["payloadBytes"],
+            16 * sent + hetero::kEntryBytes * sentPixels);
   EXPECT_EQ(j["traffic"]["childrenToParent"]["result"]["payloadBytes"],
             16 * sent + 24 * sentPixels);
   std::uint64_t childResultBytes = 0, childRays = 0;
@@ -178,7 +179,8 @@ TEST(MpiRender, DistWithoutMpirunOrWithFrameZeroIsAClearError) {
   auto zero =
       RunZephyrProcess("render --method hetero " + scene + " --frame 0 --out " + (dir / "x.png"));
   EXPECT_NE(zero.status, 0);
-  EXPECT_NE(zero.output.find("--frame: expected an integer 1..16384, got '0'"), std::string::npos) << zero.output;
+  EXPECT_NE(zero.output.find("--frame: expected an integer 1..16384, got '0'"), std::string::npos)
+      << zero.output;
 }
 
 }  // namespace

@@ -6,13 +6,12 @@
 #include <sys/stat.h>
 #include <sys/sysmacros.h>
 
+#include <CLI/CLI.hpp>
 #include <filesystem>
 #include <fstream>
 #include <string>
 #include <tuple>
 #include <vector>
-
-#include <CLI/CLI.hpp>
 
 #include "fixed/check.h"
 #include "hosts/cmd/flags.h"
@@ -72,9 +71,11 @@ TEST(OutputPreflight, EveryCommandRefusesADeviceNodeAndLeavesIt) {
   EXPECT_FALSE(std::filesystem::exists(dir / "m.pfm"));
   EXPECT_FALSE(std::filesystem::exists(dir / "p.xml"));
   // The two outputs of one command may not be the same file, nor the input.
-  const auto same = RunZephyrProcess("testbed platform --out " + (dir / "q") + " --hostfile " + (dir / "q"));
+  const auto same =
+      RunZephyrProcess("testbed platform --out " + (dir / "q") + " --hostfile " + (dir / "q"));
   EXPECT_NE(same.status, 0);
-  EXPECT_NE(same.output.find("--out and --hostfile name the same file"), std::string::npos) << same.output;
+  EXPECT_NE(same.output.find("--out and --hostfile name the same file"), std::string::npos)
+      << same.output;
   const auto over = RunZephyrProcess("export-pov " + scene + " --out " + scene);
   EXPECT_NE(over.status, 0);
   EXPECT_NE(over.output.find("is the scene file this run reads"), std::string::npos) << over.output;
@@ -86,17 +87,21 @@ TEST(OutputPreflight, EveryCommandRefusesADeviceNodeAndLeavesIt) {
 TEST(MemoryPreflight, AnImageLargerThanMemoryIsRefusedWithTheLargestThatFits) {
   TempDir dir;
   const std::string scene = dir / "big.nff";
-  ASSERT_EQ(RunZephyrProcess("gen spheres --count 4 --seed 1 --size 16384x16384 --out " + scene).status, 0);
+  ASSERT_EQ(
+      RunZephyrProcess("gen spheres --count 4 --seed 1 --size 16384x16384 --out " + scene).status,
+      0);
   const std::string limited = "ulimit -v 2097152 && " + testing::ZephyrPath() + " ";
   std::string seqMessage;
-  for (const std::string& args : {"render --no-progress --method seq " + scene + " --out " + (dir / "o.png"),
-                                  "render --no-progress --method simd " + scene + " --out " + (dir / "o.png"),
-                                  "accuracy " + scene}) {
+  for (const std::string& args :
+       {"render --no-progress --method seq " + scene + " --out " + (dir / "o.png"),
+        "render --no-progress --method simd " + scene + " --out " + (dir / "o.png"),
+        "accuracy " + scene}) {
     const auto r = RunCommand("bash -c '" + limited + args + "'");
     EXPECT_EQ(r.status, 1) << args << "\n" << r.output;
     EXPECT_NE(r.output.find("needs about"), std::string::npos) << r.output;
     EXPECT_NE(r.output.find("RLIMIT_AS"), std::string::npos) << r.output;
-    EXPECT_NE(r.output.find("the largest square image that fits is about"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("the largest square image that fits is about"), std::string::npos)
+        << r.output;
     EXPECT_EQ(r.output.find("bad_alloc"), std::string::npos) << r.output;
     EXPECT_EQ(r.output.find("cycle report"), std::string::npos) << r.output;
     if (seqMessage.empty()) seqMessage = r.output;
@@ -118,9 +123,11 @@ TEST(MemoryPreflight, TheLimitIsInclusiveAndTheLargestSquareLeavesTheFixedBytes)
   const uint64_t exact = need.Bytes();
   EXPECT_EQ(exact, (uint64_t(64) << 20) + 32 * 200 * 200);
   EXPECT_NO_THROW(CheckMemoryFits("t", need, {exact, "test"}));
-  for (const auto& [limit, side] : std::vector<std::pair<uint64_t, int>>{
-           {exact - 1, 199}, {(uint64_t(64) << 20) + 32 * 100 * 100, 100},
-           {(uint64_t(64) << 20) + 32 * 100 * 100 - 1, 99}, {(uint64_t(64) << 20) + 31, 0}}) {
+  for (const auto& [limit, side] :
+       std::vector<std::pair<uint64_t, int>>{{exact - 1, 199},
+                                             {(uint64_t(64) << 20) + 32 * 100 * 100, 100},
+                                             {(uint64_t(64) << 20) + 32 * 100 * 100 - 1, 99},
+                                             {(uint64_t(64) << 20) + 31, 0}}) {
     try {
       CheckMemoryFits("t", need, {limit, "test"});
       ADD_FAILURE() << limit << " accepted";
@@ -129,7 +136,9 @@ TEST(MemoryPreflight, TheLimitIsInclusiveAndTheLargestSquareLeavesTheFixedBytes)
       EXPECT_NE(m.find("t needs about"), std::string::npos) << m;
       EXPECT_NE(m.find("(test)"), std::string::npos) << m;
       if (side > 0)
-        EXPECT_NE(m.find("fits is about " + std::to_string(side) + "x" + std::to_string(side)), std::string::npos) << m;
+        EXPECT_NE(m.find("fits is about " + std::to_string(side) + "x" + std::to_string(side)),
+                  std::string::npos)
+            << m;
       else
         EXPECT_NE(m.find("no image fits"), std::string::npos) << m;
     }
@@ -162,15 +171,17 @@ TEST(FlagPreflight, EveryBadFlagIsRefusedBeforeTheSceneIsRead) {
   };
   for (const char* method : {"seq", "simd", "dist", "hetero"}) {
     for (const auto& [flag, message] : flags) {
-      const std::string args = std::string("render --no-progress --method ") + method + " " + missing +
-                               " --out " + (dir / "o.png") + " " + flag;
+      const std::string args = std::string("render --no-progress --method ") + method + " " +
+                               missing + " --out " + (dir / "o.png") + " " + flag;
       const auto r = RunZephyrProcess(args);
       EXPECT_NE(r.status, 0) << args;
       // Outside mpirun, dist and hetero say so before the testbed is looked at.
       const bool farmed = std::string(method) == "dist" || std::string(method) == "hetero";
-      const std::string expected = farmed && flag.rfind("--testbed", 0) == 0 ? "needs at least 2 MPI ranks" : message;
+      const std::string expected =
+          farmed && flag.rfind("--testbed", 0) == 0 ? "needs at least 2 MPI ranks" : message;
       EXPECT_NE(r.output.find(expected), std::string::npos) << args << "\n" << r.output;
-      EXPECT_EQ(r.output.find("no-such-scene"), std::string::npos) << "the scene was read first: " << args;
+      EXPECT_EQ(r.output.find("no-such-scene"), std::string::npos)
+          << "the scene was read first: " << args;
       EXPECT_EQ(r.output.find("Could not convert"), std::string::npos) << r.output;
       EXPECT_EQ(r.output.find("not in range"), std::string::npos) << r.output;
       EXPECT_EQ(Count(r.output, "zephyr: error"), 1u) << "said more than once: " << r.output;
@@ -178,16 +189,19 @@ TEST(FlagPreflight, EveryBadFlagIsRefusedBeforeTheSceneIsRead) {
   }
   // The testbed's checks that need only the command line, before any work too: dist under
   // mpirun but outside SimGrid, and simd on another machine than the testbed's array.
-  const auto farmed = RunMpi(2, "render --no-progress --method dist " + missing + " --testbed ufmg1992");
+  const auto farmed =
+      RunMpi(2, "render --no-progress --method dist " + missing + " --testbed ufmg1992");
   EXPECT_NE(farmed.status, 0);
-  EXPECT_NE(farmed.output.find("a testbed's time of method 'dist' runs on a simulated network"), std::string::npos)
+  EXPECT_NE(farmed.output.find("a testbed's time of method 'dist' runs on a simulated network"),
+            std::string::npos)
       << farmed.output;
   EXPECT_EQ(farmed.output.find("no-such-scene"), std::string::npos) << farmed.output;
   const std::string scene = testing::SmallSphereScene(dir);
   const auto mismatch = RunZephyrProcess("render --no-progress --method simd " + scene +
                                          " --testbed ufmg1992 --machine mpp");
   EXPECT_NE(mismatch.status, 0);
-  EXPECT_NE(mismatch.output.find("testbed 'ufmg1992': its array is 'wavetracer', but the machine profile is 'mpp'"),
+  EXPECT_NE(mismatch.output.find(
+                "testbed 'ufmg1992': its array is 'wavetracer', but the machine profile is 'mpp'"),
             std::string::npos)
       << mismatch.output;
   EXPECT_EQ(mismatch.output.find("cycle report"), std::string::npos) << mismatch.output;
@@ -199,11 +213,13 @@ TEST(FlagPreflight, RenderRefusesAFlagItsMethodIgnores) {
   TempDir dir;
   const std::string missing = dir / "no-such-scene.nff";
   const std::vector<std::tuple<std::string, std::string, std::string>> cases = {
-      {"seq", "--frac-bits 12", "--frac-bits: --method seq runs no SIMD pass (the flag applies to simd, hetero)"},
+      {"seq", "--frac-bits 12",
+       "--frac-bits: --method seq runs no SIMD pass (the flag applies to simd, hetero)"},
       {"seq", "--uncertain keep", "--uncertain: --method seq runs no SIMD pass"},
       {"seq", "--machine mpp", "--machine: --method seq runs no SIMD pass"},
       {"dist", "--threads 2", "--threads: --method dist runs no SIMD pass"},
-      {"seq", "--frame 8", "--frame: --method seq has no frame farm (the flag applies to dist, hetero)"},
+      {"seq", "--frame 8",
+       "--frame: --method seq has no frame farm (the flag applies to dist, hetero)"},
       {"simd", "--frame 8", "--frame: --method simd has no frame farm"},
       {"simd", "--resume", "--resume: --method simd has no frame farm"},
       {"seq", "--in-flight 4", "--in-flight: --method seq has no frame farm"},
@@ -214,11 +230,13 @@ TEST(FlagPreflight, RenderRefusesAFlagItsMethodIgnores) {
     const auto r = RunZephyrProcess(args);
     EXPECT_NE(r.status, 0) << args;
     EXPECT_NE(r.output.find(message), std::string::npos) << args << "\n" << r.output;
-    EXPECT_EQ(r.output.find("no-such-scene"), std::string::npos) << "the scene was read first: " << args;
+    EXPECT_EQ(r.output.find("no-such-scene"), std::string::npos)
+        << "the scene was read first: " << args;
   }
   // The methods that use the flags take them (here they get as far as the missing scene).
-  for (const std::string& args : {std::string("--method simd --frac-bits 12 --uncertain keep --machine mpp"),
-                                  std::string("--method seq --depth 3 --precision float")}) {
+  for (const std::string& args :
+       {std::string("--method simd --frac-bits 12 --uncertain keep --machine mpp"),
+        std::string("--method seq --depth 3 --precision float")}) {
     const auto r = RunZephyrProcess("render --no-progress " + missing + " " + args);
     EXPECT_NE(r.output.find("no-such-scene"), std::string::npos) << args << "\n" << r.output;
   }
@@ -235,12 +253,12 @@ TEST(FlagPreflight, SetOverridesAProfileEntryWhereverMachineIs) {
   ASSERT_EQ(halved.status, 0) << halved.output;
   EXPECT_NE(plain.output.find("of 2048 internal"), std::string::npos) << plain.output;
   EXPECT_NE(halved.output.find("of 1024 internal"), std::string::npos) << halved.output;
-  const auto fast = RunZephyrProcess("render --no-progress --method simd " + scene + " --set clockHz=20e6 --report " +
-                                     (dir / "fast.json"));
+  const auto fast = RunZephyrProcess("render --no-progress --method simd " + scene +
+                                     " --set clockHz=20e6 --report " + (dir / "fast.json"));
   ASSERT_EQ(fast.status, 0) << fast.output;
   EXPECT_NE(fast.output.find("at 20 MHz"), std::string::npos) << fast.output;
-  for (const std::string& command : {std::string("plan "), std::string("render --method simd "),
-                                     std::string("accuracy ")}) {
+  for (const std::string& command :
+       {std::string("plan "), std::string("render --method simd "), std::string("accuracy ")}) {
     const auto bad = RunZephyrProcess(command + scene + " --set bogusEntry=3");
     EXPECT_NE(bad.status, 0) << command;
     EXPECT_NE(bad.output.find("bogusEntry"), std::string::npos) << command << bad.output;
@@ -253,21 +271,25 @@ TEST(FlagPreflight, NumericFlagsOfEveryCommandSayWhatTheyExpect) {
   TempDir dir;
   const std::vector<std::pair<std::string, std::string>> cases = {
       {"gen spheres --count 0 --seed 1", "--count: expected an integer 1..1000000, got '0'"},
-      {"gen spheres --count 3 --seed -1", "--seed: expected an integer 0..18446744073709551615, got '-1'"},
+      {"gen spheres --count 3 --seed -1",
+       "--seed: expected an integer 0..18446744073709551615, got '-1'"},
       {"gen flake --depth 7", "--depth: expected an integer 0..6, got '7'"},
       {"cycles --bits abc", "--bits: expected an integer 1..128, got 'abc'"},
       {"cycles --bits 8 --frac 1e3", "--frac: expected an integer 0..128, got '1e3'"},
       {"testbed platform --children 0", "--children: expected an integer 1..4096, got '0'"},
-      {"testbed platform --ethernet-bps 1e999", "--ethernet-bps: expected a number >= 1000, got '1e999'"},
+      {"testbed platform --ethernet-bps 1e999",
+       "--ethernet-bps: expected a number >= 1000, got '1e999'"},
       {"stability distance --rays x", "--rays: expected an integer 1..1048576, got 'x'"},
-      {"mpi-check --width 0 --out " + (dir / "x.pfm"), "--width: expected an integer 1..16384, got '0'"},
+      {"mpi-check --width 0 --out " + (dir / "x.pfm"),
+       "--width: expected an integer 1..16384, got '0'"},
       {"export-pov x.nff --depth 0", "--depth: expected an integer 1..64, got '0'"},
       {"accuracy x.nff --sample -1", "--sample: expected an integer 0..268435456, got '-1'"},
   };
   for (const auto& [args, message] : cases) {
     const auto r = RunZephyrProcess(args);
     EXPECT_NE(r.status, 0) << args;
-    EXPECT_NE(r.output.find("zephyr: error: " + message), std::string::npos) << args << "\n" << r.output;
+    EXPECT_NE(r.output.find("zephyr: error: " + message), std::string::npos) << args << "\n"
+                                                                             << r.output;
     EXPECT_LT(r.output.size(), 400u) << r.output;
   }
 }
@@ -301,7 +323,8 @@ TEST(FlagPreflight, RangesIncludeBothEndsAndNothingPast) {
     EXPECT_TRUE(refused([&] { ParseNumberFlag("--x", bad, 1000, 2000); })) << bad;
   // The end itself through the command line: --child-timeout 0.001 is a valid timeout.
   TempDir dir;
-  const auto r = RunZephyrProcess("mpi-check --local --child-timeout 0.001 --in-flight 1024 --out " + (dir / "x.pfm"));
+  const auto r = RunZephyrProcess(
+      "mpi-check --local --child-timeout 0.001 --in-flight 1024 --out " + (dir / "x.pfm"));
   EXPECT_EQ(r.status, 0) << r.output;
 }
 
@@ -309,7 +332,8 @@ TEST(FlagPreflight, RangesIncludeBothEndsAndNothingPast) {
 TEST(FlagPreflight, UnderMpirunAFlagErrorIsPrintedOnce) {
   TempDir dir;
   const std::string scene = testing::SmallSphereScene(dir);
-  const auto r = RunMpi(3, "render --no-progress --method dist " + scene + " --frame -3 --out " + (dir / "o.png"));
+  const auto r = RunMpi(
+      3, "render --no-progress --method dist " + scene + " --frame -3 --out " + (dir / "o.png"));
   EXPECT_NE(r.status, 0) << r.output;
   EXPECT_EQ(Count(r.output, "--frame: expected an integer 1..16384, got '-3'"), 1u) << r.output;
 }

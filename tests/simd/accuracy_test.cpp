@@ -28,7 +28,7 @@ TEST(SeqAccuracy, DoubleFindsEveryFirstObjectAndFloatHasTheLargerTError) {
   EXPECT_EQ(f["precision"], "float");
   EXPECT_EQ(d["pixels"], 64 * 48);
   EXPECT_EQ(d["firstObjectDiffers"], 0);
-  EXPECT_EQ(d["psnrDb"], "inf");  // seq double against itself
+  EXPECT_EQ(d["psnrDb"], "inf");      // seq double against itself
   EXPECT_TRUE(f.contains("psnrDb"));  // may be inf too: PSNR compares the 8-bit images
   EXPECT_GT(f["tMaxError"].get<double>(), d["tMaxError"].get<double>());
   EXPECT_GT(f["tMeanError"].get<double>(), 10 * d["tMeanError"].get<double>());
@@ -42,7 +42,8 @@ TEST(SeqAccuracy, SimdFlagsWithSeqOrPrecisionWithSimdAreClearErrors) {
   ASSERT_EQ(RunZephyrProcess("gen spheres --count 3 --seed 1 --size 8x8 --out " + scene).status, 0);
   auto a = RunZephyrProcess("accuracy " + scene + " --method seq --frac-bits 12");
   EXPECT_NE(a.status, 0);
-  EXPECT_NE(a.output.find("--frac-bits applies to --method simd only"), std::string::npos) << a.output;
+  EXPECT_NE(a.output.find("--frac-bits applies to --method simd only"), std::string::npos)
+      << a.output;
   auto b = RunZephyrProcess("accuracy " + scene + " --precision float");
   EXPECT_NE(b.status, 0);
   EXPECT_NE(b.output.find("--precision applies to --method seq"), std::string::npos) << b.output;

@@ -34,7 +34,8 @@ std::vector<int> ExactObjects(const Scene& scene) {
   std::vector<int> out;
   for (int y = 0; y < scene.camera.height; ++y)
     for (int x = 0; x < scene.camera.width; ++x)
-      out.push_back(exact::FirstHit(scene, rays.At(x, y), std::max(scene.camera.hither, 0.0), planes).object);
+      out.push_back(
+          exact::FirstHit(scene, rays.At(x, y), std::max(scene.camera.hither, 0.0), planes).object);
   return out;
 }
 
@@ -50,7 +51,8 @@ PrimaryPass ExpectSound(const Scene& scene, std::initializer_list<int> widths) {
     PrimaryPass kept = RunPrimaryPass(scene, o);
     int wrong = 0, unflaggedWrong = 0;
     for (size_t i = 0; i < want.size(); ++i)
-      if (kept.matrix.hits[i].object != want[i]) ++wrong, unflaggedWrong += kept.matrix.flags[i] == 0;
+      if (kept.matrix.hits[i].object != want[i])
+        ++wrong, unflaggedWrong += kept.matrix.flags[i] == 0;
     EXPECT_EQ(unflaggedWrong, 0) << bits << " fraction bits, " << wrong << " wrong";
     o.uncertain = UncertainPolicy::kRefine;
     const PrimaryPass refined = RunPrimaryPass(scene, o);
@@ -65,7 +67,8 @@ PrimaryPass ExpectSound(const Scene& scene, std::initializer_list<int> widths) {
 // Every listed object is the first hit of some pixel (else the case would prove little).
 void ExpectSeen(const Scene& scene, std::initializer_list<int> objects) {
   const std::vector<int> want = ExactObjects(scene);
-  for (int k : objects) EXPECT_NE(std::find(want.begin(), want.end(), k), want.end()) << "object " << k;
+  for (int k : objects)
+    EXPECT_NE(std::find(want.begin(), want.end(), k), want.end()) << "object " << k;
 }
 
 TEST(SimdAdversarial, GrazingFanAcrossASphereSilhouette) {
@@ -122,10 +125,10 @@ const std::string kTwiceDrawnQuad =
 // The quad above, a fan of triangles around a vertex (seams where they share edges), and a
 // polygon seen nearly edge-on.
 const std::string kPolygons = kTwiceDrawnQuad +
-    "p 3\n1 0 -6\n2 -1 -6.5\n2.2 0.4 -6.2\n"
-    "p 3\n1 0 -6\n2.2 0.4 -6.2\n1.6 1.3 -5.8\n"
-    "p 3\n1 0 -6\n1.6 1.3 -5.8\n0.6 0.9 -6.1\n"
-    "p 4\n0.2 -2.5 -4\n2 -2.5 -4\n2 -2.501 -9\n0.2 -2.501 -9\n";
+                              "p 3\n1 0 -6\n2 -1 -6.5\n2.2 0.4 -6.2\n"
+                              "p 3\n1 0 -6\n2.2 0.4 -6.2\n1.6 1.3 -5.8\n"
+                              "p 3\n1 0 -6\n1.6 1.3 -5.8\n0.6 0.9 -6.1\n"
+                              "p 4\n0.2 -2.5 -4\n2 -2.5 -4\n2 -2.501 -9\n0.2 -2.501 -9\n";
 
 TEST(SimdAdversarial, PolygonSeamsAndPolygonsDrawnTwice) {
   const Scene s = Build("0 0 0", "0 -0.3 -6", 50, kPolygons);

@@ -7,8 +7,8 @@
 #include <cstring>
 #include <string>
 
-#include "hosts/scene/gen.h"
 #include "hosts/methods/report.h"
+#include "hosts/scene/gen.h"
 #include "hosts/simd/pass.h"
 
 namespace zephyr::simd {
@@ -70,8 +70,9 @@ void CheckBlocksAgainstOpByOp(const Scene& scene, SimdOptions o) {
   ASSERT_GT(whole.uncertain.grazing, 0);  // flags to compare, not only hits
   for (const auto& [layers, threads] : {std::pair{1, 1}, {1, 2}, {1, 4}, {2, 2}, {3, 4}}) {
     o.blockLayers = layers, o.threads = threads;
-    ExpectSamePass(whole, RunPrimaryPass(scene, o),
-                   std::to_string(layers) + " layer(s) per block, " + std::to_string(threads) + " thread(s)");
+    ExpectSamePass(
+        whole, RunPrimaryPass(scene, o),
+        std::to_string(layers) + " layer(s) per block, " + std::to_string(threads) + " thread(s)");
   }
 }
 
@@ -85,7 +86,8 @@ TEST(SimdBlocks, LowWidthsSameAsOpByOp) {  // most pixels flagged: overflow and 
   SimdOptions o;
   o.uncertain = UncertainPolicy::kKeep;
   o.formats.fracBits = 6;
-  CheckBlocksAgainstOpByOp(GenerateRandomSpheres({.count = 24, .seed = 7, .width = 150, .height = 150}), o);
+  CheckBlocksAgainstOpByOp(
+      GenerateRandomSpheres({.count = 24, .seed = 7, .width = 150, .height = 150}), o);
 }
 
 TEST(SimdBlocks, RecomputeAndRefineSameOnAnyThreadCount) {
@@ -101,7 +103,8 @@ TEST(SimdBlocks, RecomputeAndRefineSameOnAnyThreadCount) {
     for (int threads : {2, 4}) {
       o.threads = threads;
       ExpectSamePass(one, RunPrimaryPass(scene, o),
-                     std::string(kUncertainPolicyNames.NameOf(policy)) + ", " + std::to_string(threads) + " threads");
+                     std::string(kUncertainPolicyNames.NameOf(policy)) + ", " +
+                         std::to_string(threads) + " threads");
     }
   }
 }

@@ -27,7 +27,8 @@ std::vector<exact::Hit> Exact(const Scene& scene) {
   std::vector<exact::Hit> out;
   for (int y = 0; y < scene.camera.height; ++y)
     for (int x = 0; x < scene.camera.width; ++x)
-      out.push_back(exact::FirstHit(scene, rays.At(x, y), std::max(scene.camera.hither, 0.0), planes));
+      out.push_back(
+          exact::FirstHit(scene, rays.At(x, y), std::max(scene.camera.hither, 0.0), planes));
   return out;
 }
 
@@ -58,7 +59,8 @@ TEST(SimdFloat, SoundAgainstTheExactReferenceAtSeveralFormats) {
       if (h.object != want[i].object) ++wrong, unflaggedWrong += kept.matrix.flags[i] == 0;
       if (kept.matrix.flags[i] == 0 && h.object >= 0 && h.object == want[i].object) {
         ++certainHits;
-        ASSERT_LE(std::abs(h.t - double(want[i].t)), kept.plan.tErrorBound) << format << " pixel " << i;
+        ASSERT_LE(std::abs(h.t - double(want[i].t)), kept.plan.tErrorBound)
+            << format << " pixel " << i;
       }
     }
     EXPECT_EQ(unflaggedWrong, 0) << format << ": " << wrong << " wrong";
@@ -67,13 +69,16 @@ TEST(SimdFloat, SoundAgainstTheExactReferenceAtSeveralFormats) {
     }
     if (format == "e5m7") {
       narrowFlagged = flagged;
-      EXPECT_GT(wrong, 0) << "e5m7 should get some first objects wrong (else the case proves little)";
+      EXPECT_GT(wrong, 0)
+          << "e5m7 should get some first objects wrong (else the case proves little)";
     } else {
       EXPECT_LT(flagged, narrowFlagged) << format;
     }
-    const PrimaryPass fixedUp = RunPrimaryPass(scene, FloatOptions(format, UncertainPolicy::kRecompute));
+    const PrimaryPass fixedUp =
+        RunPrimaryPass(scene, FloatOptions(format, UncertainPolicy::kRecompute));
     int after = 0;
-    for (size_t i = 0; i < want.size(); ++i) after += fixedUp.matrix.hits[i].object != want[i].object;
+    for (size_t i = 0; i < want.size(); ++i)
+      after += fixedUp.matrix.hits[i].object != want[i].object;
     EXPECT_EQ(after, 0) << format << " after recompute";
     EXPECT_EQ(fixedUp.recomputedPixels, flagged) << format;
   }
@@ -115,14 +120,16 @@ TEST(SimdFloat, RefineRunsAWiderFloatAndStaysSound) {
   const PrimaryPass pass = RunPrimaryPass(scene, FloatOptions("e6m10", UncertainPolicy::kRefine));
   ASSERT_GT(pass.RefinedPixels(), 0);
   EXPECT_LT(pass.recomputedPixels, pass.RefinedPixels()) << "refine certified nothing";
-  for (size_t i = 0; i < want.size(); ++i) ASSERT_EQ(pass.matrix.hits[i].object, want[i].object) << i;
+  for (size_t i = 0; i < want.size(); ++i)
+    ASSERT_EQ(pass.matrix.hits[i].object, want[i].object) << i;
 }
 
 // Objects without a float program are refused with their file:line, never run in fixed point
 // or drawn wrong; a format whose range the scene's values exceed is refused too.
 TEST(SimdFloat, OtherPrimitivesAndTooNarrowFormatsAreRefused) {
   const std::string head =
-      "b 0 0 0\nv\nfrom 0 0 10\nat 0 0 0\nup 0 1 0\nangle 30\nhither 0.01\nresolution 8 8\nl 5 5 5\n"
+      "b 0 0 0\nv\nfrom 0 0 10\nat 0 0 0\nup 0 1 0\nangle 30\nhither 0.01\nresolution 8 8\nl 5 5 "
+      "5\n"
       "f 1 0.5 0.2 0.7 0.3 10 0 1\ns 0 0 0 1\n";
   const Scene cone = ParseNffOrThrow(head + "c 0 0 0 1 0 1 0 0.5\n", "cone.nff");
   try {
@@ -131,19 +138,23 @@ TEST(SimdFloat, OtherPrimitivesAndTooNarrowFormatsAreRefused) {
   } catch (const UserError& e) {
     const std::string what = e.what();
     EXPECT_NE(what.find("cone.nff:12"), std::string::npos) << what;
-    EXPECT_NE(what.find("the float number system supports spheres only; this object is a cone"), std::string::npos) << what;
+    EXPECT_NE(what.find("the float number system supports spheres only; this object is a cone"),
+              std::string::npos)
+        << what;
   }
   const Scene polygon = ParseNffOrThrow(head + "p 3\n-1 -1 0\n1 -1 0\n0 1 0\n", "poly.nff");
   EXPECT_THROW(RunPrimaryPass(polygon, FloatOptions("", UncertainPolicy::kRecompute)), UserError);
   const Scene far = ParseNffOrThrow(
-      "b 0 0 0\nv\nfrom 0 0 3000\nat 0 0 0\nup 0 1 0\nangle 30\nhither 0.01\nresolution 8 8\nl 5 5 5\n"
+      "b 0 0 0\nv\nfrom 0 0 3000\nat 0 0 0\nup 0 1 0\nangle 30\nhither 0.01\nresolution 8 8\nl 5 5 "
+      "5\n"
       "f 1 0.5 0.2 0.7 0.3 10 0 1\ns 0 0 0 300\n",
       "far.nff");
   try {
     RunPrimaryPass(far, FloatOptions("e4m10", UncertainPolicy::kRecompute));
     FAIL() << "e4m10 ran a sphere 3000 away";
   } catch (const UserError& e) {
-    EXPECT_NE(std::string(e.what()).find("beyond the float format e4m10"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("beyond the float format e4m10"), std::string::npos)
+        << e.what();
   }
 }
 
@@ -152,7 +163,8 @@ TEST(SimdFloat, CommandLineFlags) {
   using zephyr::testing::TempDir;
   TempDir dir;
   const std::string scene = dir / "s.nff", cone = dir / "c.nff";
-  ASSERT_EQ(RunZephyrProcess("gen spheres --count 4 --seed 1 --size 16x16 --out " + scene).status, 0);
+  ASSERT_EQ(RunZephyrProcess("gen spheres --count 4 --seed 1 --size 16x16 --out " + scene).status,
+            0);
   auto ok = RunZephyrProcess("accuracy " + scene + " --json --number float --float-format e8m20");
   ASSERT_EQ(ok.status, 0) << ok.output;
   EXPECT_EQ(nlohmann::json::parse(ok.output)["firstObjectDiffers"], 0);
@@ -163,24 +175,30 @@ TEST(SimdFloat, CommandLineFlags) {
   {
     std::FILE* f = std::fopen(cone.c_str(), "w");
     ASSERT_NE(f, nullptr);
-    std::fputs("b 0 0 0\nv\nfrom 0 0 10\nat 0 0 0\nup 0 1 0\nangle 30\nhither 0.01\nresolution 8 8\n"
-               "l 5 5 5\nf 1 0.5 0.2 0.7 0.3 10 0 1\ns 0 0 0 1\nc 0 0 0 1 0 1 0 0.5\n", f);
+    std::fputs(
+        "b 0 0 0\nv\nfrom 0 0 10\nat 0 0 0\nup 0 1 0\nangle 30\nhither 0.01\nresolution 8 8\n"
+        "l 5 5 5\nf 1 0.5 0.2 0.7 0.3 10 0 1\ns 0 0 0 1\nc 0 0 0 1 0 1 0 0.5\n",
+        f);
     std::fclose(f);
   }
   const std::string png = dir / "cone.png";
-  auto refused = RunZephyrProcess("render --method simd --scene " + cone + " --number float --out " + png);
+  auto refused =
+      RunZephyrProcess("render --method simd --scene " + cone + " --number float --out " + png);
   EXPECT_NE(refused.status, 0);
   EXPECT_NE(refused.output.find("c.nff:12"), std::string::npos) << refused.output;
-  EXPECT_NE(refused.output.find("supports spheres only; this object is a cone"), std::string::npos) << refused.output;
+  EXPECT_NE(refused.output.find("supports spheres only; this object is a cone"), std::string::npos)
+      << refused.output;
   EXPECT_FALSE(std::filesystem::exists(png));
   // `zephyr plan` names the float format where the sphere's fixed formats were.
   auto plan = RunZephyrProcess("plan " + scene + " --number float --float-format e6m12");
   ASSERT_EQ(plan.status, 0) << plan.output;
   EXPECT_NE(plan.output.find("e6m12"), std::string::npos) << plan.output;
   EXPECT_EQ(plan.output.find("cross, clamped"), std::string::npos) << plan.output;
-  auto word = RunZephyrProcess("render " + scene + " --method simd --number double --out " + (dir / "x.png"));
+  auto word = RunZephyrProcess("render " + scene + " --method simd --number double --out " +
+                               (dir / "x.png"));
   EXPECT_NE(word.status, 0);
-  EXPECT_NE(word.output.find("--number: expected fixed or float"), std::string::npos) << word.output;
+  EXPECT_NE(word.output.find("--number: expected fixed or float"), std::string::npos)
+      << word.output;
 }
 
 }  // namespace

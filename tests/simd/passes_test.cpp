@@ -8,9 +8,9 @@
 #include <vector>
 
 #include "fixed/check.h"
+#include "hosts/methods/report.h"
 #include "hosts/scene/gen.h"
 #include "hosts/scene/nff.h"
-#include "hosts/methods/report.h"
 #include "hosts/simd/pass.h"
 #include "hosts/trace/tracer.h"
 
@@ -18,13 +18,14 @@ namespace zephyr::simd {
 namespace {
 
 TEST(SimdPasses, ImageLargerThanTheArrayIsPlannedInBandsOfRows) {
-  const Scene scene = GenerateRandomSpheres({.count = 64, .seed = 1, .width = 4096, .height = 4096});
+  const Scene scene =
+      GenerateRandomSpheres({.count = 64, .seed = 1, .width = 4096, .height = 4096});
   const PrimaryPlan plan = PlanPrimaryPass(scene, {});
   ASSERT_GT(plan.passes, 1);
   EXPECT_EQ(plan.pesPerPass % 4096, 0);  // whole rows
   EXPECT_GE(plan.pesPerPass * plan.passes, plan.virtualPes);
   EXPECT_LT(plan.pesPerPass * (plan.passes - 1), plan.virtualPes);
-  EXPECT_EQ(plan.layers, 2048);          // 4096 rows of 4096 pixels, 8192 PEs a layer
+  EXPECT_EQ(plan.layers, 2048);  // 4096 rows of 4096 pixels, 8192 PEs a layer
   EXPECT_EQ(plan.layersPerPass, (plan.pesPerPass + 8191) / 8192);
   // Each pass's layers leave every virtual PE the memory the pass needs; one more pass's
   // worth of layers would not.
@@ -43,7 +44,8 @@ TEST(SimdPasses, TwoPassesGiveTheOnePassMatrixAndSeqsFirstHits) {
   ASSERT_EQ(one.plan.passes, 1);
   ASSERT_EQ(one.plan.layers, 2);
   const int64_t need = one.plan.memoryBitsPerPe;
-  o.profileOverrides = {"internalBitsPerPe=" + std::to_string(need / 2), "externalBitsPerPe=" + std::to_string(need)};
+  o.profileOverrides = {"internalBitsPerPe=" + std::to_string(need / 2),
+                        "externalBitsPerPe=" + std::to_string(need)};
   const PrimaryPass two = RunPrimaryPass(scene, o);
   ASSERT_EQ(two.plan.passes, 2);
   EXPECT_EQ(two.plan.pesPerPass, 48 * 128);
@@ -71,8 +73,10 @@ TEST(SimdPasses, TwoPassesGiveTheOnePassMatrixAndSeqsFirstHits) {
   EXPECT_DOUBLE_EQ(c["totalCycles"].get<double>(), total);
   EXPECT_EQ(c["layers"].get<int>(), 2);
   EXPECT_EQ(c["byLayer"].size(), 2u);
-  EXPECT_NE(two.array.Table().find("array pass 2 of 2: rows 48..95"), std::string::npos) << two.array.Table();
-  EXPECT_NE(two.array.Table().find("total over 2 array passes"), std::string::npos) << two.array.Table();
+  EXPECT_NE(two.array.Table().find("array pass 2 of 2: rows 48..95"), std::string::npos)
+      << two.array.Table();
+  EXPECT_NE(two.array.Table().find("total over 2 array passes"), std::string::npos)
+      << two.array.Table();
 
   // With recompute: every pixel's first object is the sequential tracer's.
   o.uncertain = UncertainPolicy::kRecompute;
@@ -101,7 +105,8 @@ TEST(SimdPasses, TwoPassesGiveTheOnePassMatrixAndSeqsFirstHits) {
 // for the showcase's cones and ellipsoids, whose programs allocate ~770.)
 TEST(SimdPasses, ThePlannedMemoryIsWhatTheProgramAllocates) {
   const std::string head =
-      "b 0 0 0\nv\nfrom 0 0 10\nat 0 0 0\nup 0 1 0\nangle 30\nhither 0.01\nresolution 32 32\nl 5 5 5\n"
+      "b 0 0 0\nv\nfrom 0 0 10\nat 0 0 0\nup 0 1 0\nangle 30\nhither 0.01\nresolution 32 32\nl 5 5 "
+      "5\n"
       "f 1 0.5 0.2 0.7 0.3 10 0 1\n";
   struct Case {
     std::string name;
@@ -125,7 +130,8 @@ TEST(SimdPasses, ThePlannedMemoryIsWhatTheProgramAllocates) {
     EXPECT_EQ(run.internalPeakBits + run.externalPeakBits, pass.plan.memoryBitsPerPe) << c.name;
     EXPECT_LE(run.externalPeakBits, pass.plan.matrixBitsPerPe) << c.name << ": a temporary spilled";
     int64_t widest = 0;
-    for (const ObjectPlan& object : pass.plan.objects) widest = std::max(widest, object.temporaryBits);
+    for (const ObjectPlan& object : pass.plan.objects)
+      widest = std::max(widest, object.temporaryBits);
     EXPECT_GT(widest, 0) << c.name;
     EXPECT_LE(pass.plan.matrixBitsPerPe + widest, pass.plan.memoryBitsPerPe) << c.name;
   }
@@ -162,12 +168,14 @@ TEST(SimdPasses, ARowWiderThanAPassIsAClearError) {
   const Scene scene = GenerateRandomSpheres({.count = 4, .seed = 1, .width = 8200, .height = 2});
   SimdOptions o;
   const int64_t need = PlanPrimaryPass(scene, o).memoryBitsPerPe;
-  o.profileOverrides = {"internalBitsPerPe=" + std::to_string(need / 2), "externalBitsPerPe=" + std::to_string(need)};
+  o.profileOverrides = {"internalBitsPerPe=" + std::to_string(need / 2),
+                        "externalBitsPerPe=" + std::to_string(need)};
   try {
     PlanPrimaryPass(scene, o);
     FAIL() << "an 8200-pixel row on one layer of 8192 PEs should not fit";
   } catch (const UserError& e) {
-    EXPECT_NE(std::string(e.what()).find("a row of 8200 pixels does not fit"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("a row of 8200 pixels does not fit"), std::string::npos)
+        << e.what();
   }
 }
 

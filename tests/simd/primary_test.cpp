@@ -5,10 +5,10 @@
 #include <cmath>
 
 #include "fixed/check.h"
-#include "hosts/simd/pass.h"
-#include "hosts/trace/exact.h"
 #include "hosts/scene/gen.h"
 #include "hosts/scene/nff.h"
+#include "hosts/simd/pass.h"
+#include "hosts/trace/exact.h"
 
 namespace zephyr::simd {
 namespace {
@@ -92,7 +92,8 @@ TEST(SimdPrimary, ShadeRegionIsBitIdenticalToTheFullImage) {
   ShadeRegion(*tracer, pass.matrix, 0, 0, 40, 32, full, stats);
   ShadeRegion(*tracer, pass.matrix, 8, 4, 16, 20, part, stats);
   for (int y = 0; y < 20; ++y)
-    for (int x = 0; x < 16; ++x) ASSERT_EQ(part[size_t(y) * 16 + x], full[size_t(y + 4) * 40 + x + 8]);
+    for (int x = 0; x < 16; ++x)
+      ASSERT_EQ(part[size_t(y) * 16 + x], full[size_t(y + 4) * 40 + x + 8]);
 }
 
 TEST(SimdPrimary, SceneThatCannotFitIsAClearError) {
@@ -117,7 +118,7 @@ TEST(SimdPrimary, SceneThatCannotFitIsAClearError) {
     o.formats.fracBits = std::stoi(what.substr(what.rfind(' ', at - 1) + 1));
     EXPECT_LT(o.formats.fracBits, 40);
     EXPECT_EQ(RunPrimaryPass(scene, o).plan.passes, 1);  // the width it names runs
-    ++o.formats.fracBits;  // and is the widest that does
+    ++o.formats.fracBits;                                // and is the widest that does
     EXPECT_THROW(PlanPrimaryPass(scene, o), UserError);
   }
   // The MPP's PEs have no external memory for the matrix: no width fits, and the planner says
@@ -128,8 +129,11 @@ TEST(SimdPrimary, SceneThatCannotFitIsAClearError) {
     PlanPrimaryPass(scene, mpp);
     FAIL() << "the MPP has no external memory for the matrix";
   } catch (const UserError& e) {
-    EXPECT_NE(std::string(e.what()).find("no width down to 4 fraction bits fits"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("external memory has 0 of 0 bits free"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("no width down to 4 fraction bits fits"),
+              std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("external memory has 0 of 0 bits free"), std::string::npos)
+        << e.what();
   }
 }
 
@@ -141,7 +145,8 @@ TEST(SimdPrimary, PlannerFollowsTheSceneAndTheOverrides) {
   // Smaller spheres need more fraction bits; a farther scene more integer bits.
   Scene small = scene, far = scene;
   for (Primitive& p : small.objects) std::get<Sphere>(p.shape).radius /= 16;
-  for (Primitive& p : far.objects) std::get<Sphere>(p.shape).centre = std::get<Sphere>(p.shape).centre * 64.0;
+  for (Primitive& p : far.objects)
+    std::get<Sphere>(p.shape).centre = std::get<Sphere>(p.shape).centre * 64.0;
   far.camera.from = far.camera.from * 64.0;
   EXPECT_EQ(PlanPrimaryPass(small, {}).fracBits, base.fracBits + 4);
   EXPECT_GE(PlanPrimaryPass(far, {}).distIntBits, base.distIntBits + 5);
@@ -176,7 +181,8 @@ TEST(SimdPrimary, UncertainPixelsAreFlaggedAndRecomputed) {
   const PrimaryPass repaired = RunPrimaryPass(scene, narrow);
   EXPECT_GT(repaired.uncertain.overflow, 0);
   EXPECT_EQ(repaired.recomputedPixels,
-            std::count_if(repaired.matrix.flags.begin(), repaired.matrix.flags.end(), [](uint32_t f) { return f != 0; }));
+            std::count_if(repaired.matrix.flags.begin(), repaired.matrix.flags.end(),
+                          [](uint32_t f) { return f != 0; }));
   EXPECT_EQ(ObjectMismatches(repaired.matrix, want), 0);
   narrow.uncertain = UncertainPolicy::kFail;
   EXPECT_THROW(RunPrimaryPass(scene, narrow), UserError);
@@ -225,7 +231,8 @@ TEST(SimdPrimary, RecomputeRepairsEveryPixelAtLowWidths) {
     const PrimaryPass kept = RunPrimaryPass(scene, o);
     int unflaggedWrong = 0, wrong = 0;
     for (size_t i = 0; i < want.size(); ++i)
-      if (kept.matrix.hits[i].object != want[i].object) ++wrong, unflaggedWrong += kept.matrix.flags[i] == 0;
+      if (kept.matrix.hits[i].object != want[i].object)
+        ++wrong, unflaggedWrong += kept.matrix.flags[i] == 0;
     EXPECT_EQ(unflaggedWrong, 0) << bits << " fraction bits, " << wrong << " wrong";
   }
 }
@@ -250,7 +257,8 @@ TEST(SimdPrimary, TransformedPrimitivesRunOnTheArray) {
       if (kept.matrix.flags[i] != 0) continue;
       ASSERT_EQ(kept.matrix.hits[i].object, want[i].object) << bits << " bits, pixel " << i;
       if (want[i].object >= 0) {
-        ASSERT_NEAR(kept.matrix.hits[i].t, want[i].t, kept.plan.tErrorBound) << bits << " bits, pixel " << i;
+        ASSERT_NEAR(kept.matrix.hits[i].t, want[i].t, kept.plan.tErrorBound)
+            << bits << " bits, pixel " << i;
       }
     }
   }
@@ -295,24 +303,27 @@ Scene ConeScene(int size) {
     s.objects.push_back(std::move(p));
   };
   add(Polygon{{{5, 5, 0}, {-5, 5, 0}, {-5, -5, 0}, {5, -5, 0}}, {}});
-  add(Cone{{-1.6, 0.5, 0}, 0.5, {-1.6, 0.5, 1.8}, 0.5});          // cylinder
-  add(Cone{{0.1, 0.2, 0}, 0.7, {0.1, 0.2, 1.9}, 0});              // cone to a point
-  add(Cone{{1.7, 0.8, 0}, 0.3, {1.7, 0.8, 1.2}, 0.8});            // frustum, wider on top
-  add(Cone{{0.6, -3.5, 2.1}, 0.35, {0.45, 3, 1.2}, 0.35});        // a tube along the view
+  add(Cone{{-1.6, 0.5, 0}, 0.5, {-1.6, 0.5, 1.8}, 0.5});    // cylinder
+  add(Cone{{0.1, 0.2, 0}, 0.7, {0.1, 0.2, 1.9}, 0});        // cone to a point
+  add(Cone{{1.7, 0.8, 0}, 0.3, {1.7, 0.8, 1.2}, 0.8});      // frustum, wider on top
+  add(Cone{{0.6, -3.5, 2.1}, 0.35, {0.45, 3, 1.2}, 0.35});  // a tube along the view
   Affine shear;
   shear.m[0][2] = 0.4;
   add(Cone{{0, 0, 0}, 0.3, {0, 0, 1.4}, 0.3}, Move(1, 1, 1, {-0.6, -1.5, 0}) * shear);
-  add(Cone{{0, 0, 0}, 0.5, {0, 0, 1.2}, 0.05}, Move(1, 1, 1, {1.2, -1.8, 0.5}) * RotX(80) * Move(1.3, 0.7, 1, {}));
-  add(Cone{{-2.5, -2, 0}, -0.3, {-2.5, -2, 1}, -0.3});            // never hit
+  add(Cone{{0, 0, 0}, 0.5, {0, 0, 1.2}, 0.05},
+      Move(1, 1, 1, {1.2, -1.8, 0.5}) * RotX(80) * Move(1.3, 0.7, 1, {}));
+  add(Cone{{-2.5, -2, 0}, -0.3, {-2.5, -2, 1}, -0.3});  // never hit
   add(Sphere{{-0.7, 1.8, 0.6}, 0.6});
   return s;
 }
 
 // Every cone of the scene is seen by some pixel (else the test would prove little).
-void ExpectEveryConeVisible(const Scene& scene, const std::vector<PrimaryHit>& want, int skip = -1) {
+void ExpectEveryConeVisible(const Scene& scene, const std::vector<PrimaryHit>& want,
+                            int skip = -1) {
   for (size_t i = 0; i < scene.objects.size(); ++i) {
     if (scene.objects[i].Kind() != ShapeKind::kCone || int(i) == skip) continue;
-    EXPECT_TRUE(std::any_of(want.begin(), want.end(), [&](const PrimaryHit& h) { return h.object == int(i); }))
+    EXPECT_TRUE(std::any_of(want.begin(), want.end(),
+                            [&](const PrimaryHit& h) { return h.object == int(i); }))
         << "cone " << i;
   }
 }
@@ -334,12 +345,14 @@ void CheckScene(const Scene& scene, int neverHit) {
     const PrimaryPass kept = RunPrimaryPass(scene, o);
     int coneCertain = 0, conePixels = 0;
     for (size_t i = 0; i < want.size(); ++i) {
-      const bool cone = want[i].object >= 0 && scene.objects[want[i].object].Kind() == ShapeKind::kCone;
+      const bool cone =
+          want[i].object >= 0 && scene.objects[want[i].object].Kind() == ShapeKind::kCone;
       conePixels += cone;
       if (kept.matrix.flags[i] != 0) continue;
       ASSERT_EQ(kept.matrix.hits[i].object, want[i].object) << bits << " bits, pixel " << i;
       if (want[i].object >= 0) {
-        ASSERT_NEAR(kept.matrix.hits[i].t, want[i].t, kept.plan.tErrorBound) << bits << " bits, pixel " << i;
+        ASSERT_NEAR(kept.matrix.hits[i].t, want[i].t, kept.plan.tErrorBound)
+            << bits << " bits, pixel " << i;
       }
       coneCertain += cone;
     }
@@ -352,9 +365,7 @@ void CheckScene(const Scene& scene, int neverHit) {
   }
 }
 
-TEST(SimdCone, DedicatedSceneAgreesWithTheExactReference) {
-  CheckScene(ConeScene(64), 7);
-}
+TEST(SimdCone, DedicatedSceneAgreesWithTheExactReference) { CheckScene(ConeScene(64), 7); }
 
 TEST(SimdCone, ShowcaseAgreesWithTheExactReference) {
   CheckScene(GenerateTransformedShowcase(64, 64), -1);
@@ -363,7 +374,8 @@ TEST(SimdCone, ShowcaseAgreesWithTheExactReference) {
 TEST(SimdCone, PlanListsTheConeFormats) {
   const PrimaryPlan plan = PlanPrimaryPass(ConeScene(32), {});
   bool listed = false;
-  for (const PlannedFormat& f : plan.formats) listed |= f.quantity.find("cone") != std::string::npos;
+  for (const PlannedFormat& f : plan.formats)
+    listed |= f.quantity.find("cone") != std::string::npos;
   EXPECT_TRUE(listed) << plan.Text();
   EXPECT_TRUE(std::isfinite(plan.tErrorBound));
   EXPECT_GT(plan.tErrorBound, 0);
@@ -452,17 +464,20 @@ TEST(SimdRefine, AutoRefinesOnlyAboveTheHostBudget) {
     o.formats.fracBits = bits;
     o.uncertain = UncertainPolicy::kAuto;
     const PrimaryPass automatic = RunPrimaryPass(scene, o);
-    const int64_t flagged = automatic.uncertain.overflow + automatic.uncertain.grazing + automatic.uncertain.nearTie;
+    const int64_t flagged =
+        automatic.uncertain.overflow + automatic.uncertain.grazing + automatic.uncertain.nearTie;
     ASSERT_GT(flagged, 0) << bits;
     const bool above = double(flagged) > kAutoRefineShare * 64 * 64;
-    EXPECT_EQ(above, bits == 8) << "the case should have " << (bits == 8 ? "many" : "few") << " flags: " << flagged;
+    EXPECT_EQ(above, bits == 8) << "the case should have " << (bits == 8 ? "many" : "few")
+                                << " flags: " << flagged;
     o.uncertain = above ? UncertainPolicy::kRefine : UncertainPolicy::kRecompute;
     const PrimaryPass same = RunPrimaryPass(scene, o);
     EXPECT_EQ(automatic.RefinedPixels(), same.RefinedPixels()) << bits;
     EXPECT_EQ(automatic.recomputedPixels, same.recomputedPixels) << bits;
     EXPECT_EQ(above, automatic.RefinedPixels() > 0) << bits;
     for (size_t i = 0; i < same.matrix.hits.size(); ++i)
-      ASSERT_EQ(automatic.matrix.hits[i].object, same.matrix.hits[i].object) << bits << " bits, pixel " << i;
+      ASSERT_EQ(automatic.matrix.hits[i].object, same.matrix.hits[i].object)
+          << bits << " bits, pixel " << i;
   }
 }
 
@@ -471,7 +486,8 @@ TEST(SimdRefine, EveryPolicyAndNumberSystemHasOneNameThatParsesBack) {
     EXPECT_EQ(kUncertainPolicyNames.Find(kUncertainPolicyNames.NameOf(e.value)), e.value) << e.name;
   for (const auto& e : kNumberSystemNames.entries)
     EXPECT_EQ(kNumberSystemNames.Find(kNumberSystemNames.NameOf(e.value)), e.value) << e.name;
-  EXPECT_EQ(kUncertainPolicyNames.List(), "auto, recompute, refine, keep or fail");  // --help's order
+  EXPECT_EQ(kUncertainPolicyNames.List(),
+            "auto, recompute, refine, keep or fail");  // --help's order
   EXPECT_FALSE(kUncertainPolicyNames.Find("refin").has_value());
 }
 
@@ -487,17 +503,21 @@ namespace {
 // near side itself.
 TEST(SimdPrimary, ANearRootInsideHitherGivesTheFarRoot) {
   for (double hither : {0.0, 4.0, 5.0, 5.9}) {
-    const std::string text = "b 0 0 0\nv\nfrom 0 0 10\nat 0 0 0\nup 0 1 0\nangle 20\nhither " + std::to_string(hither) +
+    const std::string text = "b 0 0 0\nv\nfrom 0 0 10\nat 0 0 0\nup 0 1 0\nangle 20\nhither " +
+                             std::to_string(hither) +
                              "\nresolution 32 32\nf 1 1 1 1 0 0 0 0\ns 0 0 5 1\ns 0 0 -3 0.5\n";
     const Scene scene = ParseNffOrThrow(text, "hither.nff");
     const PrimaryPass pass = RunPrimaryPass(scene, {});
     const std::vector<PrimaryHit> want = ExactHits(scene);
     int farSide = 0;
     for (size_t i = 0; i < want.size(); ++i) {
-      if (pass.matrix.flags[i] & kUncertainFlags) continue;  // recomputed on the host: not the array's answer
-      EXPECT_EQ(pass.matrix.hits[i].object, want[i].object) << "hither " << hither << " pixel " << i;
+      if (pass.matrix.flags[i] & kUncertainFlags)
+        continue;  // recomputed on the host: not the array's answer
+      EXPECT_EQ(pass.matrix.hits[i].object, want[i].object)
+          << "hither " << hither << " pixel " << i;
       if (want[i].object >= 0) {
-        EXPECT_NEAR(pass.matrix.hits[i].t, want[i].t, 1e-2) << "hither " << hither << " pixel " << i;
+        EXPECT_NEAR(pass.matrix.hits[i].t, want[i].t, 1e-2)
+            << "hither " << hither << " pixel " << i;
         farSide += want[i].object == 0 && want[i].t > 5;
       }
     }

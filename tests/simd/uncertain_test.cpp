@@ -136,22 +136,27 @@ TEST(SimdUncertain, NearTieFlagFollowsThePairRule) {
     for (int step = -3; step <= 3; ++step) shares.push_back(1.0 + step * u / both);
     for (double share : shares) {
       const Sphere j{axis * (9.5 + share * both), 0.5};
-      const auto run = [&](const std::vector<Sphere>& s) { return RunPrimaryPass(SphereScene(s), o); };
+      const auto run = [&](const std::vector<Sphere>& s) {
+        return RunPrimaryPass(SphereScene(s), o);
+      };
       const PrimaryPass alone[2] = {run({k}), run({j})}, pair = run({k, j});
       const ObjectBounds b[2] = {bk, Bounds(SphereScene({j}), 0, o)};
       double e[2];  // e_i + u rounded to F bits, as the pass loads it
-      for (int i = 0; i < 2; ++i) e[i] = std::ldexp(std::nearbyint(std::ldexp(b[i].tError + u, fracBits)), -fracBits);
+      for (int i = 0; i < 2; ++i)
+        e[i] = std::ldexp(std::nearbyint(std::ldexp(b[i].tError + u, fracBits)), -fracBits);
       int decided = 0;
       for (size_t p = 0; p < pair.matrix.flags.size(); ++p) {
         if (alone[0].matrix.hits[p].object != 0 || alone[1].matrix.hits[p].object != 0 ||
-            alone[0].matrix.flags[p] || alone[1].matrix.flags[p] || (pair.matrix.flags[p] & kGrazing))
+            alone[0].matrix.flags[p] || alone[1].matrix.flags[p] ||
+            (pair.matrix.flags[p] & kGrazing))
           continue;
         const double tk = alone[0].matrix.hits[p].t, tj = alone[1].matrix.hits[p].t;
         const bool tied = std::abs(tj - tk) <= e[0] + e[1];
         exactlyAtTheLimit += std::abs(tj - tk) == e[0] + e[1];
-        const std::string what = "F " + std::to_string(fracBits) + " gap share " + std::to_string(share) +
-                                 " pixel " + std::to_string(p) + " t " + std::to_string(tk) + " " +
-                                 std::to_string(tj) + " e " + std::to_string(e[0]) + " " + std::to_string(e[1]);
+        const std::string what = "F " + std::to_string(fracBits) + " gap share " +
+                                 std::to_string(share) + " pixel " + std::to_string(p) + " t " +
+                                 std::to_string(tk) + " " + std::to_string(tj) + " e " +
+                                 std::to_string(e[0]) + " " + std::to_string(e[1]);
         EXPECT_EQ(bool(pair.matrix.flags[p] & kNearTie), tied) << what;
         // The first object is the nearer computed t (ties to the lower index).
         EXPECT_EQ(pair.matrix.hits[p].object, tj < tk ? 1 : 0) << what;

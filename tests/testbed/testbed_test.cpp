@@ -2,6 +2,8 @@
 // seconds of seq and simd (and each charge by closed form on a tiny scene), the platform
 // files, and — when `make smpi` built zephyr-smpi — dist and hetero under smpirun: the same
 // PNG as seq/simd and the same seconds twice (to the last digit).
+#include "hosts/testbed/testbed.h"
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -16,7 +18,6 @@
 #include "hosts/methods/report.h"
 #include "hosts/scene/nff.h"
 #include "hosts/testbed/host_profile.h"
-#include "hosts/testbed/testbed.h"
 #include "tests/farm/mpi_launch.h"
 
 namespace zephyr {
@@ -65,11 +66,13 @@ TEST(TestbedProfile, SecondsAreTheWorkTableAtTheProfilesRates) {
   const testbed::HostTime t = testbed::ModelHostTime(s, ss2);
   const auto& sphere = testbed::CostOf(testbed::WorkEvent::kSphereTest);
   const auto& pixel = testbed::CostOf(testbed::WorkEvent::kPixel);
-  const double expected = 1000 * sphere.flops / (ss2.mflops.value * 1e6) +
-                          (1000 * sphere.instructions + 10 * pixel.instructions) / (ss2.mips.value * 1e6);
+  const double expected =
+      1000 * sphere.flops / (ss2.mflops.value * 1e6) +
+      (1000 * sphere.instructions + 10 * pixel.instructions) / (ss2.mips.value * 1e6);
   EXPECT_DOUBLE_EQ(t.seconds, expected);
   // The same work on the slower SLC takes longer.
-  EXPECT_GT(testbed::ModelHostTime(s, testbed::HostProfileNamed("sparcstation-slc")).seconds, t.seconds);
+  EXPECT_GT(testbed::ModelHostTime(s, testbed::HostProfileNamed("sparcstation-slc")).seconds,
+            t.seconds);
   // Every used entry has a source.
   for (const auto& name : testbed::HostProfileNames()) {
     const auto& p = testbed::HostProfileNamed(name);
@@ -88,8 +91,8 @@ TEST(TestbedModel, SeqReportsModelledSecondsFromItsCounts) {
   const double seconds = t.at("modelledSeconds").get<double>();
   EXPECT_GT(seconds, 0);
   EXPECT_EQ(seconds, RenderReportJson(b).at("testbed").at("modelledSeconds").get<double>());
-  const testbed::HostTime h = testbed::ModelHostTime(*a.hostWork,
-                                                     testbed::HostProfileNamed("sparcstation2"));
+  const testbed::HostTime h =
+      testbed::ModelHostTime(*a.hostWork, testbed::HostProfileNamed("sparcstation2"));
   EXPECT_DOUBLE_EQ(seconds, h.seconds);
   EXPECT_EQ(t.at("host").at("events").at("pixel").at("count").get<double>(), 24 * 16);
 }
@@ -102,16 +105,19 @@ TEST(TestbedModel, SimdIsArrayPlusScsiPlusHostShading) {
   const double clock = cycles.at("clockHz").get<double>();
   EXPECT_DOUBLE_EQ(t.at("array").at("scsiSeconds").get<double>(),
                    cycles.at("byClass").at("host").get<double>() / clock);
-  EXPECT_DOUBLE_EQ(t.at("array").at("seconds").get<double>() + t.at("array").at("scsiSeconds").get<double>(),
-                   cycles.at("totalCycles").get<double>() / clock);
-  EXPECT_DOUBLE_EQ(t.at("modelledSeconds").get<double>(),
-                   cycles.at("totalCycles").get<double>() / clock + t.at("host").at("seconds").get<double>());
+  EXPECT_DOUBLE_EQ(
+      t.at("array").at("seconds").get<double>() + t.at("array").at("scsiSeconds").get<double>(),
+      cycles.at("totalCycles").get<double>() / clock);
+  EXPECT_DOUBLE_EQ(
+      t.at("modelledSeconds").get<double>(),
+      cycles.at("totalCycles").get<double>() / clock + t.at("host").at("seconds").get<double>());
   EXPECT_GT(t.at("array").at("scsiBytes").get<double>(), 0);
   // Two independent sources agree: the bytes the array profile's hostPlane cost moves per
   // second at the array clock are the testbed's SCSI bandwidth (5 MB/s, docs/testbed.md) —
   // which pins bytes to bits / 8, not to bits.
-  EXPECT_NEAR(t.at("array").at("scsiBytes").get<double>() / t.at("array").at("scsiSeconds").get<double>(),
-              t.at("testbed").at("scsiBandwidth").at("value").get<double>(), 1e-6 * 5e6);
+  EXPECT_NEAR(
+      t.at("array").at("scsiBytes").get<double>() / t.at("array").at("scsiSeconds").get<double>(),
+      t.at("testbed").at("scsiBandwidth").at("value").get<double>(), 1e-6 * 5e6);
 }
 
 // ---- The charges by closed form ---------------------------------------
@@ -271,7 +277,8 @@ TEST(TestbedClosedForm, TheHostRecomputeCostsOneRayAndOneTestPerObjectPerPixel) 
         for (const int pixels : {0, 1, 7}) {
           const TraceStats none;
           const auto modelled = testbed::ModelTime(
-              "ufmg1992", {.host = &none, .arrayCycles = &pass, .recomputedPixels = uint64_t(pixels)}, scene);
+              "ufmg1992",
+              {.host = &none, .arrayCycles = &pass, .recomputedPixels = uint64_t(pixels)}, scene);
           ASSERT_TRUE(modelled);
           const nlohmann::json report = {{"testbed", modelled->Json()}};
           const std::string what = std::to_string(pixels) + " pixels, " + std::to_string(spheres) +
@@ -318,7 +325,8 @@ TEST(TestbedModel, BadTestbedAndUnsimulatedFarmAreUserErrors) {
     Render(scene, "seq", scene);  // an existing file: a platform, simulated only
     FAIL() << "--testbed FILE outside SimGrid must be refused";
   } catch (const UserError& e) {
-    EXPECT_NE(std::string(e.what()).find("simrun.sh --children K --platform " + scene), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("simrun.sh --children K --platform " + scene),
+              std::string::npos)
         << e.what();
   }
   try {
@@ -347,7 +355,11 @@ TEST(TestbedPlatform, OneSharedEthernetOnEveryChildRoute) {
 }
 
 std::string Repo() {  // the checkout: $(BUILD)/bin/zephyr_tests -> ../../
-  return std::filesystem::read_symlink("/proc/self/exe").parent_path().parent_path().parent_path().string();
+  return std::filesystem::read_symlink("/proc/self/exe")
+      .parent_path()
+      .parent_path()
+      .parent_path()
+      .string();
 }
 
 TEST(TestbedPlatform, TheCommittedPlatformIsWhatTheProfilesGive) {
@@ -370,7 +382,8 @@ TEST(TestbedSimulated, DistAndHeteroMatchSeqAndSimdAndRepeatToTheLastDigit) {
   const std::string scene = WriteScene(dir, 8, "64x64");
   auto single = [&](const std::string& method) {
     std::string out = dir / (method + ".png");
-    auto r = RunZephyrProcess("render --no-progress --method " + method + " " + scene + " --out " + out);
+    auto r =
+        RunZephyrProcess("render --no-progress --method " + method + " " + scene + " --out " + out);
     EXPECT_EQ(r.status, 0) << r.output;
     return ReadFile(out);
   };
@@ -380,8 +393,9 @@ TEST(TestbedSimulated, DistAndHeteroMatchSeqAndSimdAndRepeatToTheLastDigit) {
     for (int run = 0; run < 2; ++run) {
       const std::string out = dir / (std::string(method) + std::to_string(run) + ".png");
       const std::string report = dir / (std::string(method) + std::to_string(run) + ".json");
-      auto r = RunCommand("timeout -k 5 300 bash " + Repo() + "/tools/testbed/simrun.sh --children 2 --zephyr " +
-                          SmpiPath() + " -- render --no-progress --method " + method + " " + scene +
+      auto r = RunCommand("timeout -k 5 300 bash " + Repo() +
+                          "/tools/testbed/simrun.sh --children 2 --zephyr " + SmpiPath() +
+                          " -- render --no-progress --method " + method + " " + scene +
                           " --frame 32 --testbed ufmg1992 --out " + out + " --report " + report);
       ASSERT_EQ(r.status, 0) << r.output;
       EXPECT_EQ(ReadFile(out), *reference) << method;
@@ -398,15 +412,18 @@ TEST(TestbedSimulated, DistAndHeteroMatchSeqAndSimdAndRepeatToTheLastDigit) {
       for (const auto& child : t.at("children")) {
         EXPECT_GT(child.at("busySeconds").get<double>(), 0);
         EXPECT_GT(child.at("idleSeconds").get<double>(), 0);
-        EXPECT_DOUBLE_EQ(child.at("busySeconds").get<double>() + child.at("idleSeconds").get<double>(),
-                         seconds[run]);
+        EXPECT_DOUBLE_EQ(
+            child.at("busySeconds").get<double>() + child.at("idleSeconds").get<double>(),
+            seconds[run]);
       }
       EXPECT_GT(t.at("parent").at("hostWorkSeconds").get<double>(), 0);
       std::map<std::string, double> bytes;
-      for (const auto& link : t.at("links")) bytes[link.at("link")] = link.at("bytes").get<double>();
+      for (const auto& link : t.at("links"))
+        bytes[link.at("link")] = link.at("bytes").get<double>();
       const auto& traffic = j.at("distributed").at("traffic");
-      const double farmBytes = traffic.at("parentToChildren").at("total").at("payloadBytes").get<double>() +
-                               traffic.at("childrenToParent").at("total").at("payloadBytes").get<double>();
+      const double farmBytes =
+          traffic.at("parentToChildren").at("total").at("payloadBytes").get<double>() +
+          traffic.at("childrenToParent").at("total").at("payloadBytes").get<double>();
       EXPECT_GE(bytes["ethernet"], farmBytes) << t.dump(2);
       EXPECT_EQ(bytes["scsi"] > 0, std::string(method) == "hetero") << t.dump(2);
     }
@@ -424,8 +441,9 @@ TEST(TestbedCharts, QuickRunDrawsEveryFigureInModelledSeconds) {
   TempDir dir;
   const std::string out = dir / "charts";
   const std::string bin = std::filesystem::path(SmpiPath()).parent_path().string();
-  auto r = RunCommand("QUICK=1 TESTBED=ufmg1992 OUT=" + out + " ZEPHYR=" + bin + "/zephyr ZEPHYR_SMPI=" +
-                      SmpiPath() + " timeout -k 5 600 bash " + Repo() + "/tools/testbed/charts.sh");
+  auto r = RunCommand("QUICK=1 TESTBED=ufmg1992 OUT=" + out + " ZEPHYR=" + bin +
+                      "/zephyr ZEPHYR_SMPI=" + SmpiPath() + " timeout -k 5 600 bash " + Repo() +
+                      "/tools/testbed/charts.sh");
   ASSERT_EQ(r.status, 0) << r.output;
   auto rows = [&](const std::string& name) {
     std::ifstream f(out + "/" + name + ".csv");
@@ -439,9 +457,10 @@ TEST(TestbedCharts, QuickRunDrawsEveryFigureInModelledSeconds) {
     }
     return table;
   };
-  for (const char* name : {"fig05_seq_vs_simd", "fig06_seq_vs_dist", "fig07_hetero_vs_dist_2children",
-                           "fig10_data_flow", "fig11_pixels", "fig12_all_methods", "past_efficiency",
-                           "past_ethernet", "past_parent", "past_time", "where_each_wins"}) {
+  for (const char* name :
+       {"fig05_seq_vs_simd", "fig06_seq_vs_dist", "fig07_hetero_vs_dist_2children",
+        "fig10_data_flow", "fig11_pixels", "fig12_all_methods", "past_efficiency", "past_ethernet",
+        "past_parent", "past_time", "where_each_wins"}) {
     const auto table = rows(name);
     ASSERT_GE(table.size(), 3u) << name;  // a header and 2 points at least
     for (size_t i = 1; i < table.size(); ++i)
@@ -455,11 +474,12 @@ TEST(TestbedCharts, QuickRunDrawsEveryFigureInModelledSeconds) {
     EXPECT_EQ(std::string(magic + 1, 3), "PNG") << name;
   }
   for (const auto& row : rows("fig11_pixels")) {
-    if (row[0] == "frame") continue;  // the header
+    if (row[0] == "frame") continue;                  // the header
     EXPECT_EQ(std::stod(row[1]), 64 * 64) << row[0];  // dist: every pixel
   }
   for (const auto& row : rows("where_each_wins")) {
-    if (row[0] == "ethernet_bps") continue;  // ethernet_bps,objects,winner,seq_s,simd_s,dist_s,hetero_s
+    if (row[0] == "ethernet_bps")
+      continue;  // ethernet_bps,objects,winner,seq_s,simd_s,dist_s,hetero_s
     ASSERT_EQ(row.size(), 7u);
     int fastest = 1;
     for (int m = 2; m <= 4; ++m)
@@ -477,10 +497,11 @@ TEST(TestbedSimulated, SeqAndSimdOnAPlatformFile) {
   const std::string scene = WriteScene(dir, 8, "64x64");
   auto simulated = [&](const std::string& method, const std::string& platform) {
     const std::string report = dir / (method + ".json");
-    auto r = RunCommand("timeout -k 5 300 bash " + Repo() + "/tools/testbed/simrun.sh --children 0 " +
-                        (platform.empty() ? "" : "--platform " + platform + " ") + "--zephyr " + SmpiPath() +
-                        " -- render --no-progress --method " + method + " " + scene +
-                        " --testbed ufmg1992 --out " + (dir / (method + ".png")) + " --report " + report);
+    auto r = RunCommand(
+        "timeout -k 5 300 bash " + Repo() + "/tools/testbed/simrun.sh --children 0 " +
+        (platform.empty() ? "" : "--platform " + platform + " ") + "--zephyr " + SmpiPath() +
+        " -- render --no-progress --method " + method + " " + scene + " --testbed ufmg1992 --out " +
+        (dir / (method + ".png")) + " --report " + report);
     EXPECT_EQ(r.status, 0) << r.output;
     return ReadJson(report);
   };
@@ -488,22 +509,29 @@ TEST(TestbedSimulated, SeqAndSimdOnAPlatformFile) {
     const nlohmann::json t = RenderReportJson(Render(scene, method, "ufmg1992")).at("testbed");
     // Under SimGrid the matrix crosses the SCSI link with the network model's 5 % cross
     // traffic (docs/testbed.md, "Bytes on the Ethernet"): 1.05 times the SCSI seconds.
-    const double named = t.at("modelledSeconds").get<double>() +
-                         (t.contains("array") ? 0.05 * t.at("array").at("scsiSeconds").get<double>() : 0.0);
+    const double named =
+        t.at("modelledSeconds").get<double>() +
+        (t.contains("array") ? 0.05 * t.at("array").at("scsiSeconds").get<double>() : 0.0);
     const nlohmann::json j = simulated(method, "");
     EXPECT_NEAR(j.at("testbed").at("modelledSeconds").get<double>(), named, 1e-9 * named) << method;
-    EXPECT_EQ(j.at("testbed").at("hostProfile").at("profile"), "sparcstation2") << j.at("testbed").dump(2);
+    EXPECT_EQ(j.at("testbed").at("hostProfile").at("profile"), "sparcstation2")
+        << j.at("testbed").dump(2);
   }
   // A user's platform: the host/parent is an SLC (its profile named; the speed only converts).
   std::string xml = ReadFile(Repo() + "/hosts/testbed/platforms/ufmg1992.xml");
-  const std::string from = "<host id=\"parent\" speed=\"4200000.000000f\">\n      <prop id=\"zephyr:profile\" value=\"sparcstation2\"/>";
+  const std::string from =
+      "<host id=\"parent\" speed=\"4200000.000000f\">\n      <prop id=\"zephyr:profile\" "
+      "value=\"sparcstation2\"/>";
   ASSERT_NE(xml.find(from), std::string::npos);
   xml.replace(xml.find(from), from.size(),
-              "<host id=\"parent\" speed=\"1200000f\">\n      <prop id=\"zephyr:profile\" value=\"sparcstation-slc\"/>");
+              "<host id=\"parent\" speed=\"1200000f\">\n      <prop id=\"zephyr:profile\" "
+              "value=\"sparcstation-slc\"/>");
   const std::string platform = dir / "slc.xml";
   std::ofstream(platform) << xml;
   const nlohmann::json j = simulated("seq", platform);
-  const double slc = testbed::ModelHostTime(TraceStats::FromJson(j), testbed::HostProfileNamed("sparcstation-slc")).seconds;
+  const double slc =
+      testbed::ModelHostTime(TraceStats::FromJson(j), testbed::HostProfileNamed("sparcstation-slc"))
+          .seconds;
   EXPECT_NEAR(j.at("testbed").at("modelledSeconds").get<double>(), slc, 1e-9 * slc);
 }
 
@@ -556,7 +584,9 @@ TEST(TestbedSimulated, ThisHostCalibratedModelsItsOwnRender) {
   const double ops = c.at("operationsPerSecond").get<double>();
   EXPECT_DOUBLE_EQ(ops * seconds, c.at("flops").get<double>() + c.at("instructions").get<double>());
   const std::string simd = dir / "simd.json";
-  ASSERT_EQ(RunZephyrProcess("render --no-progress --method simd " + scene + " --report " + simd).status, 0);
+  ASSERT_EQ(
+      RunZephyrProcess("render --no-progress --method simd " + scene + " --report " + simd).status,
+      0);
   r = RunZephyrProcess("testbed calibrate --report " + simd);
   EXPECT_NE(r.status, 0);
   EXPECT_NE(r.output.find(simd), std::string::npos) << r.output;
@@ -566,15 +596,18 @@ TEST(TestbedSimulated, ThisHostCalibratedModelsItsOwnRender) {
 
   if (!std::filesystem::exists(SmpiPath())) GTEST_SKIP() << "no zephyr-smpi (make smpi)";
   const std::string platform = dir / "this-host.xml";
-  r = RunZephyrProcess("testbed platform --children 1 --host-ops " + std::to_string(ops) + " --out " + platform);
+  r = RunZephyrProcess("testbed platform --children 1 --host-ops " + std::to_string(ops) +
+                       " --out " + platform);
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_EQ(ReadFile(platform).find("zephyr:profile"), std::string::npos);
   const std::string report = dir / "sim.json";
-  r = RunCommand("timeout -k 5 300 bash " + Repo() + "/tools/testbed/simrun.sh --children 0 --platform " + platform +
-                 " --zephyr " + SmpiPath() + " -- render --no-progress --method seq " + scene +
+  r = RunCommand("timeout -k 5 300 bash " + Repo() +
+                 "/tools/testbed/simrun.sh --children 0 --platform " + platform + " --zephyr " +
+                 SmpiPath() + " -- render --no-progress --method seq " + scene +
                  " --testbed ufmg1992 --out " + (dir / "sim.png") + " --report " + report);
   ASSERT_EQ(r.status, 0) << r.output;
-  EXPECT_NEAR(ReadJson(report).at("testbed").at("modelledSeconds").get<double>(), seconds, 1e-6 * seconds);
+  EXPECT_NEAR(ReadJson(report).at("testbed").at("modelledSeconds").get<double>(), seconds,
+              1e-6 * seconds);
 }
 
 TEST(TestbedSimulated, TooFewHostsNamesTheFile) {
@@ -593,7 +626,8 @@ TEST(TestbedSimulated, TooFewHostsNamesTheFile) {
   EXPECT_NE(r.status, 0);
   EXPECT_NE(r.output.find(platform), std::string::npos) << r.output;
   const std::string broken = dir / "broken.xml";
-  std::ofstream(broken) << "<platform version=\"4.1\"><zone id=\"z\" routing=\"Full\"><host id=\"parent\"\n";
+  std::ofstream(broken)
+      << "<platform version=\"4.1\"><zone id=\"z\" routing=\"Full\"><host id=\"parent\"\n";
   r = RunCommand("bash " + Repo() + "/tools/testbed/simrun.sh --children 1 --platform " + broken +
                  " --zephyr " + SmpiPath() + " -- render --method dist x.nff");
   EXPECT_NE(r.status, 0);

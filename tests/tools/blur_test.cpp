@@ -1,13 +1,14 @@
 // The second worked example of docs/programming.md (tools/examples/blur.h): the 3x3 blur on
 // the emulated array equals the plain C++ version on random pixels (every target), and
 // through a PNG file of a size that is not whole blocks.
+#include "tools/examples/blur.h"
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <random>
 
 #include "tests/bitserial/testing.h"
-#include "tools/examples/blur.h"
 
 namespace zephyr::examples {
 namespace {
@@ -31,7 +32,8 @@ TEST(ToolsBlur, BlursAPngFile) {
   std::filesystem::create_directories(dir);
   Image img(70, 45);  // padded to 128x128 on the WaveTracer's 64x128 mesh
   std::mt19937_64 rng(2);
-  for (auto& px : img.pixels) px = Vec3((rng() % 256) / 255.0, (rng() % 256) / 255.0, (rng() % 256) / 255.0);
+  for (auto& px : img.pixels)
+    px = Vec3((rng() % 256) / 255.0, (rng() % 256) / 255.0, (rng() % 256) / 255.0);
   WritePng((dir / "in.png").string(), img);
   const BlurResult r = BlurPng((dir / "in.png").string(), (dir / "out.png").string(), "wavetracer");
   EXPECT_EQ(r.gridW, 128);

@@ -26,7 +26,8 @@ TEST(BuildHelp, ListsEveryTargetWithItsComment) {
   char buffer[4096];
   while (size_t n = std::fread(buffer, 1, sizeof buffer, pipe)) output.append(buffer, n);
   ASSERT_EQ(::pclose(pipe), 0) << output;
-  for (const char* target : {"all", "test", "run", "bench", "charts", "clean", "help", "fuzz", "mutants"}) {
+  for (const char* target :
+       {"all", "test", "run", "bench", "charts", "clean", "help", "fuzz", "mutants"}) {
     const std::string line = std::string("make ") + target + " ";
     size_t at = output.find(line);
     ASSERT_NE(at, std::string::npos) << "make help does not list '" << target << "':\n" << output;

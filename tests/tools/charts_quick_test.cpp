@@ -1,7 +1,9 @@
 // `make charts` end to end in its QUICK mode (tools/charts.sh): the sweeps run with whatever
 // methods the zephyr program has, and every CSV and PNG the docs cite is written and holds
-// data — now with all four methods and `zephyr accuracy`, every cell measured. Keeps the chart tool chain working while the methods change.
+// data — now with all four methods and `zephyr accuracy`, every cell measured. Keeps the chart tool
+// chain working while the methods change.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cstdlib>
 #include <filesystem>
@@ -9,7 +11,6 @@
 #include <map>
 #include <sstream>
 #include <string>
-#include <unistd.h>
 #include <vector>
 
 namespace {
@@ -23,7 +24,8 @@ fs::path RepoRoot() {
     if (fs::exists(p / "tools/charts.sh")) return p;
     if (p == p.root_path()) break;
   }
-  for (fs::path p = fs::read_symlink("/proc/self/exe").parent_path(); !p.empty(); p = p.parent_path()) {
+  for (fs::path p = fs::read_symlink("/proc/self/exe").parent_path(); !p.empty();
+       p = p.parent_path()) {
     if (fs::exists(p / "tools/charts.sh")) return p;
     if (p == p.root_path()) break;
   }
@@ -63,26 +65,36 @@ TEST(ChartsQuick, EverySweepWritesItsCsvAndChart) {
   ASSERT_EQ(status, 0);
 
   // QUICK: 2 object counts, 2 frame sizes; the stability scans have many rows.
-  const struct { const char* csv; int minRows; } tables[] = {
-      {"fig05_seq_vs_simd", 2}, {"fig06_seq_vs_dist", 2}, {"fig07_hetero_vs_dist_2children", 2},
-      {"fig10_data_flow", 2},   {"fig11_pixels", 2},      {"fig12_all_methods", 2},
-      {"stability_distance", 100}, {"stability_overflow", 10}, {"runs", 2},
-      {"recompute_share", 8}};  // 2 scenes x 2 policies x 2 widths
+  const struct {
+    const char* csv;
+    int minRows;
+  } tables[] = {{"fig05_seq_vs_simd", 2},
+                {"fig06_seq_vs_dist", 2},
+                {"fig07_hetero_vs_dist_2children", 2},
+                {"fig10_data_flow", 2},
+                {"fig11_pixels", 2},
+                {"fig12_all_methods", 2},
+                {"stability_distance", 100},
+                {"stability_overflow", 10},
+                {"runs", 2},
+                {"recompute_share", 8}};  // 2 scenes x 2 policies x 2 widths
   for (const auto& t : tables) {
     const fs::path csv = out / (std::string(t.csv) + ".csv");
     ASSERT_TRUE(fs::exists(csv)) << csv;
     EXPECT_GE(CountDataRows(csv), t.minRows) << csv;
   }
-  for (const char* png : {"fig05_seq_vs_simd", "fig06_seq_vs_dist", "fig07_hetero_vs_dist_2children",
-                          "fig10_data_flow", "fig11_pixels", "fig12_all_methods",
-                          "stability_wrong_hits", "stability_t_error", "stability_overflow",
-                          "speed_vs_accuracy_pct_wrong", "speed_vs_accuracy_t_error",
-                          "speed_vs_accuracy_psnr", "uncertain_pixels", "recompute_share"})
+  for (const char* png :
+       {"fig05_seq_vs_simd", "fig06_seq_vs_dist", "fig07_hetero_vs_dist_2children",
+        "fig10_data_flow", "fig11_pixels", "fig12_all_methods", "stability_wrong_hits",
+        "stability_t_error", "stability_overflow", "speed_vs_accuracy_pct_wrong",
+        "speed_vs_accuracy_t_error", "speed_vs_accuracy_psnr", "uncertain_pixels",
+        "recompute_share"})
     EXPECT_TRUE(IsPng(out / (std::string(png) + ".png"))) << png;
   // Every method has landed: each figure's every cell is a measured number (no NaN), the
   // times positive; the farm figures count bytes and pixels.
-  for (const char* csv : {"fig05_seq_vs_simd", "fig06_seq_vs_dist", "fig07_hetero_vs_dist_2children",
-                          "fig10_data_flow", "fig11_pixels", "fig12_all_methods"}) {
+  for (const char* csv :
+       {"fig05_seq_vs_simd", "fig06_seq_vs_dist", "fig07_hetero_vs_dist_2children",
+        "fig10_data_flow", "fig11_pixels", "fig12_all_methods"}) {
     std::ifstream f(out / (std::string(csv) + ".csv"));
     std::string line;
     std::getline(f, line);  // header
@@ -117,7 +129,8 @@ TEST(ChartsQuick, EverySweepWritesItsCsvAndChart) {
   {
     std::ifstream f(out / "accuracy.csv");
     std::string line;
-    std::getline(f, line);  // kind,frac_bits,cycles,host_s,pct_wrong,t_err_max,t_err_mean,psnr,planned
+    std::getline(f,
+                 line);  // kind,frac_bits,cycles,host_s,pct_wrong,t_err_max,t_err_mean,psnr,planned
     int fixedRows = 0;
     double firstTErr = -1, lastTErr = -1;
     std::map<std::string, double> floatTErr;  // the sequential tracers, against the same reference
@@ -168,7 +181,8 @@ TEST(ChartsQuick, EverySweepWritesItsCsvAndChart) {
       EXPECT_LT(r.at(16), r.at(8)) << scene;
       for (int b : {8, 16}) {
         const std::string w = "/" + std::to_string(b);
-        EXPECT_LE(recomputed[scene + std::string("/auto") + w], recomputed[scene + std::string("/recompute") + w])
+        EXPECT_LE(recomputed[scene + std::string("/auto") + w],
+                  recomputed[scene + std::string("/recompute") + w])
             << scene << " at " << b << " bits";
       }
     }

@@ -53,9 +53,19 @@ std::string TempPath(const std::string& name) {
 
 TEST(StabilityDistance, NaiveLosesTheRadiusFarAwayAndHearnBakerKeepsIt) {
   const std::string out = TempPath("distance.csv");
-  const char* argv[] = {"zephyr", "stability", "distance", "--out", out.c_str(),
-                        "--formats", "float32,float64,s15.16", "--rays", "64",
-                        "--max-log2", "14", "--steps", "1"};
+  const char* argv[] = {"zephyr",
+                        "stability",
+                        "distance",
+                        "--out",
+                        out.c_str(),
+                        "--formats",
+                        "float32,float64,s15.16",
+                        "--rays",
+                        "64",
+                        "--max-log2",
+                        "14",
+                        "--steps",
+                        "1"};
   ASSERT_EQ(RunZephyr(13, argv), 0);
   const auto rows = ReadCsv(out);
   ASSERT_EQ(rows.size(), 14u * 2 * 3);  // distances 2^1..2^14, two forms, three formats
@@ -64,7 +74,8 @@ TEST(StabilityDistance, NaiveLosesTheRadiusFarAwayAndHearnBakerKeepsIt) {
     for (const char* format : {"float32", "float64", "s15.16"})
       EXPECT_EQ(std::stod(Find(rows, "4", form, format).at("wrong_hit_pct")), 0) << form << format;
   // Far (16384 r): float32 naive calls the rays past the radius hits (RTG ch. 7: the radius
-  // stops mattering beyond ~4096 r); Hearn-Baker in float32 and the naive form in float64 stay right.
+  // stops mattering beyond ~4096 r); Hearn-Baker in float32 and the naive form in float64 stay
+  // right.
   EXPECT_GT(std::stod(Find(rows, "16384", "naive", "float32").at("wrong_hit_pct")), 10);
   EXPECT_EQ(std::stod(Find(rows, "16384", "hb", "float32").at("wrong_hit_pct")), 0);
   EXPECT_EQ(std::stod(Find(rows, "16384", "naive", "float64").at("wrong_hit_pct")), 0);
@@ -80,7 +91,8 @@ TEST(StabilityDistance, NaiveLosesTheRadiusFarAwayAndHearnBakerKeepsIt) {
 
 TEST(StabilityOverflow, HearnBakerHoldsTheSquareOfTheNaiveExtent) {
   const std::string out = TempPath("overflow.csv");
-  const char* argv[] = {"zephyr", "stability", "overflow", "--out", out.c_str(), "--max-int-bits", "12"};
+  const char* argv[] = {"zephyr",    "stability",      "overflow", "--out",
+                        out.c_str(), "--max-int-bits", "12"};
   ASSERT_EQ(RunZephyr(7, argv), 0);
   const auto rows = ReadCsv(out);
   ASSERT_EQ(rows.size(), 11u * 2);  // I = 2..12, two forms

@@ -2,11 +2,11 @@
 // emulated array equals the plain C++ version, generation by generation, on a 384x384 grid
 // of 18 virtual-PE layers; a glider crosses the layers' boundaries intact; the cycles of a
 // generation do not depend on the cells.
+#include "tools/examples/life.h"
+
 #include <gtest/gtest.h>
 
 #include <random>
-
-#include "tools/examples/life.h"
 
 namespace zephyr::examples {
 namespace {
@@ -48,7 +48,8 @@ TEST(ToolsLife, AGliderCrossesTheLayers) {
   Machine m(bitserial::Profile("wavetracer"), 384 * 384);
   const MeshShape grid{{384, 384}};
   std::vector<int64_t> plain(m.VirtualPes(), 0);
-  for (auto [x, y] : {std::pair{1, 0}, {2, 1}, {0, 2}, {1, 2}, {2, 2}}) plain[120 + x + 384 * (15 + y)] = 1;
+  for (auto [x, y] : {std::pair{1, 0}, {2, 1}, {0, 2}, {1, 2}, {2, 2}})
+    plain[120 + x + 384 * (15 + y)] = 1;
   Multi alive(m, fixed::Format::Unsigned(1, 0), "alive");
   alive.LoadRaw(plain);
   const std::vector<int64_t> start = plain;

@@ -7,11 +7,10 @@
 
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
 #include <string>
-
-#include <nlohmann/json.hpp>
 
 namespace zephyr {
 namespace {
@@ -30,7 +29,8 @@ size_t Count(const std::string& text, const std::string& part) {
 }
 
 TEST(Mutants, EveryMutantAppliesToExactlyOnePlace) {
-  ASSERT_TRUE(std::filesystem::exists("tools/mutants.json")) << "run from the repository's top folder";
+  ASSERT_TRUE(std::filesystem::exists("tools/mutants.json"))
+      << "run from the repository's top folder";
   const nlohmann::json all = nlohmann::json::parse(Text("tools/mutants.json"));
   const nlohmann::json& list = all.is_array() ? all : all.at("mutants");
   ASSERT_GT(list.size(), 50u);
@@ -40,7 +40,8 @@ TEST(Mutants, EveryMutantAppliesToExactlyOnePlace) {
     const std::string original = m.at("original").get<std::string>();
     EXPECT_TRUE(ids.insert(id).second) << id << ": the id is used twice";
     ASSERT_TRUE(std::filesystem::is_regular_file(file)) << id << ": no file " << file;
-    EXPECT_EQ(Count(Text(file), original), 1u) << id << ": its original is not exactly once in " << file;
+    EXPECT_EQ(Count(Text(file), original), 1u)
+        << id << ": its original is not exactly once in " << file;
     EXPECT_NE(m.at("replacement").get<std::string>(), original) << id;
   }
 }

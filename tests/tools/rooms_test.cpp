@@ -24,17 +24,19 @@ const std::map<std::string, std::set<std::string>>& Allowed() {
       {"hosts/io", {"fixed", "hosts/io"}},
       {"hosts/scene", {"fixed", "hosts/scene"}},
       {"hosts/trace", {"fixed", "hosts/io", "hosts/scene", "hosts/trace"}},
-      {"hosts/simd", {"fixed", "bitserial", "hosts/io", "hosts/scene", "hosts/trace", "hosts/simd"}},
+      {"hosts/simd",
+       {"fixed", "bitserial", "hosts/io", "hosts/scene", "hosts/trace", "hosts/simd"}},
       {"hosts/farm", {"fixed", "hosts/io", "hosts/farm"}},
       // The testbed prices counted work (TraceStats, cycle reports, the farm's times): it
       // needs neither the SIMD pass's code nor any method's.
-      {"hosts/testbed", {"fixed", "bitserial", "hosts/io", "hosts/scene", "hosts/trace", "hosts/testbed"}},
+      {"hosts/testbed",
+       {"fixed", "bitserial", "hosts/io", "hosts/scene", "hosts/trace", "hosts/testbed"}},
       {"hosts/methods",
-       {"fixed", "bitserial", "hosts/io", "hosts/scene", "hosts/trace", "hosts/simd",
-        "hosts/farm", "hosts/testbed", "hosts/methods"}},
+       {"fixed", "bitserial", "hosts/io", "hosts/scene", "hosts/trace", "hosts/simd", "hosts/farm",
+        "hosts/testbed", "hosts/methods"}},
       {"hosts/cmd",
-       {"fixed", "bitserial", "hosts/io", "hosts/scene", "hosts/trace", "hosts/simd",
-        "hosts/farm", "hosts/testbed", "hosts/methods", "hosts/cmd"}},
+       {"fixed", "bitserial", "hosts/io", "hosts/scene", "hosts/trace", "hosts/simd", "hosts/farm",
+        "hosts/testbed", "hosts/methods", "hosts/cmd"}},
   };
   return allowed;
 }
@@ -52,7 +54,8 @@ TEST(Rooms, EveryIncludeOfTheEnginePointsDown) {
   int files = 0;
   std::vector<std::filesystem::directory_entry> entries;
   for (const char* top : {"fixed", "bitserial", "hosts"})
-    for (const auto& entry : std::filesystem::recursive_directory_iterator(top)) entries.push_back(entry);
+    for (const auto& entry : std::filesystem::recursive_directory_iterator(top))
+      entries.push_back(entry);
   for (const auto& entry : entries) {
     if (!entry.is_regular_file()) continue;
     const std::string path = entry.path().generic_string();
@@ -67,7 +70,8 @@ TEST(Rooms, EveryIncludeOfTheEnginePointsDown) {
       if (!std::regex_search(line, m, include)) continue;
       const std::string target = m[1];
       const std::string top = target.substr(0, target.find('/'));
-      if (top != "fixed" && top != "bitserial" && top != "hosts" && top != "tests" && top != "tools")
+      if (top != "fixed" && top != "bitserial" && top != "hosts" && top != "tests" &&
+          top != "tools")
         continue;  // a library's header (Highway's are quoted as "hwy/...")
       EXPECT_TRUE(Allowed().at(room).count(RoomOf(target)))
           << path << ":" << number << ": " << room << " includes " << target;
@@ -107,7 +111,8 @@ std::vector<std::string> SourcesUnder(std::initializer_list<const char*> folders
   for (const char* folder : folders)
     for (const auto& entry : std::filesystem::recursive_directory_iterator(folder)) {
       const std::string path = entry.path().generic_string();
-      if (entry.is_regular_file() && (path.find(".cpp") != std::string::npos || path.find(".h") != std::string::npos))
+      if (entry.is_regular_file() &&
+          (path.find(".cpp") != std::string::npos || path.find(".h") != std::string::npos))
         paths.push_back(path);
     }
   return paths;
@@ -115,12 +120,14 @@ std::vector<std::string> SourcesUnder(std::initializer_list<const char*> folders
 
 // Every file of `folders` whose code (comments removed, literals kept) matches `pattern`
 // fails the test, with what matched and `why`; returns how many files were read.
-int ExpectNoMatch(std::initializer_list<const char*> folders, const std::regex& pattern, const std::string& why) {
+int ExpectNoMatch(std::initializer_list<const char*> folders, const std::regex& pattern,
+                  const std::string& why) {
   const std::vector<std::string> paths = SourcesUnder(folders);
   for (const std::string& path : paths) {
     const std::string code = CodeOf(path);
     std::smatch m;
-    EXPECT_FALSE(std::regex_search(code, m, pattern)) << path << ": '" << m.str() << "' (" << why << ")";
+    EXPECT_FALSE(std::regex_search(code, m, pattern))
+        << path << ": '" << m.str() << "' (" << why << ")";
   }
   return int(paths.size());
 }
@@ -143,13 +150,16 @@ TEST(Rooms, TheTestbedBranchesOnNoMethod) {
 TEST(Rooms, NoRoomBelowTheMethodsMakesAFlagsError) {
   // A message that starts with a flag, or a flag followed by a colon ("--depth: ...").
   const std::regex flagError(R"re("--[a-z]|--[a-z][a-z-]*:)re");
-  const int files = ExpectNoMatch({"fixed", "bitserial", "hosts/io", "hosts/scene", "hosts/trace", "hosts/simd",
-                                   "hosts/farm", "hosts/testbed"},
-                                  flagError, "a lower room names the value; hosts/cmd names the flag");
+  const int files =
+      ExpectNoMatch({"fixed", "bitserial", "hosts/io", "hosts/scene", "hosts/trace", "hosts/simd",
+                     "hosts/farm", "hosts/testbed"},
+                    flagError, "a lower room names the value; hosts/cmd names the flag");
   EXPECT_GE(files, 60);
   // The check itself: it finds the errors these rooms had before.
-  EXPECT_TRUE(std::regex_search(std::string(R"x(throw UserError("--threads: expected 1 to 8"))x"), flagError));
-  EXPECT_TRUE(std::regex_search(std::string(R"x(fmt::format("{} --frac-bits: more than"))x"), flagError));
+  EXPECT_TRUE(std::regex_search(std::string(R"x(throw UserError("--threads: expected 1 to 8"))x"),
+                                flagError));
+  EXPECT_TRUE(
+      std::regex_search(std::string(R"x(fmt::format("{} --frac-bits: more than"))x"), flagError));
   EXPECT_FALSE(std::regex_search(std::string(R"x(" (use --number fixed)")x"), flagError));
 }
 

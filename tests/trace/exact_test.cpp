@@ -1,11 +1,12 @@
 // The exact (128-bit) first-hit reference (hosts/trace/exact.h): known roots, and agreement
 // with the double tracer on the object wherever the double hit is not close to a tie.
+#include "hosts/trace/exact.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 
 #include "hosts/scene/gen.h"
-#include "hosts/trace/exact.h"
 
 namespace zephyr {
 namespace {
@@ -24,8 +25,9 @@ TEST(TraceExact, SphereRootsAreExactAndRespectTMin) {
 }
 
 TEST(TraceExact, FirstObjectAgreesWithTheDoubleTracerOnEveryKind) {
-  for (const Scene& scene : {GenerateRandomSpheres({.count = 24, .seed = 4, .width = 32, .height = 32}),
-                             GenerateTransformedShowcase(32, 32)}) {
+  for (const Scene& scene :
+       {GenerateRandomSpheres({.count = 24, .seed = 4, .width = 32, .height = 32}),
+        GenerateTransformedShowcase(32, 32)}) {
     TraceOptions o;
     o.depth = 1;
     const auto tracer = Tracer::Create(scene, o);

@@ -18,8 +18,10 @@ namespace {
 
 template <typename T>
 uint64_t Bits(T v) {
-  if constexpr (sizeof(T) == 4) return std::bit_cast<uint32_t>(v);
-  else return std::bit_cast<uint64_t>(v);
+  if constexpr (sizeof(T) == 4)
+    return std::bit_cast<uint32_t>(v);
+  else
+    return std::bit_cast<uint64_t>(v);
 }
 
 template <typename T>
@@ -99,8 +101,8 @@ void CheckRandomCases(SphereTest form) {
       const int32_t scalar = NearestSphereScalar(form, c.spheres, c.o, c.d, c.tMin, &tScalar);
       const int32_t vector = NearestSphere(form, c.spheres, c.o, c.d, c.tMin, &tVector);
       ASSERT_EQ(vector, scalar) << name << " case " << k;
-      ASSERT_EQ(Bits(tVector), Bits(tScalar)) << name << " case " << k << ": " << tVector
-                                               << " vs " << tScalar;
+      ASSERT_EQ(Bits(tVector), Bits(tScalar))
+          << name << " case " << k << ": " << tVector << " vs " << tScalar;
       (scalar >= 0 ? hits : misses)++;
       // A later exact duplicate of the winner: the scalar loop keeps the lower index.
       if (scalar >= 0) {
@@ -155,12 +157,12 @@ TEST(TraceKernels, EdgeCasesOnEveryTarget) {
       }
 
       SphereArrays<double> s;
-      s.Push({0, 0, 0}, 4);    // 0: holds the origin: far root t = 2
-      s.Push({10, 0, 0}, 1);   // 1: t = 9
-      s.Push({10, 0, 0}, 1);   // 2: the same, higher index
+      s.Push({0, 0, 0}, 4);                               // 0: holds the origin: far root t = 2
+      s.Push({10, 0, 0}, 1);                              // 1: t = 9
+      s.Push({10, 0, 0}, 1);                              // 2: the same, higher index
       for (int i = 0; i < 17; ++i) s.Push({5, 3, 0}, 1);  // misses, pushes 19 and 20 into any tail
-      s.Push({1.5, 0, 0}, 1);  // 20: t = 0.5 (near root) or 2.5
-      s.Push({1.5, 0, 0}, 1);  // 21
+      s.Push({1.5, 0, 0}, 1);                             // 20: t = 0.5 (near root) or 2.5
+      s.Push({1.5, 0, 0}, 1);                             // 21
       EXPECT_EQ(NearestSphere(form, s, o, d, 0.0, &t), 20) << name;
       EXPECT_EQ(t, 0.5);
       EXPECT_EQ(NearestSphere(form, s, o, d, 0.6, &t), 0) << name;  // 2 < 2.5
@@ -190,7 +192,7 @@ TEST(TraceKernels, TracerFirstHitsIdenticalOnEveryTarget) {
     p.material = 0;
     scene.objects.push_back(p);
     if (i % 5 == 0) scene.objects.push_back(p);  // an exact duplicate: equal t
-    if (i == 11) {  // a polygon among them, on the scalar path
+    if (i == 11) {                               // a polygon among them, on the scalar path
       Primitive wall;
       wall.shape = Polygon{{{-2, -2, 1}, {2, -2, 1}, {2, 2, 1}, {-2, 2, 1}}, {}};
       scene.objects.push_back(wall);

@@ -132,7 +132,8 @@ std::vector<Probe> Probes() {
     for (double theta = 0.05; theta < M_PI; theta += 0.1)
       for (double phi = 0; phi < 2 * M_PI; phi += 0.1)
         points.push_back(c + Vec3{std::sin(theta) * std::cos(phi), std::cos(theta),
-                                  std::sin(theta) * std::sin(phi)} * r);
+                                  std::sin(theta) * std::sin(phi)} *
+                                 r);
   std::vector<Probe> probes;
   for (const Vec3& p : points) {
     const Vec3 d = Normalize(p - kEye);
@@ -263,8 +264,8 @@ TEST(TraceOffset, ContactShadowAndReflectionsAreTheSameWhicheverMagnitudeDominat
                         std::abs(c.y - q.colour.y) <= tolerance &&
                         std::abs(c.z - q.colour.z) <= tolerance;
         if (!ok && wrong++ < 5)
-          ADD_FAILURE() << kPrecisionNames.NameOf(precision) << ", " << at.name << ": object " << q.object
-                        << " at " << q.point.x << " " << q.point.y << " " << q.point.z
+          ADD_FAILURE() << kPrecisionNames.NameOf(precision) << ", " << at.name << ": object "
+                        << q.object << " at " << q.point.x << " " << q.point.y << " " << q.point.z
                         << (q.shadowed ? " (in shadow)" : "") << ": " << c.x << " " << c.y << " "
                         << c.z << ", by hand " << q.colour.x << " " << q.colour.y << " "
                         << q.colour.z;
@@ -373,10 +374,16 @@ TEST(TraceOffset, NoKindShadowsItselfWhereverItsOwnNumbersAre) {
         {"a cylinder in a far object space",
          sideLight + xShift + "c " + std::to_string(away) + " -1 0 1 " + std::to_string(away) +
              " 1 0 1\n",
-         [](const Vec3& p) { return Vec3{p.x, 0, p.z}; }, 300},
+         [](const Vec3& p) {
+           return Vec3{p.x, 0, p.z};
+         },
+         300},
         {"a sphere of radius 1e5 (float) or 1e9 (double) as the floor, seen from near its top",
          View("0 2 5", "0 0 0", "40", "5 8 3") + "s 0 -" + giant + " 0 " + giant + "\n",
-         [&](const Vec3& p) { return p + Vec3{0, radius, 0}; }, 4000},
+         [&](const Vec3& p) {
+           return p + Vec3{0, radius, 0};
+         },
+         4000},
         // A boundary: the needle's ‖A‖∞‖A⁻¹‖∞ is 3e4, but what it multiplies moves the hit
         // point along the surface, not across it; the offset needs no term for it.
         {"a needle ellipsoid 3e4:1",

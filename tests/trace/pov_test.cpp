@@ -4,6 +4,8 @@
 // glass and mirrors 41.47 dB (edges and refraction differ slightly); the sphereflake and the
 // transformed showcase are identical pixel for pixel (inf), where one 8-bit level off in one
 // channel of one pixel would already give 92.6 dB — so a shading slip cannot hide below them.
+#include "hosts/scene/pov.h"
+
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -11,11 +13,10 @@
 #include <filesystem>
 #include <fstream>
 
-#include "hosts/trace/image.h"
-#include "hosts/trace/tracer.h"
 #include "hosts/scene/gen.h"
 #include "hosts/scene/nff.h"
-#include "hosts/scene/pov.h"
+#include "hosts/trace/image.h"
+#include "hosts/trace/tracer.h"
 
 namespace zephyr {
 namespace {
@@ -23,12 +24,13 @@ namespace {
 bool HavePovray() { return std::system("command -v povray >/dev/null 2>&1") == 0; }
 
 double CompareWithPovray(const Scene& scene, const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / ("zephyr_pov_" + std::to_string(::getpid()));
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("zephyr_pov_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   const std::string pov = (dir / (name + ".pov")).string(), png = (dir / (name + ".png")).string();
   std::ofstream(pov) << ExportPov(scene, 5);
-  const std::string cmd = PovrayCommand(pov, png, scene.camera.width, scene.camera.height) +
-                          " >'" + (dir / (name + ".log")).string() + "' 2>&1";
+  const std::string cmd = PovrayCommand(pov, png, scene.camera.width, scene.camera.height) + " >'" +
+                          (dir / (name + ".log")).string() + "' 2>&1";
   EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
   const Image reference = ReadPng(png);
   Image ours(scene.camera.width, scene.camera.height);
@@ -72,13 +74,16 @@ TEST(TracePov, TransformedPrimitivesMatchPovray) {
 // and the floor saturated to white).
 TEST(TracePov, LightsWithoutColourMatchPovray) {
   const Scene s = ParseNffOrThrow(
-      "v\nfrom 0 -6 4\nat 0 0 0.5\nup 0 0 1\nangle 40\nhither 0.01\nresolution 96 96\nb 0.078 0.361 0.753\n"
+      "v\nfrom 0 -6 4\nat 0 0 0.5\nup 0 0 1\nangle 40\nhither 0.01\nresolution 96 96\nb 0.078 "
+      "0.361 0.753\n"
       "l 3 -2 6\nl -4 -3 5\nl 1 4 7\nf 1 1 1 1 0 100000 0 0\np 4\n-4 -4 0\n4 -4 0\n4 4 0\n-4 4 0\n"
-      "f 1 0 0 0.5 0.2 3.0827 0 0\ns -1 0 1 1\nf 0.9 0.9 0.9 0.1 0.1 101.148 0.8 1.5\ns 1.2 -0.5 0.7 0.7\n",
+      "f 1 0 0 0.5 0.2 3.0827 0 0\ns -1 0 1 1\nf 0.9 0.9 0.9 0.1 0.1 101.148 0.8 1.5\ns 1.2 -0.5 "
+      "0.7 0.7\n",
       "spd.nff");
   const std::string pov = ExportPov(s, 5);
   const std::string each = "0.28867513459481287";  // √3/6
-  EXPECT_NE(pov.find("ambient_light <" + each + ", " + each + ", " + each + ">"), std::string::npos) << pov;
+  EXPECT_NE(pov.find("ambient_light <" + each + ", " + each + ", " + each + ">"), std::string::npos)
+      << pov;
   EXPECT_NE(pov.find("color rgb <" + each), std::string::npos) << pov;
   if (!HavePovray()) GTEST_SKIP() << "povray is not installed";
   const double psnr = CompareWithPovray(s, "spd");
@@ -94,7 +99,8 @@ TEST(TracePov, LightsWithoutColourMatchPovray) {
 // 1 and ours T (docs/shading.md, "Mapping onto POV-Ray").
 TEST(TracePov, GlassPolygonSolidIsOneInterior) {
   const Scene s = ParseNffOrThrow(
-      "v\nfrom 0 -3 3\nat 0 0 0.2\nup 0 0 1\nangle 40\nhither 0.01\nresolution 96 96\nb 0.078 0.361 0.753\n"
+      "v\nfrom 0 -3 3\nat 0 0 0.2\nup 0 0 1\nangle 40\nhither 0.01\nresolution 96 96\nb 0.078 "
+      "0.361 0.753\n"
       "l 3 -2 6\nl -4 -3 5\nl 1 4 7\nf 1 1 1 1 0 100000 0 0\np 4\n-2 -2 0\n2 -2 0\n2 2 0\n-2 2 0\n"
       "f 1 0 0 0.7 0.3 30 0 0\ns 0 0 0.2 0.2\nf 0.9 0.9 0.9 0.1 0 100000 0.8 1.5\n"
       // A 2 × 2 × 0.1 slab, every face counter-clockwise from outside: top, bottom, y = −1,
@@ -108,7 +114,9 @@ TEST(TracePov, GlassPolygonSolidIsOneInterior) {
       "slab.nff");
   const std::string pov = ExportPov(s, 5);
   int interiors = 0;
-  for (size_t at = pov.find("interior {"); at != std::string::npos; at = pov.find("interior {", at + 1)) ++interiors;
+  for (size_t at = pov.find("interior {"); at != std::string::npos;
+       at = pov.find("interior {", at + 1))
+    ++interiors;
   EXPECT_EQ(interiors, 1) << pov;
   EXPECT_NE(pov.find("union {"), std::string::npos) << pov;
   if (!HavePovray()) GTEST_SKIP() << "povray is not installed";
@@ -152,7 +160,8 @@ TEST(TracePov, EveryLocalWeightIsDividedByTheOpacity) {
         Scene s = GenerateTransformedShowcase(8, 8);
         for (Material& m : s.materials) m.t = t, m.ks = ks, m.kd = kd, m.shine = 20, m.ior = 1.5;
         const std::string pov = ExportPov(s, 3);
-        const std::string where = "T " + std::to_string(t) + " Ks " + std::to_string(ks) + " Kd " + std::to_string(kd);
+        const std::string where =
+            "T " + std::to_string(t) + " Ks " + std::to_string(ks) + " Kd " + std::to_string(kd);
         EXPECT_NEAR(ValueAfter(pov, "diffuse"), kd / (1 - t), 1e-12) << where;
         EXPECT_NEAR(ValueAfter(pov, "ambient"), kd / (1 - t), 1e-12) << where;
         EXPECT_NEAR(ValueAfter(pov, "phong"), ks / (1 - t), 1e-12) << where;
@@ -160,8 +169,10 @@ TEST(TracePov, EveryLocalWeightIsDividedByTheOpacity) {
         const size_t reflection = pov.find("reflection { ");
         ASSERT_NE(reflection, std::string::npos) << pov;
         EXPECT_NEAR(std::stod(pov.substr(reflection + 13)), ks, 1e-12) << where;
-        if (t > 0) EXPECT_NEAR(ValueAfter(pov, "transmit"), t, 1e-12) << where;
-        else EXPECT_EQ(pov.find("transmit"), std::string::npos) << where;
+        if (t > 0)
+          EXPECT_NEAR(ValueAfter(pov, "transmit"), t, 1e-12) << where;
+        else
+          EXPECT_EQ(pov.find("transmit"), std::string::npos) << where;
       }
 }
 

@@ -9,18 +9,21 @@
 
 #include "fixed/check.h"
 #include "hosts/cmd/command.h"
-#include "hosts/trace/image.h"
-#include "hosts/scene/nff.h"
 #include "hosts/methods/render.h"
-#include "hosts/trace/tracer.h"
 #include "hosts/scene/gen.h"
+#include "hosts/scene/nff.h"
+#include "hosts/trace/image.h"
+#include "hosts/trace/tracer.h"
 
 namespace zephyr {
 namespace {
 
-Scene TinyScene(const std::string& objects, int w = 9, int h = 7, const std::string& from = "0 0 10") {
-  return ParseNffOrThrow("b 0.1 0.2 0.3\nv\nfrom " + from + "\nat 0 0 0\nup 0 1 0\nangle 40\nhither 0\nresolution " +
-                         std::to_string(w) + " " + std::to_string(h) + "\nl 0 0 100\n" + objects, "tiny.nff");
+Scene TinyScene(const std::string& objects, int w = 9, int h = 7,
+                const std::string& from = "0 0 10") {
+  return ParseNffOrThrow(
+      "b 0.1 0.2 0.3\nv\nfrom " + from + "\nat 0 0 0\nup 0 1 0\nangle 40\nhither 0\nresolution " +
+          std::to_string(w) + " " + std::to_string(h) + "\nl 0 0 100\n" + objects,
+      "tiny.nff");
 }
 
 TEST(TracePrimary, AngleSpansTopAndBottomPixelCentres) {
@@ -30,8 +33,8 @@ TEST(TracePrimary, AngleSpansTopAndBottomPixelCentres) {
   EXPECT_NEAR(centre.direction.z, -1, 1e-15);
   const Vec3 top = rays.At(4, 0).direction, bottom = rays.At(4, 6).direction;
   EXPECT_NEAR(std::acos(Dot(top, bottom)) * 180 / M_PI, 40, 1e-9);
-  EXPECT_GT(top.y, 0);                         // row 0 is the top
-  EXPECT_GT(rays.At(8, 3).direction.x, 0);     // x grows to the right (from +z looking at -z, up +y)
+  EXPECT_GT(top.y, 0);                      // row 0 is the top
+  EXPECT_GT(rays.At(8, 3).direction.x, 0);  // x grows to the right (from +z looking at -z, up +y)
   EXPECT_NEAR(Length(rays.At(0, 0).direction), 1, 1e-15);
 }
 
@@ -58,10 +61,11 @@ TEST(TraceIntersect, SphereFormsAgreeNearAndDifferFarInFloat) {
 TEST(TraceIntersect, TransformedPrimitivesAndConesAndPolygons) {
   const Scene s = TinyScene(
       "f 1 1 1 1 0 0 0 1\n"
-      "transform 3 0 0 0  0 1 0 0  0 0 1 -5\ns 0 0 0 1\ntransform identity\n"  // ellipsoid, x radius 3
-      "c 0 -2 0 1 0 2 0 1\n"                                                 // cylinder along y
-      "c 0 0 0 1 0 0 2 0\n"                                                  // cone along z, apex at z=2
-      "p 6\n0 0 0\n4 0 0\n4 4 0\n2 1 0\n0 4 0\n0 2 0\n");                     // concave (notched) hexagon
+      "transform 3 0 0 0  0 1 0 0  0 0 1 -5\ns 0 0 0 1\ntransform identity\n"  // ellipsoid, x
+                                                                               // radius 3
+      "c 0 -2 0 1 0 2 0 1\n"                                                   // cylinder along y
+      "c 0 0 0 1 0 0 2 0\n"                                // cone along z, apex at z=2
+      "p 6\n0 0 0\n4 0 0\n4 4 0\n2 1 0\n0 4 0\n0 2 0\n");  // concave (notched) hexagon
   // Ellipsoid: along x from x=10 at y=0,z=-5 the surface is at x=3.
   EXPECT_NEAR(*IntersectObject(s, 0, {10, 0, -5}, {-1, 0, 0}), 7, 1e-12);
   // Along y from y=10 the surface is at y=1; a non-unit direction gives t in its units.
@@ -69,7 +73,7 @@ TEST(TraceIntersect, TransformedPrimitivesAndConesAndPolygons) {
   EXPECT_FALSE(IntersectObject(s, 0, {0, 1.01, 10}, {0, 0, -1}));
   // Cylinder radius 1 around the y axis, open ends.
   EXPECT_NEAR(*IntersectObject(s, 1, {5, 0.5, 0}, {-1, 0, 0}), 4, 1e-12);
-  EXPECT_FALSE(IntersectObject(s, 1, {5, 2.5, 0}, {-1, 0, 0}));      // beyond the end
+  EXPECT_FALSE(IntersectObject(s, 1, {5, 2.5, 0}, {-1, 0, 0}));         // beyond the end
   EXPECT_NEAR(*IntersectObject(s, 1, {0, 0, 0}, {0, 0, 1}), 1, 1e-12);  // from inside
   // Cone: radius 1 - z/2, so at z=1 the radius is 0.5.
   EXPECT_NEAR(*IntersectObject(s, 2, {5, 0, 1}, {-1, 0, 0}), 4.5, 1e-12);
@@ -87,10 +91,14 @@ TEST(TraceIntersect, TransformedPrimitivesAndConesAndPolygons) {
 // a sphere of radius 1e120 shrunk by 1e-120 (or 1e-120 grown by 1e120) is traced as the
 // unit sphere: their determinants (1e-360, 1e360) over- or underflow double.
 TEST(TraceIntersect, TinyAndHugeTransformScalesTraceAsTheirWorldShape) {
-  for (const auto& [e, r] : {std::pair<std::string, std::string>{"1e-120", "1e120"}, {"1e120", "1e-120"}}) {
+  for (const auto& [e, r] :
+       {std::pair<std::string, std::string>{"1e-120", "1e120"}, {"1e120", "1e-120"}}) {
     const std::string& k = e;
-    const Scene s = TinyScene("f 1 1 1 1 0 0 0 1\ntransform " + e + " 0 0 0  0 " + e + " 0 0  0 0 " + e + " -5\n"
-                              "s 0 0 0 " + r + "\n");
+    const Scene s =
+        TinyScene("f 1 1 1 1 0 0 0 1\ntransform " + e + " 0 0 0  0 " + e + " 0 0  0 0 " + e +
+                  " -5\n"
+                  "s 0 0 0 " +
+                  r + "\n");
     ASSERT_TRUE(IntersectObject(s, 0, {0, 0, 10}, {0, 0, -1})) << k;
     EXPECT_NEAR(*IntersectObject(s, 0, {0, 0, 10}, {0, 0, -1}), 14, 1e-9) << k;
     EXPECT_NEAR(*IntersectObject(s, 0, {0, 0.5, 10}, {0, 0, -1}), 15 - std::sqrt(0.75), 1e-9) << k;
@@ -101,9 +109,11 @@ TEST(TraceIntersect, TinyAndHugeTransformScalesTraceAsTheirWorldShape) {
 // A floor lit from straight above, with a blocker between a floor point and the light.
 double FloorBrightness(const std::string& blockerMaterial) {
   const Scene s = ParseNffOrThrow(
-      "b 0 0 0\nv\nfrom 0 -10 10\nat 0 0 0\nup 0 0 1\nangle 30\nhither 0\nresolution 3 3\nl 0 0 20\n"
-      "f 1 1 1 0.5 0 0 0 1\np 4\n-5 -5 0\n5 -5 0\n5 5 0\n-5 5 0\n" + blockerMaterial +
-      "s 0 0 5 1\n", "shadow.nff");
+      "b 0 0 0\nv\nfrom 0 -10 10\nat 0 0 0\nup 0 0 1\nangle 30\nhither 0\nresolution 3 3\nl 0 0 "
+      "20\n"
+      "f 1 1 1 0.5 0 0 0 1\np 4\n-5 -5 0\n5 -5 0\n5 5 0\n-5 5 0\n" +
+          blockerMaterial + "s 0 0 5 1\n",
+      "shadow.nff");
   TraceOptions o;
   o.depth = 1;
   const auto tracer = Tracer::Create(s, o);
@@ -117,16 +127,19 @@ TEST(TraceShade, TransparentBlockersAttenuateShadowsPerSurface) {
   // One light without a colour: intensity 1/2 and an ambient term 1/2 (docs/scene-format.md).
   // Ambient Kd · C · 1/2 = 0.25 (never shadowed); the light adds Kd · N·L · 1/2 = 0.25.
   EXPECT_NEAR(open, 0.25 + 0.25, 1e-12);
-  EXPECT_NEAR(FloorBrightness("f 1 1 1 1 0 0 0 1\n"), 0.25, 1e-12);                     // opaque
-  EXPECT_NEAR(FloorBrightness("f 1 1 1 0 0 0 0.5 1.5\n"), 0.25 + 0.25 * 0.25, 1e-12);  // two surfaces
+  EXPECT_NEAR(FloorBrightness("f 1 1 1 1 0 0 0 1\n"), 0.25, 1e-12);  // opaque
+  EXPECT_NEAR(FloorBrightness("f 1 1 1 0 0 0 0.5 1.5\n"), 0.25 + 0.25 * 0.25,
+              1e-12);  // two surfaces
 }
 
 TEST(TraceShade, RefractionAndTotalInternalReflection) {
   // The eye inside a glass sphere (ior 1.5): near-normal rays leave (refraction); a ray
   // meeting the surface at 64° > asin(1/1.5) = 41.8° is totally reflected.
   const Scene s = ParseNffOrThrow(
-      "b 0 0 0\nv\nfrom 0 0 0.9\nat 1 0 0.9\nup 0 0 1\nangle 30\nhither 0\nresolution 3 3\nl 0 0 20\n"
-      "f 1 1 1 0 0 0 1 1.5\ns 0 0 0 1\n", "glass.nff");
+      "b 0 0 0\nv\nfrom 0 0 0.9\nat 1 0 0.9\nup 0 0 1\nangle 30\nhither 0\nresolution 3 3\nl 0 0 "
+      "20\n"
+      "f 1 1 1 0 0 0 1 1.5\ns 0 0 0 1\n",
+      "glass.nff");
   TraceOptions o;
   o.depth = 2;
   const auto tracer = Tracer::Create(s, o);
@@ -166,12 +179,13 @@ TEST(TraceShade, RefractObeysSnellsLawOnTheVectors) {
         ASSERT_TRUE(t) << what;
         ++refracted;
         EXPECT_NEAR(Length(*t), 1, 1e-12) << what;
-        EXPECT_LT(Dot(*t, n), 0) << what;                            // across the surface
-        EXPECT_NEAR(Dot(*t, Cross(d, n)), 0, 1e-12) << what;         // in the plane of d, n
+        EXPECT_LT(Dot(*t, n), 0) << what;                     // across the surface
+        EXPECT_NEAR(Dot(*t, Cross(d, n)), 0, 1e-12) << what;  // in the plane of d, n
         const Vec3 tangentD = d - n * Dot(d, n), tangentT = *t - n * Dot(*t, n);
-        EXPECT_GE(Dot(tangentT, tangentD), 0) << what;               // not bent back
+        EXPECT_GE(Dot(tangentT, tangentD), 0) << what;                     // not bent back
         EXPECT_NEAR(Length(tangentT), eta * std::sin(th), 1e-12) << what;  // sinθt = η·sinθi
-        EXPECT_NEAR(-Dot(*t, n), std::sqrt(1 - eta * eta * std::sin(th) * std::sin(th)), 1e-12) << what;
+        EXPECT_NEAR(-Dot(*t, n), std::sqrt(1 - eta * eta * std::sin(th) * std::sin(th)), 1e-12)
+            << what;
       }
     if (eta > 1) {  // the critical angle
       const double critical = std::asin(1 / eta);
@@ -227,7 +241,8 @@ TEST(TraceShade, RefractionAndTotalInternalReflectionSplitTheEnergy) {
         << "leaving at " << deg;
     EXPECT_EQ(out.rays[int(RayKind::kRefracted)], tir ? 0u : 1u) << deg;
     EXPECT_EQ(out.rays[int(RayKind::kReflected)], tir ? 2u : 1u) << deg;
-    EXPECT_NEAR(Length(colour(deg, true, false, outOpen) - b * 0.75), 0, 1e-12) << "leaving at " << deg;
+    EXPECT_NEAR(Length(colour(deg, true, false, outOpen) - b * 0.75), 0, 1e-12)
+        << "leaving at " << deg;
   }
 }
 
@@ -272,9 +287,11 @@ TEST(TraceShade, AMirroringTransformKeepsAPolygonsFront) {
 // matter: exporters write "infinite" floors as ±1e6 polygons (±1e9 in double).
 Scene FloorAndSphere(const std::string& half) {
   return ParseNffOrThrow(
-      "v\nfrom 0 3 8\nat 0 0.5 0\nup 0 1 0\nangle 40\nhither 0.01\nresolution 64 64\nb 0.1 0.1 0.3\nl 4 8 3\n"
-      "f 0.8 0.8 0.8 0.8 0.2 20 0 0\np 4\n-" + half + " 0 -" + half + "\n" + half + " 0 -" + half + "\n" +
-      half + " 0 " + half + "\n-" + half + " 0 " + half + "\nf 0.9 0.2 0.2 0.7 0.3 40 0 0\ns 0 1 0 1\n",
+      "v\nfrom 0 3 8\nat 0 0.5 0\nup 0 1 0\nangle 40\nhither 0.01\nresolution 64 64\nb 0.1 0.1 "
+      "0.3\nl 4 8 3\n"
+      "f 0.8 0.8 0.8 0.8 0.2 20 0 0\np 4\n-" +
+          half + " 0 -" + half + "\n" + half + " 0 -" + half + "\n" + half + " 0 " + half + "\n-" +
+          half + " 0 " + half + "\nf 0.9 0.2 0.2 0.7 0.3 40 0 0\ns 0 1 0 1\n",
       "floor.nff");
 }
 
@@ -321,9 +338,11 @@ TEST(TraceShade, AFarObjectOutOfViewLeavesTheImageAlone) {
 // rays of row 32 pass exactly through the shared edge and must show the roof.
 TEST(TraceIntersect, ARayThroughASharedEdgeHitsOneOfTheFaces) {
   const Scene roof = ParseNffOrThrow(
-      "v\nfrom 0 0 0\nat 0 0 -1\nup 0 1 0\nangle 40\nhither 0.01\nresolution 65 65\nb 1 0 1\nl 0 10 10\n"
+      "v\nfrom 0 0 0\nat 0 0 -1\nup 0 1 0\nangle 40\nhither 0.01\nresolution 65 65\nb 1 0 1\nl 0 "
+      "10 10\n"
       "l 0 -10 10\nf 0.9 0.8 0.2 0.9 0 1 0 0\np 4\n-3 0 -5\n3 0 -5\n3 2 -7\n-3 2 -7\n"
-      "p 4\n-3 0 -5\n-3 -2 -7\n3 -2 -7\n3 0 -5\n", "roof.nff");
+      "p 4\n-3 0 -5\n-3 -2 -7\n3 -2 -7\n3 0 -5\n",
+      "roof.nff");
   for (const Precision p : {Precision::kFloat, Precision::kDouble}) {
     TraceOptions o;
     o.precision = p;
@@ -342,9 +361,11 @@ TEST(TraceIntersect, ARayThroughASharedEdgeHitsOneOfTheFaces) {
   const Scene pairs = ParseNffOrThrow(
       "v\nfrom 0 0 0\nat 0 0 -1\nup 0 1 0\nangle 40\nhither 0\nresolution 3 3\nb 0 0 0\n"
       "f 1 1 1 1 0 0 0 0\n"
-      "p 3\n-1.3 -0.7 -5.1\n1.1 0.3 -4.7\n0.2 1.9 -6.3\np 3\n-1.3 -0.7 -5.1\n0.4 -1.7 -3.9\n1.1 0.3 -4.7\n"
+      "p 3\n-1.3 -0.7 -5.1\n1.1 0.3 -4.7\n0.2 1.9 -6.3\np 3\n-1.3 -0.7 -5.1\n0.4 -1.7 -3.9\n1.1 "
+      "0.3 -4.7\n"
       "p 3\n-2 -1 -6\n2 -1 -6\n2 1 -6\np 3\n-2 -1 -6\n2 1 -6\n-2 1 -6\n"
-      "p 3\n-0.9 0.1 -3.3\n0.7 0.6 -3.1\n0.1 1.4 -3.9\np 3\n-0.9 0.1 -3.3\n0.7 0.6 -3.1\n-0.2 -0.8 -2.7\n",
+      "p 3\n-0.9 0.1 -3.3\n0.7 0.6 -3.1\n0.1 1.4 -3.9\np 3\n-0.9 0.1 -3.3\n0.7 0.6 -3.1\n-0.2 -0.8 "
+      "-2.7\n",
       "pairs.nff");
   const std::pair<Vec3, Vec3> edges[] = {{{-1.3, -0.7, -5.1}, {1.1, 0.3, -4.7}},
                                          {{-2, -1, -6}, {2, 1, -6}},
@@ -357,7 +378,8 @@ TEST(TraceIntersect, ARayThroughASharedEdgeHitsOneOfTheFaces) {
         const Vec3 target = a + (b - a) * (k / 200.0) + Vec3{0, nudge, 0};
         const Vec3 d = Normalize(target);
         int hits = 0;
-        for (int i = 2 * pair; i < 2 * pair + 2; ++i) hits += IntersectObject(pairs, i, {0, 0, 0}, d).has_value();
+        for (int i = 2 * pair; i < 2 * pair + 2; ++i)
+          hits += IntersectObject(pairs, i, {0, 0, 0}, d).has_value();
         EXPECT_EQ(hits, 1) << "pair " << pair << " k " << k << " nudge " << nudge;
         ++rays;
       }
@@ -370,9 +392,14 @@ TEST(TraceIntersect, ARayThroughASharedEdgeHitsOneOfTheFaces) {
 // overflows in double), and a scale float cannot square is a clear error naming the line.
 TEST(TraceRender, LargeScenesRenderOrAreAClearError) {
   auto scene = [](const std::string& k) {
-    return ParseNffOrThrow("v\nfrom 0 0 10" + k + "\nat 0 0 0\nup 0 1 0\nangle 40\nhither 0\nresolution 9 9\n"
-                           "b 0.1 0.2 0.3\nl 3" + k + " 4" + k + " 10" + k + " 1 1 1\nf 1 0.5 0 0.8 0.2 10 0 0\n"
-                           "s 0 0 0 1" + k + "\ns 0 0 0.8" + k + " 0.3" + k + "\n", "big.nff");
+    return ParseNffOrThrow("v\nfrom 0 0 10" + k +
+                               "\nat 0 0 0\nup 0 1 0\nangle 40\nhither 0\nresolution 9 9\n"
+                               "b 0.1 0.2 0.3\nl 3" +
+                               k + " 4" + k + " 10" + k +
+                               " 1 1 1\nf 1 0.5 0 0.8 0.2 10 0 0\n"
+                               "s 0 0 0 1" +
+                               k + "\ns 0 0 0.8" + k + " 0.3" + k + "\n",
+                           "big.nff");
   };
   const Scene unit = scene(""), big = scene("e140");
   Image a(9, 9), b(9, 9);
@@ -387,7 +414,9 @@ TEST(TraceRender, LargeScenesRenderOrAreAClearError) {
     Tracer::Create(scene("e18"), f);
     FAIL() << "expected a UserError";
   } catch (const UserError& e) {
-    EXPECT_NE(std::string(e.what()).find("big.nff:2:1: the eye ('from') reaches 1e+19"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("big.nff:2:1: the eye ('from') reaches 1e+19"),
+              std::string::npos)
+        << e.what();
     EXPECT_NE(std::string(e.what()).find("--precision double"), std::string::npos) << e.what();
   }
   EXPECT_NO_THROW(Tracer::Create(scene("e15"), f));
@@ -398,7 +427,8 @@ TEST(TraceRender, LargeScenesRenderOrAreAClearError) {
 TEST(TraceShade, LightsWithoutColourFollowTheSpdRule) {
   const Scene s = ParseNffOrThrow(
       "v\nfrom 0 -10 10\nat 0 0 0\nup 0 0 1\nangle 30\nhither 0\nresolution 3 3\nb 0 0 0\n"
-      "l 0 0 20\nl 0 0 30\nl 0 0 40\nl 0 0 50\nf 1 0.5 0.25 0.5 0 0 0 0\np 4\n-5 -5 0\n5 -5 0\n5 5 0\n-5 5 0\n",
+      "l 0 0 20\nl 0 0 30\nl 0 0 40\nl 0 0 50\nf 1 0.5 0.25 0.5 0 0 0 0\np 4\n-5 -5 0\n5 -5 0\n5 5 "
+      "0\n-5 5 0\n",
       "spd.nff");
   TraceOptions o;
   o.depth = 1;
@@ -453,14 +483,17 @@ TEST(TraceRender, FloatAndDoubleAgreeOnAnImage) {
 }
 
 TEST(TraceRender, CommandWritesPngReportAndPrimaryCsv) {
-  const auto dir = std::filesystem::temp_directory_path() / ("zephyr_trace_" + std::to_string(::getpid()));
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("zephyr_trace_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   const std::string scene = (dir / "s.nff").string(), png = (dir / "s.png").string(),
                     json = (dir / "s.json").string(), csv = (dir / "s.csv").string();
-  const char* gen[] = {"zephyr", "gen", "spheres", "--count", "6", "--seed", "2", "--size", "20x10", "--out", scene.c_str()};
+  const char* gen[] = {"zephyr", "gen",    "spheres", "--count", "6",          "--seed",
+                       "2",      "--size", "20x10",   "--out",   scene.c_str()};
   ASSERT_EQ(RunZephyr(11, gen), 0);
-  const char* render[] = {"zephyr", "render", "--method", "seq", "--scene", scene.c_str(), "--out", png.c_str(),
-                          "--report", json.c_str(), "--dump-primary", csv.c_str(), "--depth", "3"};
+  const char* render[] = {"zephyr",         "render",    "--method",  "seq",      "--scene",
+                          scene.c_str(),    "--out",     png.c_str(), "--report", json.c_str(),
+                          "--dump-primary", csv.c_str(), "--depth",   "3"};
   ASSERT_EQ(RunZephyr(14, render), 0);
   const Image img = ReadPng(png);
   EXPECT_EQ(img.width, 20);
@@ -481,7 +514,9 @@ TEST(TraceRender, CommandWritesPngReportAndPrimaryCsv) {
     int x, y, object;
     double dx, dy, dz, t;
     unsigned flags;
-    ASSERT_EQ(std::sscanf(line.c_str(), "%d,%d,%lf,%lf,%lf,%d,%lf,%u", &x, &y, &dx, &dy, &dz, &object, &t, &flags), 8);
+    ASSERT_EQ(std::sscanf(line.c_str(), "%d,%d,%lf,%lf,%lf,%d,%lf,%u", &x, &y, &dx, &dy, &dz,
+                          &object, &t, &flags),
+              8);
     EXPECT_EQ(x, rows % 20);
     EXPECT_EQ(y, rows / 20);
     const PrimaryRay ray = tracer->Rays().At(x, y);

@@ -99,9 +99,10 @@ void LayerProgram(Machine& m) {
 }
 
 void LayerSweep() {
-  fmt::print("\nhost time per modelled cycle against layers (a ray-test-like program; medians of 3;\n"
-             "op by op = each op over every layer; blocks of {} layers on 1 thread and on {}):\n",
-             DefaultBlockLayers(), HardwareThreads());
+  fmt::print(
+      "\nhost time per modelled cycle against layers (a ray-test-like program; medians of 3;\n"
+      "op by op = each op over every layer; blocks of {} layers on 1 thread and on {}):\n",
+      DefaultBlockLayers(), HardwareThreads());
   fmt::print("{:>7} {:>14} {:>14} {:>14} {:>14} {:>9}\n", "layers", "cycles", "op-by-op ns/c",
              "blocks 1t ns/c", "blocks Nt ns/c", "Nt/1t");
   const MachineProfile profile = Profile("wavetracer");
@@ -119,7 +120,8 @@ void LayerSweep() {
     }
     auto blocked = [&](int threads) {
       return MedianSeconds(3, [&] {
-        cycles = RunLayerBlocks(profile, pes, {.threads = threads}, LayerProgram).report.TotalCycles();
+        cycles =
+            RunLayerBlocks(profile, pes, {.threads = threads}, LayerProgram).report.TotalCycles();
       });
     };
     const double one = blocked(1), all = blocked(0);
@@ -132,8 +134,10 @@ void LayerSweep() {
   auto spread = [](const std::vector<double>& v) {
     return *std::max_element(v.begin(), v.end()) / *std::min_element(v.begin(), v.end());
   };
-  fmt::print("flatness (largest / smallest ns per cycle, 18 to 2048 layers; target <= 1.5): "
-             "blocks 1t {:.2f}, blocks Nt {:.2f}\n", spread(perCycle1), spread(perCycleN));
+  fmt::print(
+      "flatness (largest / smallest ns per cycle, 18 to 2048 layers; target <= 1.5): "
+      "blocks 1t {:.2f}, blocks Nt {:.2f}\n",
+      spread(perCycle1), spread(perCycleN));
 }
 
 // One target's single ops (the Machine takes the kernel table of the best target hwy
@@ -150,8 +154,10 @@ std::vector<OpTimes> SingleOps(const char* target, bool first, bool naive) {
   if (first)
     fmt::print("bitserial engine, Highway target {}; single ops on one core\n", target);
   else
-    fmt::print("\nHighway target {} (the better ones disabled: hwy::SetSupportedTargetsForTest); "
-               "single ops on one core\n", target);
+    fmt::print(
+        "\nHighway target {} (the better ones disabled: hwy::SetSupportedTargetsForTest); "
+        "single ops on one core\n",
+        target);
   std::vector<OpTimes> times;
   for (int64_t pes : {int64_t{8192}, int64_t{384 * 384}}) {
     Machine m(Profile("wavetracer"), pes);
@@ -193,7 +199,8 @@ std::vector<OpTimes> SingleOps(const char* target, bool first, bool naive) {
     Multi d21(m, f21, "d21");
     for (auto& v : ra) v = static_cast<int32_t>(rng()) >> 11;
     d21.LoadRaw(ra);
-    const fixed::Fixed k22{fixed::Format::Signed(11, 10), static_cast<int64_t>(static_cast<int32_t>(rng()) >> 10)};
+    const fixed::Fixed k22{fixed::Format::Signed(11, 10),
+                           static_cast<int64_t>(static_cast<int32_t>(rng()) >> 10)};
     const int mulReps = pes == 8192 ? 401 : 41;
     double tMulUni = MedianSeconds(mulReps, [&] { Multi r = Mul(d21, Uni{k22}, f23); });
     const double mulUniCycles = m.Report().OpCycles("mulUni") / mulReps;
@@ -203,9 +210,10 @@ std::vector<OpTimes> SingleOps(const char* target, bool first, bool naive) {
     fmt::print("\n{} virtual PEs ({} layer{}), profile wavetracer at {:g} Hz\n", pes, m.Layers(),
                m.Layers() == 1 ? "" : "s", clock);
     auto line = [&](const char* name, double seconds, double cycles) {
-      fmt::print("  {:<16}: {:9.0f} ns  {:7.0f} machine cycles  {:6.3g} Gcycles/host s  "
-                 "real-time factor {:.1f}\n", name, seconds * 1e9, cycles, cycles / seconds / 1e9,
-                 cycles / clock / seconds);
+      fmt::print(
+          "  {:<16}: {:9.0f} ns  {:7.0f} machine cycles  {:6.3g} Gcycles/host s  "
+          "real-time factor {:.1f}\n",
+          name, seconds * 1e9, cycles, cycles / seconds / 1e9, cycles / clock / seconds);
     };
     line("32-bit add", tAdd, addCycles);
     line("16x16 multiply", tMul, mulCycles);
@@ -223,9 +231,10 @@ std::vector<OpTimes> SingleOps(const char* target, bool first, bool naive) {
       Multi r = Add(a, b, f32);
       bool same = true;
       for (int i = 0; i < 32; ++i) same &= no.bits[i * 8192 + 77] == r.BitAt(i, 77);
-      fmt::print("  naive emulator (byte per bit): add {:.0f} ns ({:.0f}x slower), multiply {:.0f} ns "
-                 "({:.0f}x slower){}\n", nAdd * 1e9, nAdd / tAdd, nMul * 1e9, nMul / tMul,
-                 same ? "" : "  [MISMATCH]");
+      fmt::print(
+          "  naive emulator (byte per bit): add {:.0f} ns ({:.0f}x slower), multiply {:.0f} ns "
+          "({:.0f}x slower){}\n",
+          nAdd * 1e9, nAdd / tAdd, nMul * 1e9, nMul / tMul, same ? "" : "  [MISMATCH]");
     }
   }
   return times;
@@ -276,7 +285,8 @@ int main(int argc, char** argv) {
     byTarget.push_back(SingleOps(hwy::TargetName(targets[i]), i == 0, i == 0 && !opsOnly));
   }
   hwy::SetSupportedTargetsForTest(0);
-  fmt::print("\nsingle ops by Highway target, ns (medians; one run, the targets one after another):\n");
+  fmt::print(
+      "\nsingle ops by Highway target, ns (medians; one run, the targets one after another):\n");
   fmt::print("{:<28}", "");
   for (int64_t t : targets) fmt::print(" {:>9}", hwy::TargetName(t));
   fmt::print("\n");

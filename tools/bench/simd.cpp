@@ -79,8 +79,9 @@ Timing Time(const Scene& scene, int threads, int runs, simd::PrimaryPass& pass) 
 int main(int argc, char** argv) {
   const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
   if (argc > 2 || (argc == 2 && !quick)) {
-    std::fprintf(stderr, "usage: bench_simd [--quick]  (ZEPHYR_BENCH_LARGE=1 adds 4096x4096 with "
-                         "64 and 256 spheres)\n");
+    std::fprintf(stderr,
+                 "usage: bench_simd [--quick]  (ZEPHYR_BENCH_LARGE=1 adds 4096x4096 with "
+                 "64 and 256 spheres)\n");
     return 2;
   }
   const char* largeEnv = std::getenv("ZEPHYR_BENCH_LARGE");
@@ -92,24 +93,27 @@ int main(int argc, char** argv) {
     sizes.push_back({4096, 4096, large ? std::vector<int>{16, 64, 256} : std::vector<int>{16}, 1});
   }
   const int all = bitserial::HardwareThreads();
-  std::printf("whole SIMD primary pass (uncertain pixels recomputed), random spheres seed 1;\n"
-              "%d host threads = every core; load average before: %s\n", all, LoadAverage().c_str());
-  std::printf("%10s %7s %6s %6s %12s %10s %9s %9s %10s %8s %8s %9s %6s %9s\n", "size", "spheres", "passes",
-              "layers", "cycles", "modelled_s", "host_s_1", "cpu_s_1", "host_s_all", "rtf_1", "rtf_all",
-              "rtf_cpu_1", "ratio", "recomputed");
+  std::printf(
+      "whole SIMD primary pass (uncertain pixels recomputed), random spheres seed 1;\n"
+      "%d host threads = every core; load average before: %s\n",
+      all, LoadAverage().c_str());
+  std::printf("%10s %7s %6s %6s %12s %10s %9s %9s %10s %8s %8s %9s %6s %9s\n", "size", "spheres",
+              "passes", "layers", "cycles", "modelled_s", "host_s_1", "cpu_s_1", "host_s_all",
+              "rtf_1", "rtf_all", "rtf_cpu_1", "ratio", "recomputed");
   for (const Size& size : sizes)
     for (int count : size.spheres) {
-      const Scene scene =
-          GenerateRandomSpheres({.count = count, .seed = 1, .width = size.width, .height = size.height});
+      const Scene scene = GenerateRandomSpheres(
+          {.count = count, .seed = 1, .width = size.width, .height = size.height});
       simd::PrimaryPass one, many;
       const Timing t1 = Time(scene, 1, size.runs, one);
       const Timing tAll = Time(scene, all, size.runs, many);
       const double modelled = one.array.ModelledSeconds();
-      std::printf("%5dx%-4d %7d %6d %6d %12.4g %10.3f %9.3f %9.3f %10.3f %8.2f %8.2f %9.2f %6.2f %9lld\n",
-                  size.width, size.height, count, one.plan.passes, one.plan.layers,
-                  one.array.cycles.TotalCycles(), modelled, t1.wall, t1.cpu, tAll.wall,
-                  modelled / t1.wall, modelled / tAll.wall, modelled / t1.cpu, t1.wall / tAll.wall,
-                  (long long)one.recomputedPixels);
+      std::printf(
+          "%5dx%-4d %7d %6d %6d %12.4g %10.3f %9.3f %9.3f %10.3f %8.2f %8.2f %9.2f %6.2f %9lld\n",
+          size.width, size.height, count, one.plan.passes, one.plan.layers,
+          one.array.cycles.TotalCycles(), modelled, t1.wall, t1.cpu, tAll.wall, modelled / t1.wall,
+          modelled / tAll.wall, modelled / t1.cpu, t1.wall / tAll.wall,
+          (long long)one.recomputedPixels);
       std::fflush(stdout);
     }
   std::printf("load average after: %s\n", LoadAverage().c_str());

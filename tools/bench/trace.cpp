@@ -15,9 +15,9 @@
 #include <limits>
 #include <vector>
 
+#include "hosts/scene/gen.h"
 #include "hosts/trace/sphere_kernels.h"
 #include "hosts/trace/tracer.h"
-#include "hosts/scene/gen.h"
 
 namespace zephyr {
 namespace {
@@ -52,8 +52,10 @@ struct Hit {
 
 template <typename T>
 uint64_t Bits(T v) {
-  if constexpr (sizeof(T) == 4) return std::bit_cast<uint32_t>(v);
-  else return std::bit_cast<uint64_t>(v);
+  if constexpr (sizeof(T) == 4)
+    return std::bit_cast<uint32_t>(v);
+  else
+    return std::bit_cast<uint64_t>(v);
 }
 
 // Scalar loop and engine kernel on the same rays: seconds each, and whether every hit
@@ -109,8 +111,8 @@ void Run(int count, int size) {
   RTCDevice device = rtcNewDevice("threads=1");
   RTCScene es = rtcNewScene(device);
   RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_SPHERE_POINT);
-  auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4,
-                                                        4 * sizeof(float), size_t(count)));
+  auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
+      g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), size_t(count)));
   for (int i = 0; i < count; ++i) {
     const auto& sp = std::get<Sphere>(scene.objects[i].shape);
     v[4 * i] = float(sp.centre.x);
@@ -129,8 +131,12 @@ void Run(int count, int size) {
     for (size_t i = 0; i < nRays; ++i) {
       RTCRayHit rh{};
       const PrimaryRay& r = rays[i];
-      rh.ray.org_x = float(r.origin.x); rh.ray.org_y = float(r.origin.y); rh.ray.org_z = float(r.origin.z);
-      rh.ray.dir_x = float(r.direction.x); rh.ray.dir_y = float(r.direction.y); rh.ray.dir_z = float(r.direction.z);
+      rh.ray.org_x = float(r.origin.x);
+      rh.ray.org_y = float(r.origin.y);
+      rh.ray.org_z = float(r.origin.z);
+      rh.ray.dir_x = float(r.direction.x);
+      rh.ray.dir_y = float(r.direction.y);
+      rh.ray.dir_z = float(r.direction.z);
       rh.ray.tnear = 0;
       rh.ray.tfar = std::numeric_limits<float>::infinity();
       rh.ray.mask = ~0u;
@@ -144,23 +150,25 @@ void Run(int count, int size) {
 
   size_t embreeAgree = 0;
   for (size_t i = 0; i < nRays; ++i) embreeAgree += embreeHit[i] == scalarHit[i];
-  std::printf("%5d spheres %4dx%-4d | float: scalar %6.3f Gt/s, kernel %6.3f Gt/s x%.1f%s | "
-              "double: scalar %6.3f Gt/s, kernel %6.3f Gt/s x%.1f%s | embree %7.3f ms "
-              "(+build %.3f ms) = %6.3f Gt/s-equiv, agrees %.4f\n",
-              count, size, size, tests / scalarF * 1e-9, tests / kernelF * 1e-9, scalarF / kernelF,
-              exactF ? " exact" : " MISMATCH", tests / scalarD * 1e-9, tests / kernelD * 1e-9,
-              scalarD / kernelD, exactD ? " exact" : " MISMATCH", embree * 1e3, build * 1e3,
-              tests / embree * 1e-9, double(embreeAgree) / nRays);
+  std::printf(
+      "%5d spheres %4dx%-4d | float: scalar %6.3f Gt/s, kernel %6.3f Gt/s x%.1f%s | "
+      "double: scalar %6.3f Gt/s, kernel %6.3f Gt/s x%.1f%s | embree %7.3f ms "
+      "(+build %.3f ms) = %6.3f Gt/s-equiv, agrees %.4f\n",
+      count, size, size, tests / scalarF * 1e-9, tests / kernelF * 1e-9, scalarF / kernelF,
+      exactF ? " exact" : " MISMATCH", tests / scalarD * 1e-9, tests / kernelD * 1e-9,
+      scalarD / kernelD, exactD ? " exact" : " MISMATCH", embree * 1e3, build * 1e3,
+      tests / embree * 1e-9, double(embreeAgree) / nRays);
 }
 
 }  // namespace
 }  // namespace zephyr
 
 int main() {
-  std::printf("bench_trace: primary rays of `zephyr gen spheres`, nearest hit (Hearn-Baker), one core, "
-              "medians of 5; Gt/s = 10^9 ray-sphere tests/s; kernel = hosts/sphere_kernels (%s), "
-              "'exact' = same object and t bits as the scalar loop on every ray\n",
-              zephyr::SphereKernelTargetName());
+  std::printf(
+      "bench_trace: primary rays of `zephyr gen spheres`, nearest hit (Hearn-Baker), one core, "
+      "medians of 5; Gt/s = 10^9 ray-sphere tests/s; kernel = hosts/sphere_kernels (%s), "
+      "'exact' = same object and t bits as the scalar loop on every ray\n",
+      zephyr::SphereKernelTargetName());
   for (int count : {10, 100, 1000}) zephyr::Run(count, count >= 1000 ? 128 : 256);
   return 0;
 }

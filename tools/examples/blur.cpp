@@ -7,11 +7,13 @@
 // pixel (the image padded with 0 to whole blocks of the physical mesh), is checked against
 // the plain C++ version and written to out.png; prints the cycles and the report. Exit 1 on
 // any error (unreadable input, unwritable output, a difference).
-#include <CLI/CLI.hpp>
+#include "tools/examples/blur.h"
+
 #include <fmt/format.h>
 
+#include <CLI/CLI.hpp>
+
 #include "fixed/check.h"
-#include "tools/examples/blur.h"
 
 int main(int argc, char** argv) {
   using namespace zephyr;
@@ -23,9 +25,10 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   try {
     const examples::BlurResult r = examples::BlurPng(in, out, profile);
-    fmt::print("{}x{} pixels on a {}x{} virtual grid, {} ({} virtual-PE layers): equal to the "
-               "plain C++ version; {:.0f} cycles per channel on the array; wrote {}\n",
-               r.width, r.height, r.gridW, r.gridH, profile, r.layers, r.cyclesPerChannel, out);
+    fmt::print(
+        "{}x{} pixels on a {}x{} virtual grid, {} ({} virtual-PE layers): equal to the "
+        "plain C++ version; {:.0f} cycles per channel on the array; wrote {}\n",
+        r.width, r.height, r.gridW, r.gridH, profile, r.layers, r.cyclesPerChannel, out);
     fmt::print("{}", r.reportTable);
   } catch (const UserError& e) {
     fmt::print(stderr, "example_blur: {}\n", e.what());

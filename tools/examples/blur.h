@@ -23,8 +23,10 @@ namespace zephyr::examples {
 inline bitserial::Multi Blur3x3(const bitserial::Multi& pix, const bitserial::MeshShape& grid) {
   using bitserial::Multi;
   const fixed::Format sum = fixed::Format::Unsigned(12, 0);  // 9 × 255 = 2295
-  const Multi row = Add(Add(MeshShift(pix, grid, 0, 1), MeshShift(pix, grid, 0, -1), sum), pix, sum);
-  const Multi block = Add(Add(MeshShift(row, grid, 1, 1), MeshShift(row, grid, 1, -1), sum), row, sum);
+  const Multi row =
+      Add(Add(MeshShift(pix, grid, 0, 1), MeshShift(pix, grid, 0, -1), sum), pix, sum);
+  const Multi block =
+      Add(Add(MeshShift(row, grid, 1, 1), MeshShift(row, grid, 1, -1), sum), row, sum);
   const bitserial::Uni nine{fixed::Fixed{fixed::Format::Unsigned(4, 0), 9}};
   return Div(block, nine, fixed::Format::Unsigned(8, 0), {fixed::Rounding::Nearest});
 }
@@ -37,15 +39,16 @@ inline std::vector<int64_t> Blur3x3Plain(const std::vector<int64_t>& pix, int w,
       int64_t s = 0;
       for (int dy = -1; dy <= 1; ++dy)
         for (int dx = -1; dx <= 1; ++dx)
-          if (x + dx >= 0 && x + dx < w && y + dy >= 0 && y + dy < h) s += pix[x + dx + w * (y + dy)];
+          if (x + dx >= 0 && x + dx < w && y + dy >= 0 && y + dy < h)
+            s += pix[x + dx + w * (y + dy)];
       out[x + w * y] = (2 * s + 9) / 18;
     }
   return out;
 }
 
 struct BlurResult {
-  int width = 0, height = 0;    // the image
-  int gridW = 0, gridH = 0;     // the virtual grid: the image padded with 0 to whole blocks
+  int width = 0, height = 0;  // the image
+  int gridW = 0, gridH = 0;   // the virtual grid: the image padded with 0 to whole blocks
   int layers = 0;
   double cyclesPerChannel = 0;  // the array program, one channel
   std::string reportTable;      // its cycle report (the last channel's)
@@ -53,7 +56,8 @@ struct BlurResult {
 
 // Blurs every channel of the PNG `in` on a machine of `profile` and writes `out`. UserError
 // for an unreadable or unwritable file, or if the array and the plain version differ.
-inline BlurResult BlurPng(const std::string& in, const std::string& out, const std::string& profile) {
+inline BlurResult BlurPng(const std::string& in, const std::string& out,
+                          const std::string& profile) {
   const Image image = ReadPng(in);
   const bitserial::MachineProfile prof = bitserial::Profile(profile);
   const std::vector<int>& mesh = prof.shapes.at(0).extent;
@@ -69,7 +73,8 @@ inline BlurResult BlurPng(const std::string& in, const std::string& out, const s
     std::vector<int64_t> pix(m.VirtualPes(), 0), plain(image.width * size_t(image.height));
     for (int y = 0; y < image.height; ++y)
       for (int x = 0; x < image.width; ++x)
-        plain[x + size_t(image.width) * y] = pix[x + size_t(r.gridW) * y] = ToByte(image.At(x, y)[c]);
+        plain[x + size_t(image.width) * y] = pix[x + size_t(r.gridW) * y] =
+            ToByte(image.At(x, y)[c]);
     bitserial::Multi p(m, fixed::Format::Unsigned(8, 0), "pixel");
     p.LoadRaw(pix);
     m.Report().Clear();
@@ -80,10 +85,13 @@ inline BlurResult BlurPng(const std::string& in, const std::string& out, const s
       for (int x = 0; x < image.width; ++x) {
         const int64_t got = blurred.At(x + int64_t{r.gridW} * y).raw.convert_to<int64_t>();
         if (got != want[x + size_t(image.width) * y])
-          throw UserError(fmt::format("{}: pixel ({}, {}) channel {}: the array gives {}, plain "
-                                      "C++ {}", in, x, y, c, got, want[x + size_t(image.width) * y]));
+          throw UserError(
+              fmt::format("{}: pixel ({}, {}) channel {}: the array gives {}, plain "
+                          "C++ {}",
+                          in, x, y, c, got, want[x + size_t(image.width) * y]));
         Vec3& px = result.At(x, y);
-        px = Vec3(c == 0 ? got / 255.0 : px.x, c == 1 ? got / 255.0 : px.y, c == 2 ? got / 255.0 : px.z);
+        px = Vec3(c == 0 ? got / 255.0 : px.x, c == 1 ? got / 255.0 : px.y,
+                  c == 2 ? got / 255.0 : px.z);
       }
   }
   r.reportTable = m.Report().Table();

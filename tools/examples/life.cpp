@@ -6,13 +6,14 @@
 // Runs the program of tools/examples/life.h on a machine with one virtual PE per cell,
 // checks every generation against the plain C++ version, and prints the population and
 // the cycle report. Exit 1 if the two ever differ, 2 on bad arguments.
-#include <CLI/CLI.hpp>
+#include "tools/examples/life.h"
+
 #include <fmt/format.h>
 
+#include <CLI/CLI.hpp>
 #include <random>
 
 #include "fixed/check.h"
-#include "tools/examples/life.h"
 
 int main(int argc, char** argv) {
   using namespace zephyr;
@@ -41,17 +42,20 @@ int main(int argc, char** argv) {
       plain = examples::LifeStepPlain(plain, size, size);
       for (int64_t pe = 0; pe < m.VirtualPes(); ++pe)  // a debugging read: not charged
         if (alive.BitAt(0, pe) != (plain[pe] != 0)) {
-          fmt::print(stderr, "generation {}: the array and the plain C++ version differ at "
-                     "cell ({}, {})\n", g, pe % size, pe / size);
+          fmt::print(stderr,
+                     "generation {}: the array and the plain C++ version differ at "
+                     "cell ({}, {})\n",
+                     g, pe % size, pe / size);
           return 1;
         }
     }
     int64_t population = 0;
     for (int64_t c : plain) population += c;
-    fmt::print("{}x{} cells, {} generations on {} ({} virtual-PE layers): population {}, equal to "
-               "the plain C++ version\n{:.0f} cycles per generation on the array\n",
-               size, size, generations, profile, m.Layers(), population,
-               generations ? m.Report().TotalCycles() / generations : 0.0);
+    fmt::print(
+        "{}x{} cells, {} generations on {} ({} virtual-PE layers): population {}, equal to "
+        "the plain C++ version\n{:.0f} cycles per generation on the array\n",
+        size, size, generations, profile, m.Layers(), population,
+        generations ? m.Report().TotalCycles() / generations : 0.0);
     fmt::print("{}", m.Report().Table());
   } catch (const UserError& e) {
     fmt::print(stderr, "example_life: {}\n", e.what());

@@ -19,10 +19,10 @@ inline bitserial::Multi LifeStep(const bitserial::Multi& alive, const bitserial:
   using bitserial::Uni;
   const fixed::Format count = fixed::Format::Unsigned(4, 0);  // 0 .. 9 cells
   // left + right + self along x, then the same sums of the rows above and below.
-  const Multi row = Add(Add(MeshShift(alive, grid, 0, 1), MeshShift(alive, grid, 0, -1), count),
-                        alive, count);
-  const Multi block = Add(Add(MeshShift(row, grid, 1, 1), MeshShift(row, grid, 1, -1), count),
-                          row, count);
+  const Multi row =
+      Add(Add(MeshShift(alive, grid, 0, 1), MeshShift(alive, grid, 0, -1), count), alive, count);
+  const Multi block =
+      Add(Add(MeshShift(row, grid, 1, 1), MeshShift(row, grid, 1, -1), count), row, count);
   // block counts the cell itself: a cell is born with 3 neighbours (block == 3) and
   // survives with 2 or 3 (block == 3, or 4 while alive).
   const Uni three{fixed::Fixed{count, 3}}, four{fixed::Fixed{count, 4}};
