@@ -9,10 +9,10 @@ namespace zephyr::bitserial {
 
 namespace {
 MicroOp Read(Space s) {
-  return s == Space::Internal ? MicroOp::ReadInternal : MicroOp::ReadExternal;
+  return s == Space::kInternal ? MicroOp::kReadInternal : MicroOp::kReadExternal;
 }
 MicroOp Write(Space s) {
-  return s == Space::Internal ? MicroOp::WriteInternal : MicroOp::WriteExternal;
+  return s == Space::kInternal ? MicroOp::kWriteInternal : MicroOp::kWriteExternal;
 }
 // k reads of operand o's bits: PE memory, or free for a uni (the controller supplies them).
 void AddRead(MicroOpCounts& c, const Operand& o, int64_t k = 1) {
@@ -45,11 +45,11 @@ MicroOpCounts AlignedPass(const std::vector<Placed>& ops, const fixed::Format& e
   for (int p = 0; p < std::max(top, 0); ++p) {
     for (const Placed& o : ops)
       if (o.Has(p)) AddRead(c, o.op);
-    c.Add(MicroOp::AluStep);
+    c.Add(MicroOp::kAluStep);
     if (p >= lo) c.Add(Write(out.space));
   }
   if (lo < 0) c.Add(Write(out.space), std::min(-lo, wo));  // zero-filled low output bits
-  const bool rounds = policy.rounding == fixed::Rounding::Nearest && lo > 0;
+  const bool rounds = policy.rounding == fixed::Rounding::kNearest && lo > 0;
   const int roundedWidth = w + (rounds ? 1 : 0);
   const bool canOverflow = roundedWidth - lo > wo || (exact.isSigned && !out.format.isSigned);
   if (canOverflow) {
@@ -57,19 +57,19 @@ MicroOpCounts AlignedPass(const std::vector<Placed>& ops, const fixed::Format& e
     for (int p = top; p < top + extra; ++p) {
       for (const Placed& o : ops)
         if (o.Has(p)) AddRead(c, o.op);
-      c.Add(MicroOp::AluStep);
+      c.Add(MicroOp::kAluStep);
     }
   }
   if (rounds) {  // increment the kept bits by the dropped half: one more serial pass
-    c.Add(MicroOp::FlagOp);
+    c.Add(MicroOp::kFlagOp);
     c.Add(Read(out.space), wo);
-    c.Add(MicroOp::AluStep, wo + 1);
+    c.Add(MicroOp::kAluStep, wo + 1);
     c.Add(Write(out.space), wo);
   }
-  if (canOverflow && policy.overflow == fixed::OverflowPolicy::Saturate) {
-    c.Add(MicroOp::FlagOp);  // the overflow latch becomes the select mask
+  if (canOverflow && policy.overflow == fixed::OverflowPolicy::kSaturate) {
+    c.Add(MicroOp::kFlagOp);  // the overflow latch becomes the select mask
     c.Add(Read(out.space), wo);
-    c.Add(MicroOp::AluStep, wo);
+    c.Add(MicroOp::kAluStep, wo);
     c.Add(Write(out.space), wo);
   }
   return c;
@@ -93,11 +93,11 @@ MicroOpCounts MulPass(Operand a, int multiplierWidth, const std::vector<int>& ro
   const int top = lo + wo;
   for (int j : rows) {
     if (readRows) c.Add(Read(rowSpace));  // the multiplier bit into the mask register
-    c.Add(MicroOp::FlagOp);               // clear the carry
+    c.Add(MicroOp::kFlagOp);              // clear the carry
     c.Add(Read(a.space), wa);
-    c.Add(MicroOp::AluStep, wa);
-    c.Add(MicroOp::AccumulatorRead, wa);
-    c.Add(MicroOp::AccumulatorWrite, wa);
+    c.Add(MicroOp::kAluStep, wa);
+    c.Add(MicroOp::kAccumulatorRead, wa);
+    c.Add(MicroOp::kAccumulatorWrite, wa);
     (void)j;
   }
   // Each multiplier position retires the accumulator's low bit: written if it is an output
@@ -106,29 +106,29 @@ MicroOpCounts MulPass(Operand a, int multiplierWidth, const std::vector<int>& ro
     if (p >= lo && p < top) c.Add(Write(out.space));
   for (int p = multiplierWidth; p < std::min(w, std::max(top, 0)); ++p) {
     if (p < lo) continue;
-    c.Add(MicroOp::AccumulatorRead);
+    c.Add(MicroOp::kAccumulatorRead);
     c.Add(Write(out.space));
   }
   if (top > w) c.Add(Write(out.space), top - std::max(w, lo));  // sign extension of the product
   if (lo < 0) c.Add(Write(out.space), std::min(-lo, wo));
-  const bool rounds = policy.rounding == fixed::Rounding::Nearest && lo > 0;
+  const bool rounds = policy.rounding == fixed::Rounding::kNearest && lo > 0;
   const bool canOverflow =
       w + (rounds ? 1 : 0) - lo > wo || (exact.isSigned && !out.format.isSigned);
   if (canOverflow) {
     const int extra = std::max(w - top, 1);
-    c.Add(MicroOp::AccumulatorRead, extra);
-    c.Add(MicroOp::AluStep, extra);
+    c.Add(MicroOp::kAccumulatorRead, extra);
+    c.Add(MicroOp::kAluStep, extra);
   }
   if (rounds) {
-    c.Add(MicroOp::FlagOp);
+    c.Add(MicroOp::kFlagOp);
     c.Add(Read(out.space), wo);
-    c.Add(MicroOp::AluStep, wo + 1);
+    c.Add(MicroOp::kAluStep, wo + 1);
     c.Add(Write(out.space), wo);
   }
-  if (canOverflow && policy.overflow == fixed::OverflowPolicy::Saturate) {
-    c.Add(MicroOp::FlagOp);
+  if (canOverflow && policy.overflow == fixed::OverflowPolicy::kSaturate) {
+    c.Add(MicroOp::kFlagOp);
     c.Add(Read(out.space), wo);
-    c.Add(MicroOp::AluStep, wo);
+    c.Add(MicroOp::kAluStep, wo);
     c.Add(Write(out.space), wo);
   }
   return c;
@@ -161,21 +161,21 @@ fixed::Format UnionFormat(const fixed::Format& a, const fixed::Format& b) {
 MicroOpCounts AddCost(Operand a, Operand b, Operand out, fixed::Policy p) {
   fixed::Format e = SumFormat(a.format, b.format);
   MicroOpCounts c = AlignedPass({{a, Offset(e, a.format)}, {b, Offset(e, b.format)}}, e, out, p);
-  c.Add(MicroOp::FlagOp);  // clear the carry
+  c.Add(MicroOp::kFlagOp);  // clear the carry
   return c;
 }
 
 MicroOpCounts SubCost(Operand a, Operand b, Operand out, fixed::Policy p) {
   fixed::Format e = DiffFormat(a.format, b.format);
   MicroOpCounts c = AlignedPass({{a, Offset(e, a.format)}, {b, Offset(e, b.format)}}, e, out, p);
-  c.Add(MicroOp::FlagOp);  // set the carry (a + ~b + 1)
+  c.Add(MicroOp::kFlagOp);  // set the carry (a + ~b + 1)
   return c;
 }
 
 MicroOpCounts NegCost(Operand a, Operand out, fixed::Policy p) {
   fixed::Format e = NegFormat(a.format);
   MicroOpCounts c = AlignedPass({{a, 0}}, e, out, p);
-  c.Add(MicroOp::FlagOp);
+  c.Add(MicroOp::kFlagOp);
   return c;
 }
 
@@ -184,7 +184,7 @@ MicroOpCounts AbsCost(Operand a, Operand out, fixed::Policy p) {
   MicroOpCounts c = AlignedPass({{a, 0}}, e, out, p);
   if (a.format.isSigned) {  // the sign bit becomes the conditional-negate mask
     c.Add(Read(a.space));
-    c.Add(MicroOp::FlagOp, 2);
+    c.Add(MicroOp::kFlagOp, 2);
   }
   return c;
 }
@@ -208,11 +208,11 @@ MicroOpCounts CompareCost(Operand a, Operand b, Space outSpace) {
   fixed::Format e = DiffFormat(a.format, b.format);
   std::vector<Placed> ops = {{a, Offset(e, a.format)}, {b, Offset(e, b.format)}};
   MicroOpCounts c;
-  c.Add(MicroOp::FlagOp);
+  c.Add(MicroOp::kFlagOp);
   for (int p = 0; p < e.Width(); ++p) {
     for (const Placed& o : ops)
       if (o.Has(p)) AddRead(c, o.op);
-    c.Add(MicroOp::AluStep);
+    c.Add(MicroOp::kAluStep);
   }
   c.Add(Write(outSpace));
   return c;
@@ -222,23 +222,23 @@ MicroOpCounts SelectCost(Operand mask, Operand a, Operand b, Operand out, fixed:
   fixed::Format e = UnionFormat(a.format, b.format);
   MicroOpCounts c = AlignedPass({{a, Offset(e, a.format)}, {b, Offset(e, b.format)}}, e, out, p);
   c.Add(Read(mask.space));
-  c.Add(MicroOp::FlagOp);
+  c.Add(MicroOp::kFlagOp);
   return c;
 }
 
 MicroOpCounts MinMaxCost(Operand a, Operand b, Operand out, fixed::Policy p) {
   fixed::Format e = DiffFormat(a.format, b.format);
   MicroOpCounts c;
-  c.Add(MicroOp::FlagOp);
+  c.Add(MicroOp::kFlagOp);
   std::vector<Placed> ops = {{a, Offset(e, a.format)}, {b, Offset(e, b.format)}};
   for (int q = 0; q < e.Width(); ++q) {
     for (const Placed& o : ops)
       if (o.Has(q)) AddRead(c, o.op);
-    c.Add(MicroOp::AluStep);
+    c.Add(MicroOp::kAluStep);
   }
   fixed::Format u = UnionFormat(a.format, b.format);
   c += AlignedPass({{a, Offset(u, a.format)}, {b, Offset(u, b.format)}}, u, out, p);
-  c.Add(MicroOp::FlagOp);  // the comparison's sign becomes the select mask
+  c.Add(MicroOp::kFlagOp);  // the comparison's sign becomes the select mask
   return c;
 }
 
@@ -253,14 +253,14 @@ MicroOpCounts MulUniCost(Operand a, const fixed::Fixed& k, Operand out, fixed::P
   std::vector<int> rows;
   for (int j = 0; j < k.format.Width(); ++j)
     if (k.Bit(j)) rows.push_back(j);
-  return MulPass(a, k.format.Width(), rows, false, Space::Internal,
+  return MulPass(a, k.format.Width(), rows, false, Space::kInternal,
                  ProductFormat(a.format, k.format), out, p);
 }
 
 DivShape DivideShape(const fixed::Format& a, const fixed::Format& b, const fixed::Format& out,
                      fixed::Policy p) {
   DivShape s;
-  const int nearestBit = p.rounding == fixed::Rounding::Nearest ? 1 : 0;
+  const int nearestBit = p.rounding == fixed::Rounding::kNearest ? 1 : 0;
   s.shift = b.fracBits + out.fracBits + nearestBit - a.fracBits;
   s.dividendBits = a.Width() + std::max(s.shift, 0);
   s.divisorZeros = std::max(-s.shift, 0);
@@ -296,63 +296,63 @@ MicroOpCounts DivCost(Operand a, Operand b, Operand out, fixed::Policy p) {
   auto magnitude = [&](Operand x) {
     const int w = x.format.Width();
     c.Add(Read(x.space));
-    c.Add(MicroOp::FlagOp);
+    c.Add(MicroOp::kFlagOp);
     c.Add(Read(x.space), w);
-    c.Add(MicroOp::AluStep, w);
-    c.Add(MicroOp::WriteInternal, w);
+    c.Add(MicroOp::kAluStep, w);
+    c.Add(MicroOp::kWriteInternal, w);
   };
   // A uni's magnitude and whether it is 0 come from the host.
   if (a.format.isSigned && !a.uni) magnitude(a);
   if (b.format.isSigned && !b.uni) magnitude(b);
   auto readA = [&](int64_t k = 1) {
-    if (!a.uni) c.Add(a.format.isSigned ? MicroOp::ReadInternal : Read(a.space), k);
+    if (!a.uni) c.Add(a.format.isSigned ? MicroOp::kReadInternal : Read(a.space), k);
   };
   auto readB = [&] {
-    if (!b.uni) c.Add(b.format.isSigned ? MicroOp::ReadInternal : Read(b.space));
+    if (!b.uni) c.Add(b.format.isSigned ? MicroOp::kReadInternal : Read(b.space));
   };
   if (!b.uni) {  // b == 0: an OR over b's bits, latched.
     c.Add(Read(b.space), wb);
-    c.Add(MicroOp::AluStep, wb);
-    c.Add(MicroOp::FlagOp);
+    c.Add(MicroOp::kAluStep, wb);
+    c.Add(MicroOp::kFlagOp);
   }
   // The skipped leading quotient bits leave the dividend's top bits as the remainder.
   readA(s.skipped);
-  c.Add(MicroOp::AccumulatorWrite, s.skipped);
+  c.Add(MicroOp::kAccumulatorWrite, s.skipped);
   const int lowA = std::max(s.shift, 0);  // dividend bits below this are zero
   for (int i = s.steps - 1; i >= 0; --i) {
-    c.Add(MicroOp::FlagOp);  // set the carry: R' + ~D + 1
+    c.Add(MicroOp::kFlagOp);  // set the carry: R' + ~D + 1
     for (int q = 0; q <= d; ++q) {
       if (q == 0) {
         if (i >= lowA) readA();  // bring down dividend bit i
       } else {
-        c.Add(MicroOp::AccumulatorRead);  // remainder bit q-1
+        c.Add(MicroOp::kAccumulatorRead);  // remainder bit q-1
       }
       if (q >= s.divisorZeros && q < d) readB();
-      c.Add(MicroOp::AluStep);
-      if (q < d) c.Add(MicroOp::AccumulatorWrite);  // the difference; bit d is its sign
+      c.Add(MicroOp::kAluStep);
+      if (q < d) c.Add(MicroOp::kAccumulatorWrite);  // the difference; bit d is its sign
     }
-    c.Add(MicroOp::FlagOp);               // latch the sign: the quotient bit is the write mask
-    c.Add(MicroOp::WriteInternal);        // the quotient bit
-    c.Add(MicroOp::AccumulatorRead, d);   // restore: the difference replaces the
-    c.Add(MicroOp::AccumulatorWrite, d);  // remainder where the quotient bit is 1
+    c.Add(MicroOp::kFlagOp);               // latch the sign: the quotient bit is the write mask
+    c.Add(MicroOp::kWriteInternal);        // the quotient bit
+    c.Add(MicroOp::kAccumulatorRead, d);   // restore: the difference replaces the
+    c.Add(MicroOp::kAccumulatorWrite, d);  // remainder where the quotient bit is 1
   }
   const int m = s.dividendBits;
   if (s.canBeNegative) {
     // floor of a negative quotient: -Q - (R != 0) = ~Q + (R == 0), where the signs differ.
-    c.Add(MicroOp::AccumulatorRead, d);
-    c.Add(MicroOp::AluStep, d);
-    c.Add(MicroOp::FlagOp);  // R == 0
+    c.Add(MicroOp::kAccumulatorRead, d);
+    c.Add(MicroOp::kAluStep, d);
+    c.Add(MicroOp::kFlagOp);  // R == 0
     if (a.format.isSigned) AddRead(c, a);
     if (b.format.isSigned) AddRead(c, b);
-    c.Add(MicroOp::AluStep);
-    c.Add(MicroOp::FlagOp);  // the quotient's sign
-    c.Add(MicroOp::ReadInternal, m);
-    c.Add(MicroOp::AluStep, m + 1);
-    c.Add(MicroOp::WriteInternal, m + 1);
+    c.Add(MicroOp::kAluStep);
+    c.Add(MicroOp::kFlagOp);  // the quotient's sign
+    c.Add(MicroOp::kReadInternal, m);
+    c.Add(MicroOp::kAluStep, m + 1);
+    c.Add(MicroOp::kWriteInternal, m + 1);
   }
-  c += AlignedPass({{Operand{s.quotient, Space::Internal}, 0}}, s.quotient, out, p);
+  c += AlignedPass({{Operand{s.quotient, Space::kInternal}, 0}}, s.quotient, out, p);
   // Where b == 0: the end of the range on a's side (written under the latched mask).
-  c.Add(MicroOp::FlagOp);
+  c.Add(MicroOp::kFlagOp);
   if (a.format.isSigned) AddRead(c, a);
   c.Add(Write(out.space), wo);
   (void)wa;
@@ -371,36 +371,36 @@ MicroOpCounts SqrtCost(Operand a, Operand out, fixed::Policy p) {
     const int i = nr - 1 - j;
     const int n = j + 3;                           // positions of R' - (4Y + 1), sign on top
     const int remainderBits = j == 0 ? 0 : j + 1;  // R <= 2Y < 2^(j+1)
-    c.Add(MicroOp::FlagOp);
+    c.Add(MicroOp::kFlagOp);
     for (int q = 0; q < n; ++q) {
       if (q < 2) {
         const int bit = 2 * i + q - s.shift;  // radicand bit 2i+q is a's bit `bit`
         if (bit >= 0 && bit < ma) c.Add(Read(a.space));
       } else if (q - 2 < remainderBits) {
-        c.Add(MicroOp::AccumulatorRead);
+        c.Add(MicroOp::kAccumulatorRead);
       }
-      if (q >= 2 && q < j + 2) c.Add(MicroOp::ReadInternal);  // root bit (trial 4Y + 1)
-      c.Add(MicroOp::AluStep);
-      if (q < n - 1) c.Add(MicroOp::AccumulatorWrite);
+      if (q >= 2 && q < j + 2) c.Add(MicroOp::kReadInternal);  // root bit (trial 4Y + 1)
+      c.Add(MicroOp::kAluStep);
+      if (q < n - 1) c.Add(MicroOp::kAccumulatorWrite);
     }
-    c.Add(MicroOp::FlagOp);
-    c.Add(MicroOp::WriteInternal);  // the root bit
-    c.Add(MicroOp::AccumulatorRead, j + 2);
-    c.Add(MicroOp::AccumulatorWrite, j + 2);
+    c.Add(MicroOp::kFlagOp);
+    c.Add(MicroOp::kWriteInternal);  // the root bit
+    c.Add(MicroOp::kAccumulatorRead, j + 2);
+    c.Add(MicroOp::kAccumulatorWrite, j + 2);
   }
   if (a.format.isSigned) {  // a < 0: the sign is the invalid mask
     c.Add(Read(a.space));
-    c.Add(MicroOp::FlagOp);
+    c.Add(MicroOp::kFlagOp);
   }
   if (nr > 0) {
     const fixed::Format root{false, nr - out.format.fracBits, out.format.fracBits};
-    c += AlignedPass({{Operand{root, Space::Internal}, 0}}, root, out,
-                     {fixed::Rounding::Floor, p.overflow});
+    c += AlignedPass({{Operand{root, Space::kInternal}, 0}}, root, out,
+                     {fixed::Rounding::kFloor, p.overflow});
   } else {
     c.Add(Write(out.space), wo);  // the root is 0
   }
   if (a.format.isSigned) {  // zeros written where a < 0
-    c.Add(MicroOp::FlagOp);
+    c.Add(MicroOp::kFlagOp);
     c.Add(Write(out.space), wo);
   }
   return c;
@@ -409,7 +409,7 @@ MicroOpCounts SqrtCost(Operand a, Operand out, fixed::Policy p) {
 MicroOpCounts LogicCost(Operand a, bool binary, Space outSpace) {
   MicroOpCounts c;
   c.Add(Read(a.space), binary ? 2 : 1);
-  c.Add(MicroOp::AluStep);
+  c.Add(MicroOp::kAluStep);
   c.Add(Write(outSpace));
   return c;
 }
@@ -423,14 +423,14 @@ MicroOpCounts CopyCost(Operand a, Operand out) {
 
 MicroOpCounts BroadcastCost(Operand out) {
   MicroOpCounts c;
-  c.Add(MicroOp::BroadcastBit, out.format.Width());
+  c.Add(MicroOp::kBroadcastBit, out.format.Width());
   c.Add(Write(out.space), out.format.Width());
   return c;
 }
 
 MicroOpCounts HostTransferCost(int width) {
   MicroOpCounts c;
-  c.Add(MicroOp::HostPlane, width);
+  c.Add(MicroOp::kHostPlane, width);
   return c;
 }
 
@@ -444,13 +444,13 @@ MicroOpCounts ReduceCost(ReduceKind kind, Operand a) {
   MicroOpCounts c;
   const int w = a.format.Width();
   c.Add(Read(a.space), w);
-  c.Add(MicroOp::ReduceBit, w);
-  if (kind == ReduceKind::Max || kind == ReduceKind::Min) {
+  c.Add(MicroOp::kReduceBit, w);
+  if (kind == ReduceKind::kMax || kind == ReduceKind::kMin) {
     // Most significant bit first: each answer bit is broadcast back and the PEs that
     // differ from it drop out of the candidate set.
-    c.Add(MicroOp::ActivitySet);
-    c.Add(MicroOp::AluStep, w);
-    c.Add(MicroOp::BroadcastBit, w);
+    c.Add(MicroOp::kActivitySet);
+    c.Add(MicroOp::kAluStep, w);
+    c.Add(MicroOp::kBroadcastBit, w);
   }
   return c;
 }
@@ -459,7 +459,7 @@ MicroOpCounts MeshShiftCost(Operand a, int distance) {
   MicroOpCounts c;
   const int w = a.format.Width();
   c.Add(Read(a.space), w);
-  c.Add(MicroOp::MeshHop, static_cast<int64_t>(w) * std::abs(distance));
+  c.Add(MicroOp::kMeshHop, static_cast<int64_t>(w) * std::abs(distance));
   c.Add(Write(a.space), w);
   return c;
 }
@@ -472,20 +472,20 @@ MicroOpCounts VirtualMeshShiftCost(Operand a, int layers, int block, int distanc
   c.Add(Write(a.space), w * layers);
   // Hermite: over the block's positions i, the source PE is floor((i - d) / b) PEs away,
   // and those distances sum to |d|; layers / block layers sit at each position.
-  c.Add(MicroOp::MeshHop, w * std::abs(distance) * (layers / block));
+  c.Add(MicroOp::kMeshHop, w * std::abs(distance) * (layers / block));
   return c;
 }
 
 MicroOpCounts WhereCost(Operand mask) {
   MicroOpCounts c;
   c.Add(Read(mask.space));
-  c.Add(MicroOp::ActivitySet);
+  c.Add(MicroOp::kActivitySet);
   return c;
 }
 
 MicroOpCounts ActivityCost() {
   MicroOpCounts c;
-  c.Add(MicroOp::ActivitySet);
+  c.Add(MicroOp::kActivitySet);
   return c;
 }
 

@@ -23,7 +23,7 @@ namespace zephyr::bitserial {
 // nothing, and what the host knows of it (its sign, whether it is 0) costs no pass.
 struct Operand {
   fixed::Format format;
-  Space space = Space::Internal;
+  Space space = Space::kInternal;
   bool uni = false;
 };
 
@@ -78,7 +78,7 @@ MicroOpCounts LogicCost(Operand a, bool binary, Space outSpace);  // 1-bit and/o
 MicroOpCounts CopyCost(Operand a, Operand out);                   // masked assignment
 MicroOpCounts BroadcastCost(Operand out);                         // a uni value into every PE
 MicroOpCounts HostTransferCost(int width);                        // planes between host and array
-enum class ReduceKind { Or, And, Xor, Sum, Max, Min };
+enum class ReduceKind { kOr, kAnd, kXor, kSum, kMax, kMin };
 const char* ReduceName(ReduceKind k);
 MicroOpCounts ReduceCost(ReduceKind kind, Operand a);
 MicroOpCounts MeshShiftCost(Operand a, int distance);

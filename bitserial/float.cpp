@@ -36,7 +36,7 @@ void ShiftRightStickyBy(Serial& s, const OutPlanes& v, const Planes& amount, con
     s.ShiftRightSticky(v, s.And(amount[k], enable), 1 << k);
   if (a > stages) {
     const Word* all = s.And(s.AnyOf(Slice(amount, stages, a)), enable);
-    s.Logic(LogicOp::Or, v[0], s.And(all, s.AnyOf(Slice(In(v), 1, n))), Loc::Acc, v[0]);
+    s.Logic(LogicOp::kOr, v[0], s.And(all, s.AnyOf(Slice(In(v), 1, n))), Loc::kAcc, v[0]);
     s.Mux(all, s.Zeros(n - 1), Slice(In(v), 1, n), OutPlanes(v.begin() + 1, v.end()));
   }
 }
@@ -50,15 +50,15 @@ Planes Divide(Serial& s, const Planes& dividend, const Planes& divisor, const Ou
   const int d = static_cast<int>(divisor.size()), steps = static_cast<int>(q.size());
   const int skipped = static_cast<int>(dividend.size()) - steps;
   ZEPHYR_CHECK(skipped >= 0 && skipped <= d);
-  OutPlanes r[2] = {s.New(d, Loc::Acc), s.New(d, Loc::Acc)};
-  OutPlanes t = s.New(d + 1, Loc::Acc);
+  OutPlanes r[2] = {s.New(d, Loc::kAcc), s.New(d, Loc::kAcc)};
+  OutPlanes t = s.New(d + 1, Loc::kAcc);
   s.Copy(Slice(dividend, steps, steps + skipped), OutPlanes(r[0].begin(), r[0].begin() + skipped));
   const Planes divisorExt = Concat({divisor, {s.Zero()}});
   int cur = 0;
   for (int i = steps - 1; i >= 0; --i) {
     const Planes shifted = Concat({{dividend[i]}, In(r[cur])});  // 2R + dividend bit i
     s.Add(shifted, divisorExt, t, true, true);
-    s.Logic(LogicOp::Not, t[d], nullptr, Loc::Internal, q[i]);
+    s.Logic(LogicOp::kNot, t[d], nullptr, Loc::kInternal, q[i]);
     s.Mux(q[i], Slice(In(t), 0, d), Slice(shifted, 0, d), r[1 - cur]);
     cur = 1 - cur;
   }
@@ -72,8 +72,8 @@ Planes Divide(Serial& s, const Planes& dividend, const Planes& divisor, const Ou
 Planes SquareRoot(Serial& s, const Planes& radicand, const OutPlanes& root) {
   const int nr = static_cast<int>(root.size());
   ZEPHYR_CHECK(static_cast<int>(radicand.size()) == 2 * nr);
-  OutPlanes r[2] = {s.New(nr + 1, Loc::Acc), s.New(nr + 1, Loc::Acc)};
-  OutPlanes t = s.New(nr + 2, Loc::Acc);
+  OutPlanes r[2] = {s.New(nr + 1, Loc::kAcc), s.New(nr + 1, Loc::kAcc)};
+  OutPlanes t = s.New(nr + 2, Loc::kAcc);
   int cur = 0;
   for (int j = 0; j < nr; ++j) {
     const int i = nr - 1 - j, n = j + 3;
@@ -83,7 +83,7 @@ Planes SquareRoot(Serial& s, const Planes& radicand, const OutPlanes& root) {
     for (int k = 0; k < n - 2; ++k) trial.push_back(k < j ? root[i + 1 + k] : s.Zero());
     const OutPlanes tj(t.begin(), t.begin() + n);
     s.Add(shifted, trial, tj, true, true);
-    s.Logic(LogicOp::Not, tj[n - 1], nullptr, Loc::Internal, root[i]);
+    s.Logic(LogicOp::kNot, tj[n - 1], nullptr, Loc::kInternal, root[i]);
     const OutPlanes next(r[1 - cur].begin(), r[1 - cur].begin() + n - 1);
     s.Mux(root[i], Slice(In(tj), 0, n - 1), Slice(shifted, 0, n - 1), next);
     cur = 1 - cur;
@@ -114,11 +114,11 @@ Unpacked Unpack(Serial& s, const MultiFloat& x, bool negate) {
   const Multi& bits = x.Bits();
   for (int i = 0; i < m; ++i) u.frac.push_back(bits.Plane(i));
   for (int i = m; i < m + e; ++i) u.exp.push_back(bits.Plane(i));
-  u.sign = negate ? s.Not(bits.Plane(w - 1), Loc::Internal) : bits.Plane(w - 1);
-  std::tie(u.hidden, u.maxField) = s.AnyAll(u.exp, Loc::Internal);
+  u.sign = negate ? s.Not(bits.Plane(w - 1), Loc::kInternal) : bits.Plane(w - 1);
+  std::tie(u.hidden, u.maxField) = s.AnyAll(u.exp, Loc::kInternal);
   if (!f.subnormals)  // flush to zero on input: the passes that read the fraction gate
     u.frac = s.Routed(s.Not(u.hidden), u.frac, {});  // it off where the field is 0
-  u.exp[0] = s.Logic(LogicOp::Or, u.exp[0], s.Not(u.hidden), Loc::Internal);
+  u.exp[0] = s.Logic(LogicOp::kOr, u.exp[0], s.Not(u.hidden), Loc::kInternal);
   u.sig = Concat({u.frac, {u.hidden}});
   return u;
 }
@@ -158,7 +158,7 @@ void RoundPack(Serial& s, const FloatFormat& f, const Word* sign, const Planes& 
   const Word* tiny = s.Zero();
   if (f.subnormals) {
     // t = -c - xr = (the denormalising shift) - 1; tiny where t >= 0.
-    OutPlanes t = s.New(x, Loc::Internal);
+    OutPlanes t = s.New(x, Loc::kInternal);
     s.Add(s.Const(-c, x), xr, t, true, true);
     tiny = s.Not(t[x - 1]);
     ShiftRightStickyBy(s, v, Slice(In(t), 0, x - 1), tiny);
@@ -170,8 +170,8 @@ void RoundPack(Serial& s, const FloatFormat& f, const Word* sign, const Planes& 
   const Word* up = s.And(v[lsb - 1], s.Or(sticky, v[lsb]));
   // packed = (xr << m | fraction) + (c << m) + up, the exponent terms gated off where
   // tiny (a subnormal's field is 0); the carry-in enters as position -1.
-  OutPlanes packed = s.New(m + x, Loc::Internal);
-  for (int i = 0; i < m; ++i) packed[i] = s.New(Loc::Acc);
+  OutPlanes packed = s.New(m + x, Loc::kInternal);
+  for (int i = 0; i < m; ++i) packed[i] = s.New(Loc::kAcc);
   OutPlanes sum = {nullptr};
   sum.insert(sum.end(), packed.begin(), packed.end());
   Planes cBits = s.Const(c, x);
@@ -183,14 +183,14 @@ void RoundPack(Serial& s, const FloatFormat& f, const Word* sign, const Planes& 
   // field >= maxField (the sign of field - maxField, compared as the packing pass
   // produces the field), ignoring a zero result.
   OutPlanes diff(x, nullptr);
-  diff[x - 1] = s.New(Loc::Flag);
+  diff[x - 1] = s.New(Loc::kFlag);
   s.CompareAlong(field, s.Const(f.MaxField(), x), diff);
   const Word* overflow = s.AndNot(s.Not(diff[x - 1]), sp.zero);
   const Word* inf = s.Or(sp.inf, overflow);
   const Word* zero = sp.zero;
   if (!f.subnormals) {  // flush to zero: field < 1
     OutPlanes below(x, nullptr);
-    below[x - 1] = s.New(Loc::Flag);
+    below[x - 1] = s.New(Loc::kFlag);
     s.CompareAlong(field, s.Const(1, x), below);
     zero = s.Or(zero, below[x - 1]);
   }
@@ -202,7 +202,7 @@ void RoundPack(Serial& s, const FloatFormat& f, const Word* sign, const Planes& 
   const Word* signed_ = s.AndNot(sp.inf, sp.nan);  // an operand's infinity gives its sign
   Word* outSign = out.Bits().Plane(f.Width() - 1);
   s.Mux(signed_, {sp.infSign}, {sign}, {outSign});
-  s.Logic(LogicOp::AndNot, outSign, sp.nan, Loc::Internal, outSign);
+  s.Logic(LogicOp::kAndNot, outSign, sp.nan, Loc::kInternal, outSign);
 }
 
 void CheckPair(const MultiFloat& a, const MultiFloat& b, const char* op) {
@@ -226,15 +226,15 @@ MultiFloat AddSub(const MultiFloat& a, const MultiFloat& b, bool subtract) {
   Serial s(mach);
   Unpacked A = Unpack(s, a, false), B = Unpack(s, b, subtract);
   // d = xa - xb; swap where b's exponent is larger; |d| by a conditional negation.
-  OutPlanes d = s.New(e + 1, Loc::Internal);
+  OutPlanes d = s.New(e + 1, Loc::kInternal);
   s.Add(Concat({A.exp, {s.Zero()}}), Concat({B.exp, {s.Zero()}}), d, true, true);
   const Word* swap = d[e];
   const Word* signL =
-      s.Logic(LogicOp::Xor, A.sign, s.And(swap, s.Xor(A.sign, B.sign)), Loc::Internal);
+      s.Logic(LogicOp::kXor, A.sign, s.And(swap, s.Xor(A.sign, B.sign)), Loc::kInternal);
   // The larger-exponent significand to memory, the other into the accumulator above
   // guard, round and sticky; the same pass latches each operand's "fraction not zero".
-  OutPlanes big = s.New(p, Loc::Internal);
-  OutPlanes small = s.New(n, Loc::Acc);
+  OutPlanes big = s.New(p, Loc::kInternal);
+  OutPlanes small = s.New(n, Loc::kAcc);
   s.Swap(swap, A.sig, B.sig, big, OutPlanes(small.begin() + 3, small.end()));
   Classify(s, f, A, s.AnyOfRead(A.frac));
   Classify(s, f, B, s.AnyOfRead(B.frac));
@@ -247,14 +247,15 @@ MultiFloat AddSub(const MultiFloat& a, const MultiFloat& b, bool subtract) {
   if (e > stages) {
     s.ChargeReads(Slice(In(d), stages, e));
     const Word* all = s.AnyOf(s.XorRouted(Slice(In(d), stages, e), swap));
-    s.Logic(LogicOp::Or, small[0], s.And(all, s.AnyOf(Slice(In(small), 1, n))), Loc::Acc, small[0]);
+    s.Logic(LogicOp::kOr, small[0], s.And(all, s.AnyOf(Slice(In(small), 1, n))), Loc::kAcc,
+            small[0]);
     s.Mux(all, s.Zeros(n - 1), Slice(In(small), 1, n), OutPlanes(small.begin() + 1, small.end()));
   }
   // big ± small over n+1 positions (position n: the carry, or the sign of a difference);
   // a per-PE subtraction complements small and carries in 1 through position -1.
-  const Word* sub = s.Xor(A.sign, B.sign, Loc::Internal);
+  const Word* sub = s.Xor(A.sign, B.sign, Loc::kInternal);
   s.XorWith(small, sub);
-  OutPlanes sum = s.New(n + 1, Loc::Acc);
+  OutPlanes sum = s.New(n + 1, Loc::kAcc);
   OutPlanes sumOut = {nullptr};
   sumOut.insert(sumOut.end(), sum.begin(), sum.end());
   s.Add(Concat({{sub}, s.Zeros(3), In(big), {s.Zero()}}), Concat({{sub}, In(small), {sub}}), sumOut,
@@ -265,15 +266,15 @@ MultiFloat AddSub(const MultiFloat& a, const MultiFloat& b, bool subtract) {
   const Word* signR = s.Xor(signL, neg);
   const Word* zero = s.NoneOf(In(sum));
   // Exact zero: +0 for a difference, the operands' sign for a sum (-0 + -0 = -0).
-  const Word* sign =
-      s.Logic(LogicOp::Or, s.AndNot(signR, zero), s.And(zero, s.AndNot(signL, sub)), Loc::Internal);
+  const Word* sign = s.Logic(LogicOp::kOr, s.AndNot(signR, zero), s.And(zero, s.AndNot(signL, sub)),
+                             Loc::kInternal);
   const int nstages = CeilLog2(n + 1);
   const Planes u = s.Normalise(sum, nstages);
   // The top position's field: xl + 1 - shift = xl + u + 2 - 2^nstages, with xl (the
   // larger exponent) selected from the operands inside the same pass.
   const int c = 2 - (1 << nstages);
   const int x = ExpWidth((1 << e) + (1 << nstages), c);
-  OutPlanes xr = s.New(x, Loc::Internal);
+  OutPlanes xr = s.New(x, Loc::kInternal);
   s.ChargeReads(Concat({A.exp, B.exp}));
   s.Add(Concat({s.Routed(swap, B.exp, A.exp), s.Zeros(x - e)}), Concat({u, s.Zeros(x - nstages)}),
         xr, false, false);
@@ -339,8 +340,8 @@ MultiFloat Mul(const MultiFloat& a, const MultiFloat& b) {
   const int e = f.expBits, p = f.Precision();
   Serial s(mach);
   Unpacked A = Unpack(s, a, false), B = Unpack(s, b, false);
-  const Word* sign = s.Xor(A.sign, B.sign, Loc::Internal);
-  OutPlanes prod = s.New(2 * p, Loc::Acc);
+  const Word* sign = s.Xor(A.sign, B.sign, Loc::kInternal);
+  OutPlanes prod = s.New(2 * p, Loc::kAcc);
   s.Multiply(A.sig, B.sig, prod);
   // The multiply reads every bit of both fractions: it latches "fraction not zero".
   Classify(s, f, A, s.AnyOfRead(A.frac));
@@ -349,13 +350,13 @@ MultiFloat Mul(const MultiFloat& a, const MultiFloat& b) {
   const int stages = f.subnormals ? CeilLog2(2 * p) : 1;
   const Planes u = s.Normalise(prod, stages);
   // Keep the top p+2 bits; the rest only as a sticky bit below them.
-  OutPlanes v = {s.New(Loc::Acc)};
-  s.Logic(LogicOp::Or, s.AnyOf(Slice(In(prod), 0, p - 2)), s.Zero(), Loc::Acc, v[0]);
+  OutPlanes v = {s.New(Loc::kAcc)};
+  s.Logic(LogicOp::kOr, s.AnyOf(Slice(In(prod), 0, p - 2)), s.Zero(), Loc::kAcc, v[0]);
   v.insert(v.end(), prod.begin() + (p - 2), prod.end());
   // Field of the top position: xa + xb - bias + 1 - shift = xa + xb + u + 2 - bias - 2^stages.
   const int c = 2 - f.Bias() - (1 << stages);
   const int x = ExpWidth((2 << e) + (1 << stages), c);
-  OutPlanes xr = s.New(x, Loc::Internal);
+  OutPlanes xr = s.New(x, Loc::kInternal);
   s.Add(Concat({A.exp, s.Zeros(x - e)}), Concat({B.exp, s.Zeros(x - e)}), xr, false, false);
   s.Add(In(xr), Concat({u, s.Zeros(x - stages)}), xr, false, false);
   const Word* nan = s.Or(s.Or(A.nan, B.nan), s.Or(s.And(A.inf, B.zero), s.And(A.zero, B.inf)));
@@ -411,14 +412,14 @@ Ordered Order(Serial& s, const MultiFloat& a, const MultiFloat& b) {
     Planes frac, exp;
     for (int i = 0; i < m; ++i) frac.push_back(bits.Plane(i));
     for (int i = m; i < w - 1; ++i) exp.push_back(bits.Plane(i));
-    std::tie(side[k].hidden, side[k].maxField) = s.AnyAll(exp, Loc::Flag);
+    std::tie(side[k].hidden, side[k].maxField) = s.AnyAll(exp, Loc::kFlag);
     if (!f.subnormals) frac = s.Routed(s.Not(side[k].hidden), frac, {});
     side[k].mag = Concat({frac, exp});
   }
   o.signA = a.Bits().Plane(w - 1), o.signB = b.Bits().Plane(w - 1);
   o.magA = side[0].mag, o.magB = side[1].mag;
   OutPlanes diff(w, nullptr);
-  diff[w - 1] = s.New(Loc::Flag);
+  diff[w - 1] = s.New(Loc::kFlag);
   s.Add(Concat({o.magA, {s.Zero()}}), Concat({o.magB, {s.Zero()}}), diff, true, true);
   o.less = diff[w - 1];
   o.equal = s.EqualAlong(o.magA, o.magB);
@@ -442,7 +443,7 @@ const Word* SignedLessEqual(Serial& s, const Word* signX, const Word* signY, con
   return s.Or(s.AndNot(signX, signY), s.And(sameSign, mag));
 }
 
-enum class CompareKind { Less, LessEqual, Equal };
+enum class CompareKind { kLess, kLessEqual, kEqual };
 
 Multi Compare(const MultiFloat& a, const MultiFloat& b, CompareKind kind, const char* name) {
   CheckPair(a, b, name);
@@ -459,12 +460,12 @@ Multi Compare(const MultiFloat& a, const MultiFloat& b, CompareKind kind, const 
       s.AndNot(s.Or(s.AndNot(o.signA, o.signB),
                     s.And(sameSign, s.Or(s.And(o.signA, greater), s.AndNot(o.less, o.signA)))),
                bothZero);
-  const Word* result = kind == CompareKind::Less    ? lt
-                       : kind == CompareKind::Equal ? eq
-                                                    : s.Or(lt, eq);
+  const Word* result = kind == CompareKind::kLess    ? lt
+                       : kind == CompareKind::kEqual ? eq
+                                                     : s.Or(lt, eq);
   Multi r(mach, BoolFormat(), name, Multi::Uninitialised{});
   s.Place(r);
-  s.Logic(LogicOp::AndNot, result, nan, Loc::Internal, r.Plane(0));  // false if either is NaN
+  s.Logic(LogicOp::kAndNot, result, nan, Loc::kInternal, r.Plane(0));  // false if either is NaN
   mach.Charge("fcompare", s.Counts());
   return r;
 }
@@ -501,17 +502,17 @@ MultiFloat Div(const MultiFloat& a, const MultiFloat& b) {
   const int e = f.expBits, p = f.Precision();
   Serial s(mach);
   Unpacked A = Unpack(s, a, false), B = Unpack(s, b, false);
-  const Word* sign = s.Xor(A.sign, B.sign, Loc::Internal);
+  const Word* sign = s.Xor(A.sign, B.sign, Loc::kInternal);
   // Both significands with their leading one on top (the copies read every fraction bit,
   // or, flush-to-zero, the divider does: "fraction not zero" is latched along).
-  const auto [na, ua] = NormalisedSig(s, f, A.sig, Loc::Acc);
+  const auto [na, ua] = NormalisedSig(s, f, A.sig, Loc::kAcc);
   Classify(s, f, A, s.AnyOfRead(A.frac));
-  const auto [nb, ub] = NormalisedSig(s, f, B.sig, Loc::Internal);
+  const auto [nb, ub] = NormalisedSig(s, f, B.sig, Loc::kInternal);
   Classify(s, f, B, s.AnyOfRead(B.frac));
   // q = floor(na·2^(p+1) / nb) in [2^p, 2^(p+2)): p+2 quotient bits, the remainder sticky.
-  OutPlanes q = s.New(p + 2, Loc::Internal);
+  OutPlanes q = s.New(p + 2, Loc::kInternal);
   const Planes rem = Divide(s, Concat({s.Zeros(p + 1), na}), nb, q);
-  OutPlanes v = {const_cast<Word*>(s.AnyOf(rem, Loc::Acc))};
+  OutPlanes v = {const_cast<Word*>(s.AnyOf(rem, Loc::kAcc))};
   v.insert(v.end(), q.begin(), q.end());
   const Planes un = s.Normalise(v, 1);
   // Field of the top position: xa - xb + ua - ub + un + bias - 1 (ua, ub: the operands'
@@ -519,12 +520,12 @@ MultiFloat Div(const MultiFloat& a, const MultiFloat& b) {
   const int S = static_cast<int>(ua.size());
   const int c = f.Bias() - 1;
   const int x = ExpWidth((1 << e) + (1 << S) + 2, c);
-  OutPlanes xr = s.New(x, Loc::Internal);
+  OutPlanes xr = s.New(x, Loc::kInternal);
   OutPlanes sum = {nullptr};
   sum.insert(sum.end(), xr.begin(), xr.end());
   s.Add(Concat({un, A.exp, s.Zeros(x - e)}), Concat({un, ua, s.Zeros(x - S)}), sum, false, false);
   if (S > 0) {
-    OutPlanes yb = s.New(x, Loc::Internal);
+    OutPlanes yb = s.New(x, Loc::kInternal);
     s.Add(Concat({B.exp, s.Zeros(x - e)}), Concat({ub, s.Zeros(x - S)}), yb, false, false);
     s.Add(In(xr), In(yb), xr, true, true);
   } else {
@@ -545,7 +546,7 @@ MultiFloat Sqrt(const MultiFloat& a) {
   const int e = f.expBits, p = f.Precision();
   Serial s(mach);
   Unpacked A = Unpack(s, a, false);
-  const auto [na, ua] = NormalisedSig(s, f, A.sig, Loc::Acc);
+  const auto [na, ua] = NormalisedSig(s, f, A.sig, Loc::kAcc);
   Classify(s, f, A, s.AnyOfRead(A.frac));
   const int S = static_cast<int>(ua.size());
   // a = na·2^E with E = xa + ua - bias - p + 2 - 2^S. The radicand na·2^j, j = p+3 or
@@ -556,7 +557,7 @@ MultiFloat Sqrt(const MultiFloat& a) {
   const int x = ExpWidth((1 << e) + (1 << S) + 2, p + 1 + f.Bias() - (K >> 1));
   Planes y = Concat({A.exp, s.Zeros(x - e)});
   if (S > 0) {
-    OutPlanes sum = s.New(x, Loc::Internal);
+    OutPlanes sum = s.New(x, Loc::kInternal);
     s.Add(y, Concat({ua, s.Zeros(x - S)}), sum, false, false);
     y = In(sum);
   }
@@ -566,17 +567,17 @@ MultiFloat Sqrt(const MultiFloat& a) {
     low[i - p - 3] = i - p - 3 < p ? na[i - p - 3] : s.Zero();
     high[i - p - 3] = i - p - 4 >= 0 ? na[i - p - 4] : s.Zero();
   }
-  OutPlanes top = s.New(p + 1, Loc::Acc);
+  OutPlanes top = s.New(p + 1, Loc::kAcc);
   s.Mux(odd, high, low, top);
-  OutPlanes root = s.New(p + 2, Loc::Internal);
+  OutPlanes root = s.New(p + 2, Loc::kInternal);
   const Planes rem = SquareRoot(s, Concat({s.Zeros(p + 3), In(top)}), root);
-  OutPlanes v = {const_cast<Word*>(s.AnyOf(rem, Loc::Acc))};
+  OutPlanes v = {const_cast<Word*>(s.AnyOf(rem, Loc::kAcc))};
   v.insert(v.end(), root.begin(), root.end());
   // Field of the top position: p + 1 + bias + (E - j)/2.
   const int c = p + 1 + f.Bias() - (K >> 1);
   Planes xr = Concat({Slice(y, 1, x), {s.Zero()}});
   if (K & 1) {
-    OutPlanes dec = s.New(x, Loc::Internal);
+    OutPlanes dec = s.New(x, Loc::kInternal);
     s.Add(xr, Planes(x, odd), dec, false, false);  // - odd: all ones is -1
     xr = In(dec);
   }
@@ -589,13 +590,13 @@ MultiFloat Sqrt(const MultiFloat& a) {
 }
 
 Multi Less(const MultiFloat& a, const MultiFloat& b) {
-  return Compare(a, b, CompareKind::Less, "fless");
+  return Compare(a, b, CompareKind::kLess, "fless");
 }
 Multi LessEqual(const MultiFloat& a, const MultiFloat& b) {
-  return Compare(a, b, CompareKind::LessEqual, "flessEqual");
+  return Compare(a, b, CompareKind::kLessEqual, "flessEqual");
 }
 Multi Equal(const MultiFloat& a, const MultiFloat& b) {
-  return Compare(a, b, CompareKind::Equal, "fequal");
+  return Compare(a, b, CompareKind::kEqual, "fequal");
 }
 MultiFloat Min(const MultiFloat& a, const MultiFloat& b) { return MinMax(a, b, false); }
 MultiFloat Max(const MultiFloat& a, const MultiFloat& b) { return MinMax(a, b, true); }
@@ -613,7 +614,7 @@ MultiFloat ToFloat(const Multi& a, const FloatFormat& f) {
   const Word* sign = fa.isSigned ? a.Plane(w - 1) : s.Zero();
   // |a| (w bits hold it, also for the most negative value), padded below to p+2 places.
   const int pad = std::max(0, p + 2 - w), n = w + pad;
-  OutPlanes v = s.New(n, Loc::Acc);
+  OutPlanes v = s.New(n, Loc::kAcc);
   const OutPlanes mag(v.begin() + pad, v.end());
   s.NegateWhere(bits, sign, mag);
   const Word* zero = s.Not(s.AnyOfRead(bits));
@@ -622,7 +623,7 @@ MultiFloat ToFloat(const Multi& a, const FloatFormat& f) {
   // Keep the top p+2 bits and the rest as a sticky bit below them.
   OutPlanes kept = v;
   if (n > p + 3) {
-    kept = {const_cast<Word*>(s.AnyOf(Slice(In(v), 0, n - p - 2), Loc::Acc))};
+    kept = {const_cast<Word*>(s.AnyOf(Slice(In(v), 0, n - p - 2), Loc::kAcc))};
     kept.insert(kept.end(), v.end() - (p + 2), v.end());
   }
   // The top position is worth 2^(w - 1 - fracBits - shift), shift = 2^S - 1 - u: its
@@ -656,11 +657,11 @@ Multi ToFixed(const MultiFloat& a, fixed::Format out, fixed::Policy policy) {
   // load position, which overflows every wo-bit format.
   const int C = wo + f.Bias() + f.fracBits - fo;
   const int x = CeilLog2(C + (1 << e) + 2) + 1;
-  OutPlanes amount = s.New(x, Loc::Internal);
+  OutPlanes amount = s.New(x, Loc::kInternal);
   s.Add(s.Const(C, x), Concat({A.exp, s.Zeros(x - e)}), amount, true, true);
   const Word* shift = s.Not(s.Or(amount[x - 1], A.maxField));
   const int n = wo + p + 2;
-  OutPlanes frame = s.New(n, Loc::Acc);
+  OutPlanes frame = s.New(n, Loc::kAcc);
   s.Copy(s.Routed(A.nan, A.sig, {}), OutPlanes(frame.begin() + wo + 2, frame.end()));  // NaN: 0
   ShiftRightStickyBy(s, frame, Slice(In(amount), 0, x - 1), shift);
   Multi exact(mach, frameFormat, "ftofixed", Multi::Uninitialised{});

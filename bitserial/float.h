@@ -116,12 +116,12 @@ const std::vector<std::string>& FloatOpNames();
 // machine of `profile`. The conversions take the fixed side's format and policy from
 // `fixedSide` and `policy`. UserError for an unknown op.
 double FloatOpCycles(const MachineProfile& profile, const std::string& op,
-                     const fixed::FloatFormat& f, Space space = Space::Internal,
+                     const fixed::FloatFormat& f, Space space = Space::kInternal,
                      fixed::Format fixedSide = fixed::Format::Signed(15, 16),
                      fixed::Policy policy = {});
 // The same run's whole cycle report (the op's micro-ops by class).
 CycleReport FloatOpReport(const MachineProfile& profile, const std::string& op,
-                          const fixed::FloatFormat& f, Space space = Space::Internal,
+                          const fixed::FloatFormat& f, Space space = Space::kInternal,
                           fixed::Format fixedSide = fixed::Format::Signed(15, 16),
                           fixed::Policy policy = {});
 

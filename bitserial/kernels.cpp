@@ -481,16 +481,16 @@ void Logic(LogicOp op, const Word* a, const Word* b, Word* out, size_t words) {
     const V y = b ? hn::Load(d, b + w) : hn::Zero(d);
     V r;
     switch (op) {
-      case LogicOp::And:
+      case LogicOp::kAnd:
         r = hn::And(x, y);
         break;
-      case LogicOp::Or:
+      case LogicOp::kOr:
         r = hn::Or(x, y);
         break;
-      case LogicOp::Xor:
+      case LogicOp::kXor:
         r = hn::Xor(x, y);
         break;
-      case LogicOp::AndNot:
+      case LogicOp::kAndNot:
         r = hn::AndNot(y, x);
         break;
       default:

@@ -100,7 +100,7 @@ struct SqrtArgs {
   Word* const* root;  // rootBits entries
 };
 
-enum class LogicOp : int { And, Or, Xor, AndNot /* a & ~b */, Not /* ~a */ };
+enum class LogicOp : int { kAnd, kOr, kXor, kAndNot /* a & ~b */, kNot /* ~a */ };
 
 struct PlaneKernels {
   const char* target;

@@ -95,7 +95,7 @@ void Machine::ReleasePlanes(Word* p, int planes) {
 
 void Machine::PushActivity(const Word* mask, bool complement) {
   Word* next = AcquirePlanes(1);
-  kernels_->logic(complement ? LogicOp::AndNot : LogicOp::And, activity_.back(), mask, next,
+  kernels_->logic(complement ? LogicOp::kAndNot : LogicOp::kAnd, activity_.back(), mask, next,
                   words_);
   activity_.push_back(next);
 }

@@ -8,7 +8,7 @@
 
 namespace zephyr::bitserial {
 
-const char* SpaceName(Space s) { return s == Space::Internal ? "internal" : "external"; }
+const char* SpaceName(Space s) { return s == Space::kInternal ? "internal" : "external"; }
 
 PeMemory::PeMemory(int64_t internalBitsPerPe, int64_t externalBitsPerPe, int layers)
     : layers_(layers) {
@@ -39,10 +39,10 @@ std::optional<int64_t> PeMemory::FirstFit(Space s, int64_t bits) const {
 Allocation PeMemory::Allocate(const std::string& name, int64_t bits, std::optional<Space> space) {
   ZEPHYR_CHECK_GE(bits, 1);
   std::optional<int64_t> at;
-  Space s = space.value_or(Space::Internal);
+  Space s = space.value_or(Space::kInternal);
   at = FirstFit(s, bits);
   if (!at && !space) {
-    s = Space::External;
+    s = Space::kExternal;
     at = FirstFit(s, bits);
   }
   if (!at) {
@@ -50,7 +50,8 @@ Allocation PeMemory::Allocate(const std::string& name, int64_t bits, std::option
       return fmt::format("{} memory has {} of {} bits free", SpaceName(x), Capacity(x) - Used(x),
                          Capacity(x));
     };
-    std::string where = space ? left(*space) : left(Space::Internal) + ", " + left(Space::External);
+    std::string where =
+        space ? left(*space) : left(Space::kInternal) + ", " + left(Space::kExternal);
     throw UserError(fmt::format(
         "PE memory full: multi '{}' needs {} bits per virtual PE; {} (per virtual PE, with {} "
         "virtual-PE layer{} sharing each physical PE's memory)",
@@ -80,7 +81,7 @@ std::string PeMemory::Map() const {
   std::string s =
       fmt::format("PE memory map ({} virtual-PE layer{}; addresses in bits per virtual PE)\n",
                   layers_, layers_ == 1 ? "" : "s");
-  for (Space sp : {Space::Internal, Space::External}) {
+  for (Space sp : {Space::kInternal, Space::kExternal}) {
     s += fmt::format("  {}: {} of {} bits used (peak {})\n", SpaceName(sp), Used(sp), Capacity(sp),
                      PeakUsed(sp));
     for (const Allocation& a : live_)

@@ -16,13 +16,13 @@
 namespace zephyr::bitserial {
 
 // The two address spaces of a PE (internal: 2 Kbit on the WaveTracer; external: 32 KB).
-enum class Space : int { Internal, External };
+enum class Space : int { kInternal, kExternal };
 const char* SpaceName(Space s);
 
 struct Allocation {
   int id = -1;
   std::string name;
-  Space space = Space::Internal;
+  Space space = Space::kInternal;
   int64_t address = 0;  // first bit, per virtual PE
   int64_t bits = 0;
 };

@@ -58,13 +58,13 @@ void RoundFitInto(Machine& m, const Word* base, int w, bool isSigned, int frac, 
   for (int i = 0; i < wo; ++i) dst.push_back(out.Plane(i));
   RoundFitArgs args{src.data(),
                     k,
-                    policy.rounding == fixed::Rounding::Nearest && lo > 0
+                    policy.rounding == fixed::Rounding::kNearest && lo > 0
                         ? RawAt(m, base, w, isSigned, lo - 1)
                         : nullptr,
                     dst.data(),
                     wo,
                     out.Format().isSigned,
-                    policy.overflow == fixed::OverflowPolicy::Saturate,
+                    policy.overflow == fixed::OverflowPolicy::kSaturate,
                     MachineInternals::Overflow(m),
                     act};
   m.Kernels().roundFit(args, m.WordsPerPlane());
@@ -88,7 +88,7 @@ void AddInto(const Multi& a, const Multi& b, bool subtract, Multi& out, Policy p
   auto& pa = MachineInternals::PointersA(m);
   auto& pb = MachineInternals::PointersB(m);
   auto& po = MachineInternals::PointersOut(m);
-  if (lo == 0 && policy.overflow == fixed::OverflowPolicy::Wrap) {
+  if (lo == 0 && policy.overflow == fixed::OverflowPolicy::kWrap) {
     // Fast path: the output bits are the exact sum's low bits; the adder runs on past
     // them only to latch the overflow.
     const int n = std::max(w, wo + 1);
@@ -199,7 +199,7 @@ void MulInto(const Multi& a, const std::vector<const Word*>& rows, const std::ve
                          po.data(),
                          wo,
                          out.Format().isSigned,
-                         policy.overflow == fixed::OverflowPolicy::Saturate,
+                         policy.overflow == fixed::OverflowPolicy::kSaturate,
                          MachineInternals::Overflow(m),
                          m.Activity()};
   MulArgs args{pa.data(),
@@ -212,7 +212,7 @@ void MulInto(const Multi& a, const std::vector<const Word*>& rows, const std::ve
                &fit,
                lo,
                product.isSigned,
-               policy.rounding == fixed::Rounding::Nearest,
+               policy.rounding == fixed::Rounding::kNearest,
                a.Width(),
                a.Format().isSigned};
   m.Kernels().mul(args, m.WordsPerPlane());
@@ -589,7 +589,7 @@ Multi Div(const Multi& a, const Multi& b, Format out, Policy p) {
     for (int q = 0; q < wb; ++q) bits.push_back(b.Plane(q));
     k.equal(bits.data(), zeros.data(), wb, zeroDivisor, words);
   }
-  k.logic(LogicOp::AndNot, m.Activity(), zeroDivisor, keep, words);
+  k.logic(LogicOp::kAndNot, m.Activity(), zeroDivisor, keep, words);
   const Word* signA = fa.isSigned ? a.Plane(wa - 1) : m.ZeroPlane();
   const Word* signB = fb.isSigned ? b.Plane(wb - 1) : m.ZeroPlane();
   if (s.canBeNegative) {
@@ -598,7 +598,7 @@ Multi Div(const Multi& a, const Multi& b, Format out, Policy p) {
     Word* neg = flags.Plane(3);
     PlaneList zeros(d, m.ZeroPlane());
     k.equal(rem.data(), zeros.data(), d, exactRem, words);
-    k.logic(LogicOp::Xor, signA, signB, neg, words);
+    k.logic(LogicOp::kXor, signA, signB, neg, words);
     const int w = mBits + 1;
     Scratch exact(m, w);
     PlaneList carry(w, m.ZeroPlane()), q(w, m.ZeroPlane());
@@ -616,14 +616,14 @@ Multi Div(const Multi& a, const Multi& b, Format out, Policy p) {
 
   // Where b == 0: the end of out's range on a's side, and the divideByZero flag.
   Word* notSignA = flags.Plane(2);
-  k.logic(LogicOp::Not, signA, nullptr, notSignA, words);
+  k.logic(LogicOp::kNot, signA, nullptr, notSignA, words);
   PlaneList ends(wo, notSignA);
   if (out.isSigned) ends[wo - 1] = signA;
   std::vector<Word*> ro(wo);
   for (int i = 0; i < wo; ++i) ro[i] = r.Plane(i);
   k.select(zeroDivisor, ends.data(), ro.data(), ro.data(), wo, words);
-  k.logic(LogicOp::And, zeroDivisor, m.Activity(), keep, words);
-  k.logic(LogicOp::Or, MachineInternals::DivideByZero(m), keep, MachineInternals::DivideByZero(m),
+  k.logic(LogicOp::kAnd, zeroDivisor, m.Activity(), keep, words);
+  k.logic(LogicOp::kOr, MachineInternals::DivideByZero(m), keep, MachineInternals::DivideByZero(m),
           words);
   return r;
 }
@@ -644,7 +644,7 @@ Multi Sqrt(const Multi& a, Format out, Policy p) {
   };
   const Word* neg = fa.isSigned ? a.Plane(a.Width() - 1) : m.ZeroPlane();
   Scratch keep(m, 1);
-  k.logic(LogicOp::AndNot, m.Activity(), neg, keep.p, words);
+  k.logic(LogicOp::kAndNot, m.Activity(), neg, keep.p, words);
   if (nr > 0) {
     // Root bit i: R' = 4R + (radicand bits 2i+1, 2i); if R' >= 4Y + 1, subtract it and
     // set the bit. With j bits decided, R <= 2Y < 2^(j+1), so j+3 positions hold the
@@ -656,14 +656,15 @@ Multi Sqrt(const Multi& a, Format out, Policy p) {
     for (int j = 0; j < 2 * nr; ++j) pRadicand.push_back(radicand(j));
     for (int i = 0; i < nr; ++i) pRoot.push_back(root.Plane(i));
     k.sqrt(SqrtArgs{pRadicand.data(), nr, pRoot.data()}, words);
-    RoundFitInto(m, root.p, nr, false, out.fracBits, r, {fixed::Rounding::Floor, p.overflow},
+    RoundFitInto(m, root.p, nr, false, out.fracBits, r, {fixed::Rounding::kFloor, p.overflow},
                  keep.p);
   }
   if (fa.isSigned) {  // a < 0: 0 and the invalid flag
     for (int i = 0; i < r.Width(); ++i)
-      k.logic(LogicOp::AndNot, r.Plane(i), neg, r.Plane(i), words);
-    k.logic(LogicOp::And, neg, m.Activity(), keep.p, words);
-    k.logic(LogicOp::Or, MachineInternals::Invalid(m), keep.p, MachineInternals::Invalid(m), words);
+      k.logic(LogicOp::kAndNot, r.Plane(i), neg, r.Plane(i), words);
+    k.logic(LogicOp::kAnd, neg, m.Activity(), keep.p, words);
+    k.logic(LogicOp::kOr, MachineInternals::Invalid(m), keep.p, MachineInternals::Invalid(m),
+            words);
   }
   return r;
 }
@@ -685,8 +686,8 @@ void ConvertUncharged(const Multi& a, Multi& out, Policy p) {
 
 void SetInvalid(Machine& m, const Word* where) {
   Scratch active(m, 1);
-  m.Kernels().logic(LogicOp::And, where, m.Activity(), active.p, m.WordsPerPlane());
-  m.Kernels().logic(LogicOp::Or, MachineInternals::Invalid(m), active.p,
+  m.Kernels().logic(LogicOp::kAnd, where, m.Activity(), active.p, m.WordsPerPlane());
+  m.Kernels().logic(LogicOp::kOr, MachineInternals::Invalid(m), active.p,
                     MachineInternals::Invalid(m), m.WordsPerPlane());
 }
 
@@ -731,7 +732,7 @@ Multi LessEqual(const Multi& a, const Multi& b) {
   Multi r(m, BoolFormat(), "lessEqual", Multi::Uninitialised{});
   m.Charge("compare", CompareCost(a.AsOperand(), b.AsOperand(), r.GetSpace()));
   LessPlane(b, a, r.Plane(0));
-  m.Kernels().logic(LogicOp::Not, r.Plane(0), nullptr, r.Plane(0), m.WordsPerPlane());
+  m.Kernels().logic(LogicOp::kNot, r.Plane(0), nullptr, r.Plane(0), m.WordsPerPlane());
   return r;
 }
 
@@ -781,10 +782,10 @@ static Multi LogicOf(LogicOp op, const Multi& a, const Multi* b, const char* nam
   return r;
 }
 
-Multi And(const Multi& a, const Multi& b) { return LogicOf(LogicOp::And, a, &b, "and"); }
-Multi Or(const Multi& a, const Multi& b) { return LogicOf(LogicOp::Or, a, &b, "or"); }
-Multi Xor(const Multi& a, const Multi& b) { return LogicOf(LogicOp::Xor, a, &b, "xor"); }
-Multi Not(const Multi& a) { return LogicOf(LogicOp::Not, a, nullptr, "not"); }
+Multi And(const Multi& a, const Multi& b) { return LogicOf(LogicOp::kAnd, a, &b, "and"); }
+Multi Or(const Multi& a, const Multi& b) { return LogicOf(LogicOp::kOr, a, &b, "or"); }
+Multi Xor(const Multi& a, const Multi& b) { return LogicOf(LogicOp::kXor, a, &b, "xor"); }
+Multi Not(const Multi& a) { return LogicOf(LogicOp::kNot, a, nullptr, "not"); }
 
 Multi operator+(const Multi& a, const Multi& b) {
   return Add(a, b, SumFormat(a.Format(), b.Format()));

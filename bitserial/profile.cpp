@@ -123,22 +123,22 @@ const char* CycleClassName(CycleClass c) { return kClassNames[static_cast<int>(c
 
 CycleClass ClassOf(MicroOp op) {
   switch (op) {
-    case MicroOp::ReadInternal:
-    case MicroOp::WriteInternal:
-    case MicroOp::AccumulatorRead:
-    case MicroOp::AccumulatorWrite:
-      return CycleClass::InternalMemory;
-    case MicroOp::ReadExternal:
-    case MicroOp::WriteExternal:
-      return CycleClass::ExternalMemory;
-    case MicroOp::MeshHop:
-      return CycleClass::Communication;
-    case MicroOp::ReduceBit:
-      return CycleClass::Reduction;
-    case MicroOp::HostPlane:
-      return CycleClass::Host;
+    case MicroOp::kReadInternal:
+    case MicroOp::kWriteInternal:
+    case MicroOp::kAccumulatorRead:
+    case MicroOp::kAccumulatorWrite:
+      return CycleClass::kInternalMemory;
+    case MicroOp::kReadExternal:
+    case MicroOp::kWriteExternal:
+      return CycleClass::kExternalMemory;
+    case MicroOp::kMeshHop:
+      return CycleClass::kCommunication;
+    case MicroOp::kReduceBit:
+      return CycleClass::kReduction;
+    case MicroOp::kHostPlane:
+      return CycleClass::kHost;
     default:
-      return CycleClass::Alu;
+      return CycleClass::kAlu;
   }
 }
 

@@ -17,19 +17,19 @@ namespace zephyr::bitserial {
 
 // The micro-ops of a 1-bit PE datapath (docs/bitserial.md, "Micro-ops").
 enum class MicroOp : int {
-  ReadInternal,   // read one bit of internal PE memory into the ALU
-  WriteInternal,  // write one ALU output bit to internal memory (gated by activity)
-  ReadExternal,   // the same for external PE memory
-  WriteExternal,
-  AluStep,           // one boolean / full-adder step (sum + carry flag, or a logic op)
-  FlagOp,            // clear/set/latch a PE flag (carry, mask register, overflow latch)
-  AccumulatorRead,   // read a bit of the multiply partial-product accumulator
-  AccumulatorWrite,  // write a bit of it (MPP: a shift register; WaveTracer: memory)
-  ActivitySet,       // load/set/clear the activity flag (where / elsewhere)
-  MeshHop,           // move one bit-plane one PE along a mesh axis
-  ReduceBit,         // one global reduction over a bit-plane (OR tree / count) to the host
-  BroadcastBit,      // the controller broadcasts one host bit to every PE
-  HostPlane,         // move one bit-plane (one bit of every PE) between host and array
+  kReadInternal,   // read one bit of internal PE memory into the ALU
+  kWriteInternal,  // write one ALU output bit to internal memory (gated by activity)
+  kReadExternal,   // the same for external PE memory
+  kWriteExternal,
+  kAluStep,           // one boolean / full-adder step (sum + carry flag, or a logic op)
+  kFlagOp,            // clear/set/latch a PE flag (carry, mask register, overflow latch)
+  kAccumulatorRead,   // read a bit of the multiply partial-product accumulator
+  kAccumulatorWrite,  // write a bit of it (MPP: a shift register; WaveTracer: memory)
+  kActivitySet,       // load/set/clear the activity flag (where / elsewhere)
+  kMeshHop,           // move one bit-plane one PE along a mesh axis
+  kReduceBit,         // one global reduction over a bit-plane (OR tree / count) to the host
+  kBroadcastBit,      // the controller broadcasts one host bit to every PE
+  kHostPlane,         // move one bit-plane (one bit of every PE) between host and array
   kCount
 };
 inline constexpr int kMicroOpCount = static_cast<int>(MicroOp::kCount);
@@ -37,12 +37,12 @@ const char* MicroOpName(MicroOp op);  // "readInternal", ... (the profile's entr
 
 // The cycle classes of the report.
 enum class CycleClass : int {
-  Alu,
-  InternalMemory,
-  ExternalMemory,
-  Communication,
-  Reduction,
-  Host,
+  kAlu,
+  kInternalMemory,
+  kExternalMemory,
+  kCommunication,
+  kReduction,
+  kHost,
   kCount
 };
 inline constexpr int kCycleClassCount = static_cast<int>(CycleClass::kCount);

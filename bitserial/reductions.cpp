@@ -43,9 +43,9 @@ fixed::Fixed Bitwise(const Multi& a, ReduceKind kind) {
   fixed::BigInt bits = 0;
   for (int i = 0; i < a.Width(); ++i) {
     bool bit = false;
-    if (kind == ReduceKind::Or) bit = AnyActive(m, a.Plane(i), false);
-    if (kind == ReduceKind::And) bit = !AnyActive(m, a.Plane(i), true);
-    if (kind == ReduceKind::Xor) {
+    if (kind == ReduceKind::kOr) bit = AnyActive(m, a.Plane(i), false);
+    if (kind == ReduceKind::kAnd) bit = !AnyActive(m, a.Plane(i), true);
+    if (kind == ReduceKind::kXor) {
       int64_t n = 0;
       for (size_t w = 0; w < m.WordsPerPlane(); ++w)
         n += std::popcount(a.Plane(i)[w] & m.Activity()[w]);
@@ -58,9 +58,9 @@ fixed::Fixed Bitwise(const Multi& a, ReduceKind kind) {
 
 fixed::Fixed Extreme(const Multi& a, bool isMax) {
   Machine& m = a.GetMachine();
-  CheckWhole(m, ReduceName(isMax ? ReduceKind::Max : ReduceKind::Min));
-  m.Charge(ReduceName(isMax ? ReduceKind::Max : ReduceKind::Min),
-           ReduceCost(isMax ? ReduceKind::Max : ReduceKind::Min, a.AsOperand()));
+  CheckWhole(m, ReduceName(isMax ? ReduceKind::kMax : ReduceKind::kMin));
+  m.Charge(ReduceName(isMax ? ReduceKind::kMax : ReduceKind::kMin),
+           ReduceCost(isMax ? ReduceKind::kMax : ReduceKind::kMin, a.AsOperand()));
   const Format& f = a.Format();
   if (!AnyActive(m, m.OnesPlane(), false)) return fixed::Fixed{f, isMax ? f.MinRaw() : f.MaxRaw()};
   const size_t words = m.WordsPerPlane();
@@ -80,9 +80,9 @@ fixed::Fixed Extreme(const Multi& a, bool isMax) {
 }
 }  // namespace
 
-fixed::Fixed ReduceOr(const Multi& a) { return Bitwise(a, ReduceKind::Or); }
-fixed::Fixed ReduceAnd(const Multi& a) { return Bitwise(a, ReduceKind::And); }
-fixed::Fixed ReduceXor(const Multi& a) { return Bitwise(a, ReduceKind::Xor); }
+fixed::Fixed ReduceOr(const Multi& a) { return Bitwise(a, ReduceKind::kOr); }
+fixed::Fixed ReduceAnd(const Multi& a) { return Bitwise(a, ReduceKind::kAnd); }
+fixed::Fixed ReduceXor(const Multi& a) { return Bitwise(a, ReduceKind::kXor); }
 bool Any(const Multi& mask) {
   CheckBool(mask, "Any");
   return ReduceOr(mask).raw != 0;
@@ -91,7 +91,7 @@ bool Any(const Multi& mask) {
 fixed::Fixed ReduceSum(const Multi& a) {
   Machine& m = a.GetMachine();
   CheckWhole(m, "reduceSum");
-  m.Charge("reduceSum", ReduceCost(ReduceKind::Sum, a.AsOperand()));
+  m.Charge("reduceSum", ReduceCost(ReduceKind::kSum, a.AsOperand()));
   fixed::BigInt sum = 0;
   for (int i = 0; i < a.Width(); ++i) {
     int64_t n = 0;

@@ -21,7 +21,7 @@ namespace zephyr::bitserial::serial {
 // PE memory, the accumulator (the MPP's shift register; internal memory on the
 // WaveTracer), a PE flag register (loading it is a flagOp, the ALU reads it for free) or
 // a constant the controller supplies (free).
-enum class Loc : unsigned char { Internal, External, Acc, Flag, Const };
+enum class Loc : unsigned char { kInternal, kExternal, kAcc, kFlag, kConst };
 
 using Planes = std::vector<const Word*>;
 using OutPlanes = std::vector<Word*>;
@@ -48,8 +48,8 @@ inline int CeilLog2(int n) {
 class Serial {
  public:
   explicit Serial(Machine& m) : m_(m), words_(m.WordsPerPlane()) {
-    loc_[m.ZeroPlane()] = Loc::Const;
-    loc_[m.OnesPlane()] = Loc::Const;
+    loc_[m.ZeroPlane()] = Loc::kConst;
+    loc_[m.OnesPlane()] = Loc::kConst;
   }
   ~Serial() {
     for (Word* p : owned_) m_.ReleasePlanes(p, 1);
@@ -70,9 +70,9 @@ class Serial {
   Planes Zeros(int n) const { return Planes(n, Zero()); }
 
   void Place(const Multi& x) {
-    const Loc loc = x.IsUni()                         ? Loc::Const
-                    : x.GetSpace() == Space::Internal ? Loc::Internal
-                                                      : Loc::External;
+    const Loc loc = x.IsUni()                          ? Loc::kConst
+                    : x.GetSpace() == Space::kInternal ? Loc::kInternal
+                                                       : Loc::kExternal;
     for (int i = 0; i < x.Width(); ++i) loc_[x.Plane(i)] = loc;
   }
   Word* New(Loc loc) {
@@ -90,14 +90,14 @@ class Serial {
 
   void Read(const Word* p) {
     switch (LocOf(p)) {
-      case Loc::Internal:
-        c_.Add(MicroOp::ReadInternal);
+      case Loc::kInternal:
+        c_.Add(MicroOp::kReadInternal);
         break;
-      case Loc::External:
-        c_.Add(MicroOp::ReadExternal);
+      case Loc::kExternal:
+        c_.Add(MicroOp::kReadExternal);
         break;
-      case Loc::Acc:
-        c_.Add(MicroOp::AccumulatorRead);
+      case Loc::kAcc:
+        c_.Add(MicroOp::kAccumulatorRead);
         break;
       default:
         break;
@@ -105,19 +105,19 @@ class Serial {
   }
   void Write(const Word* p) {
     switch (LocOf(p)) {
-      case Loc::Internal:
-        c_.Add(MicroOp::WriteInternal);
+      case Loc::kInternal:
+        c_.Add(MicroOp::kWriteInternal);
         break;
-      case Loc::External:
-        c_.Add(MicroOp::WriteExternal);
+      case Loc::kExternal:
+        c_.Add(MicroOp::kWriteExternal);
         break;
-      case Loc::Acc:
-        c_.Add(MicroOp::AccumulatorWrite);
+      case Loc::kAcc:
+        c_.Add(MicroOp::kAccumulatorWrite);
         break;
-      case Loc::Flag:
-        c_.Add(MicroOp::FlagOp);
+      case Loc::kFlag:
+        c_.Add(MicroOp::kFlagOp);
         break;
-      case Loc::Const:
+      case Loc::kConst:
         ZEPHYR_CHECK(false);
     }
   }
@@ -127,10 +127,10 @@ class Serial {
   void Add(const Planes& a, const Planes& b, const OutPlanes& out, bool invertB, bool carryIn) {
     const int n = static_cast<int>(out.size());
     ZEPHYR_CHECK(static_cast<int>(a.size()) == n && static_cast<int>(b.size()) == n);
-    c_.Add(MicroOp::FlagOp);  // clear or set the carry
+    c_.Add(MicroOp::kFlagOp);  // clear or set the carry
     for (int i = 0; i < n; ++i) {
       Read(a[i]), Read(b[i]);
-      c_.Add(MicroOp::AluStep);
+      c_.Add(MicroOp::kAluStep);
       if (out[i]) Write(out[i]);
     }
     AddArgs args{a.data(), b.data(), out.data(), n, invertB, carryIn, 0, false, nullptr, nullptr};
@@ -144,11 +144,11 @@ class Serial {
     const int n = static_cast<int>(out.size());
     ZEPHYR_CHECK(static_cast<int>(a.size()) == n && static_cast<int>(b.size()) == n);
     Read(mask);
-    c_.Add(MicroOp::FlagOp);
+    c_.Add(MicroOp::kFlagOp);
     for (int i = 0; i < n; ++i) {
       Read(a[i]);
       if (out[i] != b[i] && a[i] != b[i]) Read(b[i]);
-      c_.Add(MicroOp::AluStep);
+      c_.Add(MicroOp::kAluStep);
       Write(out[i]);
     }
     m_.Kernels().select(mask, a.data(), b.data(), out.data(), n, words_);
@@ -158,52 +158,52 @@ class Serial {
   const Word* Logic(LogicOp op, const Word* x, const Word* y, Loc loc, Word* into = nullptr) {
     Read(x);
     if (y) Read(y);
-    c_.Add(MicroOp::AluStep);
+    c_.Add(MicroOp::kAluStep);
     Word* o = into ? into : New(loc);
     Write(o);
     m_.Kernels().logic(op, x, y, o, words_);
     return o;
   }
-  const Word* And(const Word* x, const Word* y, Loc loc = Loc::Flag) {
-    return Logic(LogicOp::And, x, y, loc);
+  const Word* And(const Word* x, const Word* y, Loc loc = Loc::kFlag) {
+    return Logic(LogicOp::kAnd, x, y, loc);
   }
-  const Word* Or(const Word* x, const Word* y, Loc loc = Loc::Flag) {
-    return Logic(LogicOp::Or, x, y, loc);
+  const Word* Or(const Word* x, const Word* y, Loc loc = Loc::kFlag) {
+    return Logic(LogicOp::kOr, x, y, loc);
   }
-  const Word* Xor(const Word* x, const Word* y, Loc loc = Loc::Flag) {
-    return Logic(LogicOp::Xor, x, y, loc);
+  const Word* Xor(const Word* x, const Word* y, Loc loc = Loc::kFlag) {
+    return Logic(LogicOp::kXor, x, y, loc);
   }
-  const Word* AndNot(const Word* x, const Word* y, Loc loc = Loc::Flag) {
-    return Logic(LogicOp::AndNot, x, y, loc);
+  const Word* AndNot(const Word* x, const Word* y, Loc loc = Loc::kFlag) {
+    return Logic(LogicOp::kAndNot, x, y, loc);
   }
-  const Word* Not(const Word* x, Loc loc = Loc::Flag) {
-    return Logic(LogicOp::Not, x, nullptr, loc);
+  const Word* Not(const Word* x, Loc loc = Loc::kFlag) {
+    return Logic(LogicOp::kNot, x, nullptr, loc);
   }
 
   // 1 where every plane is 0 (none) or 1 (all): one serial OR/AND over the planes.
-  const Word* NoneOf(const Planes& x, Loc loc = Loc::Flag) { return Scan(x, Zero(), loc); }
-  const Word* AllOf(const Planes& x, Loc loc = Loc::Flag) { return Scan(x, Ones(), loc); }
-  const Word* AnyOf(const Planes& x, Loc loc = Loc::Flag) {
+  const Word* NoneOf(const Planes& x, Loc loc = Loc::kFlag) { return Scan(x, Zero(), loc); }
+  const Word* AllOf(const Planes& x, Loc loc = Loc::kFlag) { return Scan(x, Ones(), loc); }
+  const Word* AnyOf(const Planes& x, Loc loc = Loc::kFlag) {
     if (x.empty()) return Zero();
-    const Word* none = Scan(x, Zero(), Loc::Flag);
+    const Word* none = Scan(x, Zero(), Loc::kFlag);
     Word* o = New(loc);
-    m_.Kernels().logic(LogicOp::Not, none, nullptr, o, words_);  // the same latch, inverted
-    if (loc != Loc::Flag) Write(o);
+    m_.Kernels().logic(LogicOp::kNot, none, nullptr, o, words_);  // the same latch, inverted
+    if (loc != Loc::kFlag) Write(o);
     return o;
   }
 
   // out[i] = a[i]: one pass.
   void Copy(const Planes& a, const OutPlanes& out) {
     ZEPHYR_CHECK(a.size() == out.size());
-    for (size_t i = 0; i < a.size(); ++i) Read(a[i]), c_.Add(MicroOp::AluStep), Write(out[i]);
+    for (size_t i = 0; i < a.size(); ++i) Read(a[i]), c_.Add(MicroOp::kAluStep), Write(out[i]);
     m_.Kernels().select(Ones(), a.data(), a.data(), out.data(), static_cast<int>(a.size()), words_);
   }
   // "a == b in every position", latched by a pass that reads both anyway: only the latch
   // is charged.
   const Word* EqualAlong(const Planes& a, const Planes& b) {
-    Word* o = New(Loc::Flag);
+    Word* o = New(Loc::kFlag);
     m_.Kernels().equal(a.data(), b.data(), static_cast<int>(a.size()), o, words_);
-    c_.Add(MicroOp::FlagOp);
+    c_.Add(MicroOp::kFlagOp);
     return o;
   }
   // Adds the counts of a pass run by another layer (a fixed-point conversion).
@@ -221,9 +221,9 @@ class Serial {
   Planes Routed(const Word* mask, const Planes& a, const Planes& b) {
     Planes r(a.size());
     for (size_t i = 0; i < a.size(); ++i) {
-      Word* o = New(b.empty() ? LocOf(a[i]) : Loc::Flag);
+      Word* o = New(b.empty() ? LocOf(a[i]) : Loc::kFlag);
       if (b.empty())
-        m_.Kernels().logic(LogicOp::AndNot, a[i], mask, o, words_);
+        m_.Kernels().logic(LogicOp::kAndNot, a[i], mask, o, words_);
       else
         m_.Kernels().select(mask, &a[i], &b[i], &o, 1, words_);
       r[i] = o;
@@ -234,8 +234,8 @@ class Serial {
   Planes XorRouted(const Planes& v, const Word* mask) {
     Planes r(v.size());
     for (size_t i = 0; i < v.size(); ++i) {
-      Word* o = New(Loc::Flag);
-      m_.Kernels().logic(LogicOp::Xor, v[i], mask, o, words_);
+      Word* o = New(Loc::kFlag);
+      m_.Kernels().logic(LogicOp::kXor, v[i], mask, o, words_);
       r[i] = o;
     }
     return r;
@@ -243,30 +243,30 @@ class Serial {
   // A serial comparison riding on the pass that produces `a` bit by bit (against a
   // constant b): only the latch of its sign is charged. out as in Add.
   void CompareAlong(const Planes& a, const Planes& b, const OutPlanes& out) {
-    c_.Add(MicroOp::FlagOp);
+    c_.Add(MicroOp::kFlagOp);
     AddArgs args{a.data(), b.data(), out.data(), static_cast<int>(out.size()), true, true, 0,
                  false,    nullptr,  nullptr};
     m_.Kernels().add(args, words_);
   }
   // The OR of planes that the current pass reads anyway: only the latch is charged.
   const Word* AnyOfRead(const Planes& x) {
-    Word* o = New(Loc::Flag);
+    Word* o = New(Loc::kFlag);
     Planes ref(x.size(), Zero());
     m_.Kernels().equal(x.data(), ref.data(), static_cast<int>(x.size()), o, words_);
-    m_.Kernels().logic(LogicOp::Not, o, nullptr, o, words_);
-    c_.Add(MicroOp::FlagOp);
+    m_.Kernels().logic(LogicOp::kNot, o, nullptr, o, words_);
+    c_.Add(MicroOp::kFlagOp);
     return o;
   }
   // One serial pass over x that latches both "any bit set" (into a plane at `anyLoc`)
   // and "all bits set" (a flag).
   std::pair<const Word*, const Word*> AnyAll(const Planes& x, Loc anyLoc) {
-    for (const Word* p : x) Read(p), c_.Add(MicroOp::AluStep);
+    for (const Word* p : x) Read(p), c_.Add(MicroOp::kAluStep);
     Word* any = New(anyLoc);
     Write(any);
     Planes zero(x.size(), Zero()), ones(x.size(), Ones());
     m_.Kernels().equal(x.data(), zero.data(), static_cast<int>(x.size()), any, words_);
-    m_.Kernels().logic(LogicOp::Not, any, nullptr, any, words_);
-    Word* all = New(Loc::Flag);
+    m_.Kernels().logic(LogicOp::kNot, any, nullptr, any, words_);
+    Word* all = New(Loc::kFlag);
     Write(all);
     m_.Kernels().equal(x.data(), ones.data(), static_cast<int>(x.size()), all, words_);
     return {any, all};
@@ -275,12 +275,12 @@ class Serial {
   void NegateWhere(const Planes& v, const Word* mask, const OutPlanes& out) {
     const int n = static_cast<int>(v.size());
     Read(mask);
-    c_.Add(MicroOp::FlagOp, 2);  // the mask, and the carry
-    for (int i = 0; i < n; ++i) Read(v[i]), c_.Add(MicroOp::AluStep), Write(out[i]);
+    c_.Add(MicroOp::kFlagOp, 2);  // the mask, and the carry
+    for (int i = 0; i < n; ++i) Read(v[i]), c_.Add(MicroOp::kAluStep), Write(out[i]);
     Planes x(n);
     for (int i = 0; i < n; ++i) {
-      Word* t = New(Loc::Flag);
-      m_.Kernels().logic(LogicOp::Xor, v[i], mask, t, words_);
+      Word* t = New(Loc::kFlag);
+      m_.Kernels().logic(LogicOp::kXor, v[i], mask, t, words_);
       x[i] = t;
     }
     Planes xi = Concat({{mask}, x}), zi = Concat({{mask}, Planes(n, Zero())});
@@ -294,10 +294,10 @@ class Serial {
   void Swap(const Word* mask, const Planes& a, const Planes& b, const OutPlanes& big,
             const OutPlanes& small) {
     Read(mask);
-    c_.Add(MicroOp::FlagOp);
+    c_.Add(MicroOp::kFlagOp);
     for (size_t i = 0; i < a.size(); ++i) {
       Read(a[i]), Read(b[i]);
-      c_.Add(MicroOp::AluStep, 2);
+      c_.Add(MicroOp::kAluStep, 2);
       Write(big[i]), Write(small[i]);
     }
     m_.Kernels().select(mask, b.data(), a.data(), big.data(), static_cast<int>(a.size()), words_);
@@ -307,12 +307,12 @@ class Serial {
   // v ^= mask in place (a conditional complement): mask into a register, one pass.
   void XorWith(const OutPlanes& v, const Word* mask) {
     Read(mask);
-    c_.Add(MicroOp::FlagOp);
+    c_.Add(MicroOp::kFlagOp);
     for (Word* p : v) {
       Read(p);
-      c_.Add(MicroOp::AluStep);
+      c_.Add(MicroOp::kAluStep);
       Write(p);
-      m_.Kernels().logic(LogicOp::Xor, p, mask, p, words_);
+      m_.Kernels().logic(LogicOp::kXor, p, mask, p, words_);
     }
   }
 
@@ -323,7 +323,7 @@ class Serial {
     Planes lost(v.begin() + 1, v.begin() + std::min(s + 1, n));
     const Word* any = AnyOf(lost);
     const Word* gone = And(mask, any);
-    Logic(LogicOp::Or, v[0], gone, Loc::Acc, v[0]);
+    Logic(LogicOp::kOr, v[0], gone, Loc::kAcc, v[0]);
     Planes src(n - 1), self(n - 1);
     OutPlanes dst(n - 1);
     for (int i = 1; i < n; ++i) {
@@ -357,7 +357,7 @@ class Serial {
       ZEPHYR_CHECK(s < n);
       const Word* z = NoneOf(Planes(v.end() - s, v.end()));
       ShiftLeft(v, z, s);
-      u[k] = Not(z, Loc::Internal);
+      u[k] = Not(z, Loc::kInternal);
     }
     return u;
   }
@@ -370,12 +370,12 @@ class Serial {
     ZEPHYR_CHECK(w == static_cast<int>(a.size() + b.size()));
     for (size_t j = 0; j < b.size(); ++j) {
       Read(b[j]);
-      c_.Add(MicroOp::FlagOp);
+      c_.Add(MicroOp::kFlagOp);
       for (const Word* x : a) {
         Read(x);
-        c_.Add(MicroOp::AluStep);
-        c_.Add(MicroOp::AccumulatorRead);
-        c_.Add(MicroOp::AccumulatorWrite);
+        c_.Add(MicroOp::kAluStep);
+        c_.Add(MicroOp::kAccumulatorRead);
+        c_.Add(MicroOp::kAccumulatorWrite);
       }
     }
     Planes aw(a);
@@ -396,7 +396,7 @@ class Serial {
     return it->second;
   }
   const Word* Scan(const Planes& x, const Word* value, Loc loc) {
-    for (const Word* p : x) Read(p), c_.Add(MicroOp::AluStep);
+    for (const Word* p : x) Read(p), c_.Add(MicroOp::kAluStep);
     Word* o = New(loc);
     Write(o);
     Planes ref(x.size(), value);

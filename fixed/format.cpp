@@ -64,7 +64,7 @@ Fixed Fit(BigInt r, Format out, Policy p, Status* status) {
   BigInt lo = out.MinRaw(), hi = out.MaxRaw();
   if (r < lo || r > hi) {
     if (status) status->overflow = true;
-    if (p.overflow == OverflowPolicy::Saturate) {
+    if (p.overflow == OverflowPolicy::kSaturate) {
       r = r < lo ? lo : hi;
     } else {
       BigInt modulus = Pow2(out.Width());
@@ -132,7 +132,7 @@ Fixed RoundAndFit(const BigInt& num, int scale, Format out, Policy p, Status* st
   BigInt r;
   if (drop <= 0) {
     r = num << -drop;
-  } else if (p.rounding == Rounding::Floor) {
+  } else if (p.rounding == Rounding::kFloor) {
     r = FloorShiftRight(num, drop);
   } else {
     r = FloorShiftRight(num + Pow2(drop - 1), drop);  // add half an ulp, then shift
@@ -190,7 +190,7 @@ Fixed Div(const Fixed& a, const Fixed& b, Format out, Policy p, Status* status) 
     d = -d;
   }
   // Nearest: floor(n/d + 1/2) = floor((2n + d) / 2d), the restoring divider's extra bit.
-  BigInt q = p.rounding == Rounding::Floor ? FloorDiv(n, d) : FloorDiv(2 * n + d, 2 * d);
+  BigInt q = p.rounding == Rounding::kFloor ? FloorDiv(n, d) : FloorDiv(2 * n + d, 2 * d);
   return Fit(std::move(q), out, p, status);
 }
 

@@ -51,14 +51,14 @@ struct Format {
 // Step 2 of the rule. Floor is what a shift-based datapath does (truncate toward -inf);
 // Nearest rounds half-way cases up (toward +inf): floor(x + 1/2 ulp), one add before the
 // shift in hardware.
-enum class Rounding { Floor, Nearest };
+enum class Rounding { kFloor, kNearest };
 // Step 3 of the rule. Wrap keeps the low Width() bits (two's complement); Saturate clamps
 // to the nearest end of the range.
-enum class OverflowPolicy { Wrap, Saturate };
+enum class OverflowPolicy { kWrap, kSaturate };
 
 struct Policy {
-  Rounding rounding = Rounding::Floor;
-  OverflowPolicy overflow = OverflowPolicy::Wrap;
+  Rounding rounding = Rounding::kFloor;
+  OverflowPolicy overflow = OverflowPolicy::kWrap;
 };
 
 // Sticky flags: operations only ever set them.

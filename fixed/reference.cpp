@@ -35,7 +35,7 @@ Rational ExactValue(const Fixed& v) {
 
 Fixed FromExact(const Rational& x, Format out, Policy p, Status* status) {
   Rational scaled = x * TwoTo(out.fracBits);
-  BigInt r = p.rounding == Rounding::Floor ? FloorOf(scaled) : FloorOf(scaled + Rational(1, 2));
+  BigInt r = p.rounding == Rounding::kFloor ? FloorOf(scaled) : FloorOf(scaled + Rational(1, 2));
   // The range by definition: [-2^(w-1), 2^(w-1)) signed, [0, 2^w) unsigned.
   int w = out.Width();
   BigInt span = BigInt(1) << w;
@@ -43,7 +43,7 @@ Fixed FromExact(const Rational& x, Format out, Policy p, Status* status) {
   BigInt hi = lo + span - 1;
   if (r < lo || r > hi) {
     if (status) status->overflow = true;
-    if (p.overflow == OverflowPolicy::Saturate) {
+    if (p.overflow == OverflowPolicy::kSaturate) {
       r = r < lo ? lo : hi;
     } else {
       // The representative of r modulo 2^w inside [lo, hi].
@@ -95,7 +95,7 @@ Fixed Sqrt(const Fixed& a, Format out, Policy p, Status* s) {
   // floor(sqrt(x) 2^fo) = isqrt(floor(x 2^(2 fo))), with Boost's integer square root.
   BigInt radicand = FloorOf(ExactValue(a) * TwoTo(2 * out.fracBits));
   Policy floor = p;
-  floor.rounding = Rounding::Floor;
+  floor.rounding = Rounding::kFloor;
   return FromExact(Rational(Unbounded(bmp::sqrt(radicand))) / TwoTo(out.fracBits), out, floor, s);
 }
 Fixed Shift(const Fixed& a, int k, Format out, Policy p, Status* s) {

@@ -67,7 +67,7 @@ void RunFloatCycles(const CyclesOptions& o, const MachineProfile& profile,
                                    ? fixed::FloatFormat{8, 23, profile.floatSubnormals}
                                    : FloatFormatOf(o, profile);
   const CycleReport rep = FloatOpReport(
-      profile, o.op, f, o.external ? Space::External : Space::Internal, fixedSide, policy);
+      profile, o.op, f, o.external ? Space::kExternal : Space::kInternal, fixedSide, policy);
   const double cycles = rep.OpCycles(o.op);
   const double mops = profile.physicalPes * profile.clockHz / cycles / 1e6;
   if (o.json) {
@@ -103,11 +103,11 @@ void RunCycles(const CyclesOptions& o) {
   };
   fixed::Policy policy;
   if (o.rounding == "nearest")
-    policy.rounding = fixed::Rounding::Nearest;
+    policy.rounding = fixed::Rounding::kNearest;
   else if (o.rounding != "floor")
     throw UserError("--rounding must be floor or nearest, got '" + o.rounding + "'");
   if (o.overflow == "saturate")
-    policy.overflow = fixed::OverflowPolicy::Saturate;
+    policy.overflow = fixed::OverflowPolicy::kSaturate;
   else if (o.overflow != "wrap")
     throw UserError("--overflow must be wrap or saturate, got '" + o.overflow + "'");
   if (IsFloatOp(o.op)) {
@@ -120,7 +120,7 @@ void RunCycles(const CyclesOptions& o) {
 
   Machine m(profile);
   std::optional<Space> space;
-  if (o.external) space = Space::External;
+  if (o.external) space = Space::kExternal;
   Multi a(m, fa, "a", space), b(m, fb, "b", space);
   const fixed::Format out = fa;
   using Run = std::function<Multi()>;

@@ -18,7 +18,7 @@ int IntBitsFor(double bound) { return std::max(1, CeilLog2(bound + 1)); }
 
 fixed::Fixed Tight(double x, int frac) {
   return fixed::FromDouble(x, Format::Signed(IntBitsFor(std::abs(x)), frac),
-                           {fixed::Rounding::Nearest, fixed::OverflowPolicy::Saturate});
+                           {fixed::Rounding::kNearest, fixed::OverflowPolicy::kSaturate});
 }
 
 double MulErr(double mx, double ex, double my, double ey, double u) {

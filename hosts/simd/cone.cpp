@@ -410,8 +410,8 @@ void ConeProgram::Climb(Machine& m, int i, const Multi (&discAt)[kDiscRungs - 1]
   const double dStar = (i == 0 ? cs_.divA : cs_.divC).dStar;
   auto at = [&](double x) {
     return Broadcast(
-        m,
-        fixed::FromDouble(x, l.format, {fixed::Rounding::Floor, fixed::OverflowPolicy::Saturate}));
+        m, fixed::FromDouble(x, l.format,
+                             {fixed::Rounding::kFloor, fixed::OverflowPolicy::kSaturate}));
   };
   Multi divAt[kDivRungs - 1];
   for (int k = 1; k < kDivRungs; ++k)

@@ -9,7 +9,7 @@
 namespace zephyr::simd {
 
 // Floor rounding, saturation at the format's ends.
-inline const fixed::Policy kSaturate{fixed::Rounding::Floor, fixed::OverflowPolicy::Saturate};
+inline const fixed::Policy kSaturate{fixed::Rounding::kFloor, fixed::OverflowPolicy::kSaturate};
 
 // Runs `body` with overflow flags it raises discarded (charged as two flag operations:
 // save and restore).
@@ -19,7 +19,7 @@ void WithExpectedSaturation(bitserial::Machine& m, F&& body) {
   body();
   m.RestoreOverflow(saved);
   bitserial::MicroOpCounts c;
-  c.Add(bitserial::MicroOp::FlagOp, 2);
+  c.Add(bitserial::MicroOp::kFlagOp, 2);
   m.Charge("saturateClamp", c);
 }
 

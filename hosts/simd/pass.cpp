@@ -35,10 +35,10 @@ ArrayPassReport ReportPass(const bitserial::BlockedRun& run, double hostSeconds,
                            int64_t pes) {
   const bitserial::PeMemory& mem = run.memory;
   return {.cycles = run.report,
-          .internalPeakBits = mem.PeakUsed(Space::Internal),
-          .internalCapacityBits = mem.Capacity(Space::Internal),
-          .externalPeakBits = mem.PeakUsed(Space::External),
-          .externalCapacityBits = mem.Capacity(Space::External),
+          .internalPeakBits = mem.PeakUsed(Space::kInternal),
+          .internalCapacityBits = mem.Capacity(Space::kInternal),
+          .externalPeakBits = mem.PeakUsed(Space::kExternal),
+          .externalCapacityBits = mem.Capacity(Space::kExternal),
           .hostSeconds = hostSeconds,
           .firstPe = firstPe,
           .pes = pes};

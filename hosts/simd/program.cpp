@@ -23,14 +23,14 @@ namespace {
 // matrix layout").
 struct ArrayMatrix {
   ArrayMatrix(Machine& m, const PrimaryPlan& plan)
-      : object(m, plan.object, "matrix.object", Space::External),
-        t(m, plan.t, "matrix.t", Space::External),
-        d{{Multi(m, plan.direction, "matrix.dx", Space::External),
-           Multi(m, plan.direction, "matrix.dy", Space::External),
-           Multi(m, plan.direction, "matrix.dz", Space::External)},
+      : object(m, plan.object, "matrix.object", Space::kExternal),
+        t(m, plan.t, "matrix.t", Space::kExternal),
+        d{{Multi(m, plan.direction, "matrix.dx", Space::kExternal),
+           Multi(m, plan.direction, "matrix.dy", Space::kExternal),
+           Multi(m, plan.direction, "matrix.dz", Space::kExternal)},
           {}},
-        grazing(m, bitserial::BoolFormat(), "matrix.grazing", Space::External),
-        nearTie(m, bitserial::BoolFormat(), "matrix.nearTie", Space::External) {
+        grazing(m, bitserial::BoolFormat(), "matrix.grazing", Space::kExternal),
+        nearTie(m, bitserial::BoolFormat(), "matrix.nearTie", Space::kExternal) {
     // --number float: the directions in the pass's float format too (internal memory: the
     // programs read them; the matrix keeps the fixed ones for the host).
     if (plan.number == NumberSystem::kFloat)
@@ -144,10 +144,10 @@ void ReadMatrix(Machine& m, const ArrayMatrix& a, MatrixRaw& r, int64_t passFirs
 
 // The bits live and the most live at once since the last ResetPeak (both spaces).
 int64_t LiveBits(Machine& m) {
-  return m.Memory().Used(Space::Internal) + m.Memory().Used(Space::External);
+  return m.Memory().Used(Space::kInternal) + m.Memory().Used(Space::kExternal);
 }
 int64_t PeakBits(Machine& m) {
-  return m.Memory().PeakUsed(Space::Internal) + m.Memory().PeakUsed(Space::External);
+  return m.Memory().PeakUsed(Space::kInternal) + m.Memory().PeakUsed(Space::kExternal);
 }
 
 // The program; with `memory`, what each part allocates (the peaks restart at each object).

@@ -66,7 +66,7 @@ class FloatSphereProgram final : public ObjectProgram {
     const MultiFloat sum = Add(Add(Mul(c[0], c[0]), Mul(c[1], c[1])), Mul(c[2], c[2]));
     const MultiFloat disc = Sub(UniFloat{ff_, r2Bits_}, sum);
     const MultiFloat root = Sqrt(Max(disc, zero));  // a miss's root is 0 (its t is not used)
-    const fixed::Policy nearest{fixed::Rounding::Nearest, fixed::OverflowPolicy::Saturate};
+    const fixed::Policy nearest{fixed::Rounding::kNearest, fixed::OverflowPolicy::kSaturate};
     const Multi t0 = ToFixed(Sub(tca, root), T, nearest), t1 = ToFixed(Add(tca, root), T, nearest);
     const Multi hither = Broadcast(m, Tight(pf_.hither, F));
     Candidate out;

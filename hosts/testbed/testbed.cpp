@@ -45,14 +45,14 @@ ArraySplit SplitArrayCycles(const bitserial::CycleReport& first,
   for (const bitserial::CycleReport* pass : {&first, refine}) {
     if (!pass) continue;
     ZEPHYR_CHECK(pass->Profile().clockHz == a.clockHz);
-    const double passHost = pass->ClassCycles(bitserial::CycleClass::Host);
+    const double passHost = pass->ClassCycles(bitserial::CycleClass::kHost);
     a.arrayCycles += pass->TotalCycles() - passHost;
     host += passHost;
     if (pass == refine) a.refineCycles = pass->TotalCycles();
   }
   a.arraySeconds = a.arrayCycles / a.clockHz;
   a.scsiSeconds = host / a.clockHz;
-  const double planeCycles = profile.Cost(bitserial::MicroOp::HostPlane);
+  const double planeCycles = profile.Cost(bitserial::MicroOp::kHostPlane);
   a.scsiBytes = planeCycles > 0 ? host / planeCycles * profile.physicalPes / 8 : 0;
   return a;
 }

@@ -67,7 +67,7 @@ Outcome FloatHit(SphereTest form, const Vec3& dir, double distance, RefReal d[3]
 Outcome FixedHit(SphereTest form, fixed::Format w, const Vec3& dir, double distance, RefReal d[3],
                  RefReal c[3]) {
   using namespace fixed;
-  const Policy p{Rounding::Floor, OverflowPolicy::Saturate};
+  const Policy p{Rounding::kFloor, OverflowPolicy::kSaturate};
   Status st;
   const Fixed dx = FromDouble(dir.x, w, p, &st), dy = FromDouble(dir.y, w, p, &st),
               dz = FromDouble(dir.z, w, p, &st);

@@ -211,7 +211,7 @@ TEST(BitserialArith, MulUniEveryConstantOfAByteAndWideOnes) {
   auto a = Values(fa, 8192, rng);
   Multi ma(m, fa, "a");
   ma.Load(a);
-  const Policy p{fixed::Rounding::Nearest, fixed::OverflowPolicy::Saturate};
+  const Policy p{fixed::Rounding::kNearest, fixed::OverflowPolicy::kSaturate};
   auto check = [&](const Fixed& c, const Format& out) {
     m.ClearFlags();
     Multi r = Mul(ma, Uni{c}, out, p);
@@ -251,7 +251,7 @@ TEST(BitserialArith, ComparisonsAndSelectMatchFixed) {
   mb.Load(b);
   Multi lt = ma<mb, le = ma <= mb, eq = ma == mb, gt = ma> mb;
   Multi sel = Select(lt, ma, mb, Format::Signed(2, 3),
-                     {fixed::Rounding::Nearest, fixed::OverflowPolicy::Saturate});
+                     {fixed::Rounding::kNearest, fixed::OverflowPolicy::kSaturate});
   for (int pe = 0; pe < 8192; ++pe) {
     const int c = fixed::Compare(a[pe], b[pe]);
     ASSERT_EQ(lt.BitAt(0, pe), c < 0);
@@ -259,7 +259,7 @@ TEST(BitserialArith, ComparisonsAndSelectMatchFixed) {
     ASSERT_EQ(eq.BitAt(0, pe), c == 0);
     ASSERT_EQ(gt.BitAt(0, pe), c > 0);
     Fixed want = fixed::Convert(c < 0 ? a[pe] : b[pe], Format::Signed(2, 3),
-                                {fixed::Rounding::Nearest, fixed::OverflowPolicy::Saturate});
+                                {fixed::Rounding::kNearest, fixed::OverflowPolicy::kSaturate});
     ASSERT_EQ(sel.At(pe), want);
   }
 }
@@ -344,8 +344,8 @@ TEST(BitserialArith, HostTransfersRoundTrip) {
   Multi x(m, f, "x");
   x.LoadRaw(raw);
   EXPECT_EQ(x.ReadRaw(), raw);
-  EXPECT_EQ(m.Report().ClassCycles(CycleClass::Host),
-            2 * 32 * 18 * m.Profile().Cost(MicroOp::HostPlane));
+  EXPECT_EQ(m.Report().ClassCycles(CycleClass::kHost),
+            2 * 32 * 18 * m.Profile().Cost(MicroOp::kHostPlane));
 }
 
 }  // namespace

@@ -38,9 +38,9 @@ struct Outcome {
 void Program(Machine& m, const std::vector<int64_t>& ra, const std::vector<int64_t>& rb,
              Outcome& out) {
   const Format fa = Format::Signed(9, 8), fb = Format::Signed(5, 10), fo = Format::Signed(7, 6);
-  const fixed::Policy sat{fixed::Rounding::Nearest, fixed::OverflowPolicy::Saturate};
+  const fixed::Policy sat{fixed::Rounding::kNearest, fixed::OverflowPolicy::kSaturate};
   const int64_t first = m.FirstPe(), n = m.VirtualPes();
-  Multi a(m, fa, "a"), b(m, fb, "b", Space::External);
+  Multi a(m, fa, "a"), b(m, fb, "b", Space::kExternal);
   a.LoadRaw(std::vector<int64_t>(ra.begin() + first, ra.begin() + first + n));
   b.LoadRaw(std::vector<int64_t>(rb.begin() + first, rb.begin() + first + n));
   Multi sum = Add(a, b, fo, sat);
@@ -108,7 +108,7 @@ TEST(BitserialBlocks, ABlockModelsTheWholeMachine) {
   EXPECT_EQ(m.ModelledLayers(), 5);
   EXPECT_EQ(m.FirstPe(), 4 * 8192);
   EXPECT_EQ(m.VirtualPes(), 1000);
-  EXPECT_EQ(m.Memory().Capacity(Space::Internal), 2048 / 5);
+  EXPECT_EQ(m.Memory().Capacity(Space::kInternal), 2048 / 5);
   EXPECT_THROW(Machine(Profile("wavetracer"), kPes, 0, LayerBlock{5, 1}), UserError);
 }
 

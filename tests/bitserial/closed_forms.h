@@ -45,11 +45,11 @@ struct Counts {
   }
 };
 
-inline std::string R(Space s) { return s == Space::Internal ? "readInternal" : "readExternal"; }
-inline std::string W(Space s) { return s == Space::Internal ? "writeInternal" : "writeExternal"; }
+inline std::string R(Space s) { return s == Space::kInternal ? "readInternal" : "readExternal"; }
+inline std::string W(Space s) { return s == Space::kInternal ? "writeInternal" : "writeExternal"; }
 
-inline bool Nearest(fixed::Policy p) { return p.rounding == fixed::Rounding::Nearest; }
-inline bool Saturate(fixed::Policy p) { return p.overflow == fixed::OverflowPolicy::Saturate; }
+inline bool Nearest(fixed::Policy p) { return p.rounding == fixed::Rounding::kNearest; }
+inline bool Saturate(fixed::Policy p) { return p.overflow == fixed::OverflowPolicy::kSaturate; }
 
 // The two extra passes over a wo-bit result: Nearest (lo > 0) `flag + wo·(r + alu + w) + alu`,
 // Saturate (when overflow is possible) `flag + wo·(r + alu + w)`.
@@ -188,13 +188,13 @@ inline Counts MeshShift(int n, int d, Space s) {
 // Floating point. A pass costs, per plane it touches, what reading or writing that plane
 // costs where the plane lives (docs/float.md, "The bit-serial schedule"):
 enum class At {
-  Internal,  // PE memory: readInternal / writeInternal
-  External,  // readExternal / writeExternal
-  Acc,       // the working significand: accumulatorRead / accumulatorWrite
-  Flag,      // a PE flag register: loading it is a flagOp, the ALU reads it for free
-  Const,     // a constant or a uni's bit, supplied by the controller: free to read
+  kInternal,  // PE memory: readInternal / writeInternal
+  kExternal,  // readExternal / writeExternal
+  kAcc,       // the working significand: accumulatorRead / accumulatorWrite
+  kFlag,      // a PE flag register: loading it is a flagOp, the ALU reads it for free
+  kConst,     // a constant or a uni's bit, supplied by the controller: free to read
 };
-inline At Of(Space s) { return s == Space::Internal ? At::Internal : At::External; }
+inline At Of(Space s) { return s == Space::kInternal ? At::kInternal : At::kExternal; }
 
 namespace fp {
 
@@ -202,22 +202,22 @@ namespace fp {
 struct Tally {
   Counts c;
   Tally& Rd(At a, int64_t k = 1) {
-    if (a == At::Internal) c.Add("readInternal", k);
-    if (a == At::External) c.Add("readExternal", k);
-    if (a == At::Acc) c.Add("accumulatorRead", k);
+    if (a == At::kInternal) c.Add("readInternal", k);
+    if (a == At::kExternal) c.Add("readExternal", k);
+    if (a == At::kAcc) c.Add("accumulatorRead", k);
     return *this;
   }
   Tally& Wr(At a, int64_t k = 1) {
-    if (a == At::Internal) c.Add("writeInternal", k);
-    if (a == At::External) c.Add("writeExternal", k);
-    if (a == At::Acc) c.Add("accumulatorWrite", k);
-    if (a == At::Flag) c.Add("flagOp", k);
+    if (a == At::kInternal) c.Add("writeInternal", k);
+    if (a == At::kExternal) c.Add("writeExternal", k);
+    if (a == At::kAcc) c.Add("accumulatorWrite", k);
+    if (a == At::kFlag) c.Add("flagOp", k);
     return *this;
   }
   Tally& Alu(int64_t k = 1) { return c.Add("aluStep", k), *this; }
   Tally& Flag(int64_t k = 1) { return c.Add("flagOp", k), *this; }
   // A boolean of one or two planes (read where they live) into a plane at `out`.
-  Tally& Logic(std::initializer_list<At> in, At out = At::Flag) {
+  Tally& Logic(std::initializer_list<At> in, At out = At::kFlag) {
     for (At a : in) Rd(a);
     return Alu().Wr(out);
   }
@@ -267,7 +267,7 @@ inline void ShiftRightBy(Tally& t, const Sig& v, int a, At amount) {
   const int stages = CeilLog2(v.n);
   for (int k = 0; k < std::min(stages, a); ++k) {
     t.Logic({amount});
-    RightStage(t, v, int64_t{1} << k, At::Flag);
+    RightStage(t, v, int64_t{1} << k, At::kFlag);
   }
   if (a > stages) {
     t.Rd(amount, a - stages).Alu(a - stages).Flag().Flags(1);
@@ -279,7 +279,7 @@ inline void ShiftRightBy(Tally& t, const Sig& v, int a, At amount) {
 // internal memory: n reads and writes of v, n + 1 + s ALU steps, 2 flag operations.
 inline void LeftStage(Tally& t, const Sig& v, int64_t s) {
   t.Rd(v.v0).Rd(v.vr, v.n - 1).Wr(v.v0).Wr(v.vr, v.n - 1).Alu(v.n + 1 + s).Flag(2);
-  t.Wr(At::Internal);
+  t.Wr(At::kInternal);
 }
 // `stages` normalising stages, 2^(stages-1) first.
 inline void Normalise(Tally& t, const Sig& v, int stages) {
@@ -294,10 +294,10 @@ inline void Normalise(Tally& t, const Sig& v, int stages) {
 // sign is complemented into internal memory.
 inline void Unpack(Tally& t, const fixed::FloatFormat& f, At x, bool negate) {
   const int e = f.expBits;
-  if (negate) t.Logic({x}, At::Internal);
-  t.Rd(x, e).Alu(e).Wr(At::Internal).Flag();  // hidden bit, all ones
-  if (!f.subnormals) t.Logic({At::Internal});
-  t.Logic({At::Internal}).Logic({x, At::Flag}, At::Internal);  // bit 0 |= !hidden
+  if (negate) t.Logic({x}, At::kInternal);
+  t.Rd(x, e).Alu(e).Wr(At::kInternal).Flag();  // hidden bit, all ones
+  if (!f.subnormals) t.Logic({At::kInternal});
+  t.Logic({At::kInternal}).Logic({x, At::kFlag}, At::kInternal);  // bit 0 |= !hidden
 }
 // The class flags from "fraction not zero" (latched by a pass that read the fraction, one
 // flagOp counted there): NaN, inf, and zero (the hidden bit, read from internal memory, and
@@ -305,9 +305,9 @@ inline void Unpack(Tally& t, const fixed::FloatFormat& f, At x, bool negate) {
 inline void Classify(Tally& t, const fixed::FloatFormat& f) {
   t.Flags(2);
   if (f.subnormals)
-    t.Logic({At::Internal}).Flags(1);
+    t.Logic({At::kInternal}).Flags(1);
   else
-    t.Logic({At::Internal});
+    t.Logic({At::kInternal});
 }
 inline void Latch(Tally& t) { t.Flag(); }  // a flag latched by a pass that reads its bits anyway
 
@@ -323,10 +323,10 @@ inline void RoundPack(Tally& t, const fixed::FloatFormat& f, const Sig& v, int x
   if (f.subnormals) {
     // t = -c - xr (x planes to internal memory); tiny where t >= 0: the field is below 1 and
     // v shifts right by 1 - field = t + 1 (t's x - 1 magnitude planes, then one more stage).
-    t.Flag().Rd(At::Internal, xrRead).Alu(x).Wr(At::Internal, x);
-    t.Logic({At::Internal});
-    ShiftRightBy(t, v, x - 1, At::Internal);
-    RightStage(t, v, 1, At::Flag);
+    t.Flag().Rd(At::kInternal, xrRead).Alu(x).Wr(At::kInternal, x);
+    t.Logic({At::kInternal});
+    ShiftRightBy(t, v, x - 1, At::kInternal);
+    RightStage(t, v, 1, At::kFlag);
   }
   // Round to nearest even: sticky = OR of v[0..lsb-1); up = guard & (sticky | lsb).
   t.Rd(v.v0).Rd(v.vr, lsb - 2).Alu(lsb - 1).Flag();
@@ -335,13 +335,18 @@ inline void RoundPack(Tally& t, const fixed::FloatFormat& f, const Sig& v, int x
   t.Flags(OnesOf(c, x));
   // The packing increment: (xr << m | v's m fraction bits) + (c << m) + up over 1 + m + x
   // positions, the fraction into the accumulator, the field into internal memory.
-  t.Flag().Rd(v.vr, m).Rd(At::Internal, xrRead).Alu(1 + m + x).Wr(At::Acc, m).Wr(At::Internal, x);
+  t.Flag()
+      .Rd(v.vr, m)
+      .Rd(At::kInternal, xrRead)
+      .Alu(1 + m + x)
+      .Wr(At::kAcc, m)
+      .Wr(At::kInternal, x);
   // field >= all ones (its sign latched along): overflow unless zero; inf.
   t.Flag().Flags(3);
   if (!f.subnormals) t.Flag().Flags(1);  // field < 1: flush to zero
   t.Flags(3);                            // special = zero | inf | NaN; the exponent's fill
   // The fraction and exponent planes: the fill under `special`, else the packed bits.
-  t.Flag().Rd(At::Acc, m).Rd(At::Internal, e).Alu(m + e).Wr(out, m + e);
+  t.Flag().Rd(At::kAcc, m).Rd(At::kInternal, e).Alu(m + e).Wr(out, m + e);
   // The sign: an operand's infinity gives its sign, else `sign`; a NaN's sign cleared.
   t.Flags(1).Flag().Rd(sign).Alu().Wr(out);
   t.Rd(out).Alu().Wr(out);
@@ -350,7 +355,7 @@ inline void RoundPack(Tally& t, const fixed::FloatFormat& f, const Sig& v, int x
 // fadd / fsub (docs/float.md steps 1-7); a and b at `a`, `b`, the result at `out`.
 inline Counts AddSub(const fixed::FloatFormat& f, At a, At b, At out, bool subtract) {
   const int e = f.expBits, m = f.fracBits, p = f.Precision(), n = p + 3;
-  const At I = At::Internal, signB = subtract ? I : b;
+  const At I = At::kInternal, signB = subtract ? I : b;
   Tally t;
   Unpack(t, f, a, false), Unpack(t, f, b, subtract);  // 1.
   // 2. d = xa - xb over e + 1 positions (each exponent's bit 0 now in internal memory);
@@ -360,16 +365,16 @@ inline Counts AddSub(const fixed::FloatFormat& f, At a, At b, At out, bool subtr
   // 3. One pass reading both significands (swap as the mask): the larger to internal memory,
   // the smaller into the accumulator above guard, round and sticky; "fraction not zero"
   // latched for each.
-  t.Rd(I).Flag().Rd(a, m).Rd(b, m).Rd(I, 2).Alu(2 * p).Wr(I, p).Wr(At::Acc, p);
+  t.Rd(I).Flag().Rd(a, m).Rd(b, m).Rd(I, 2).Alu(2 * p).Wr(I, p).Wr(At::kAcc, p);
   Latch(t), Classify(t, f), Latch(t), Classify(t, f);
   // 4. Align by |d|: stage k (k < min(stages, e)) masked by d_k ^ swap, then one stage of 1
   // masked by swap itself (internal memory); d's bits above the stages (read, complemented
   // under swap along) into one clearing stage.
-  const Sig small{n, At::Acc, At::Acc};
+  const Sig small{n, At::kAcc, At::kAcc};
   const int stages = CeilLog2(n);
   for (int k = 0; k < std::min(stages, e); ++k) {
     t.Logic({I, I});
-    RightStage(t, small, int64_t{1} << k, At::Flag);
+    RightStage(t, small, int64_t{1} << k, At::kFlag);
   }
   RightStage(t, small, 1, I);
   if (e > stages) {
@@ -381,16 +386,16 @@ inline Counts AddSub(const fixed::FloatFormat& f, At a, At b, At out, bool subtr
   // difference (equal exponents) negated where sub & sign; the result's sign; zero = NOR of
   // the sum; the sign of an exact zero.
   t.Logic({a, signB}, I);
-  t.Rd(I).Flag().Rd(At::Acc, n).Alu(n).Wr(At::Acc, n);
-  t.Flag().Rd(I, p + 3).Rd(At::Acc, n).Alu(n + 2).Wr(At::Acc, n + 1);
-  t.Logic({I, At::Acc});
-  t.Flag(2).Rd(At::Acc, n + 1).Alu(n + 1).Wr(At::Acc, n + 1);
+  t.Rd(I).Flag().Rd(At::kAcc, n).Alu(n).Wr(At::kAcc, n);
+  t.Flag().Rd(I, p + 3).Rd(At::kAcc, n).Alu(n + 2).Wr(At::kAcc, n + 1);
+  t.Logic({I, At::kAcc});
+  t.Flag(2).Rd(At::kAcc, n + 1).Alu(n + 1).Wr(At::kAcc, n + 1);
   t.Logic({I});
-  t.Rd(At::Acc, n + 1).Alu(n + 1).Flag();
+  t.Rd(At::kAcc, n + 1).Alu(n + 1).Flag();
   t.Flags(1).Logic({I, I}).Flags(1).Alu().Wr(I);
   // 6. Normalise the n + 1 planes; the field xl + u + c (xl selected from both exponents inside
   // the pass that adds u).
-  const Sig sum{n + 1, At::Acc, At::Acc};
+  const Sig sum{n + 1, At::kAcc, At::kAcc};
   const int nstages = CeilLog2(n + 1);
   Normalise(t, sum, nstages);
   const int64_t c = 2 - (int64_t{1} << nstages);
@@ -409,23 +414,23 @@ inline Counts AddSub(const fixed::FloatFormat& f, At a, At b, At out, bool subtr
 // the exponent xa + xb then + u (the bias folded into c), the specials, round and pack.
 inline Counts Mul(const fixed::FloatFormat& f, At a, At b, At out) {
   const int e = f.expBits, m = f.fracBits, p = f.Precision();
-  const At I = At::Internal;
+  const At I = At::kInternal;
   Tally t;
   Unpack(t, f, a, false), Unpack(t, f, b, false);
   t.Logic({a, b}, I);  // the sign
   const int64_t pp = int64_t{p} * p;
-  t.Rd(b, m).Rd(I).Flag(p).Rd(a, int64_t{m} * p).Rd(I, p).Alu(pp).Rd(At::Acc, pp).Wr(At::Acc, pp);
+  t.Rd(b, m).Rd(I).Flag(p).Rd(a, int64_t{m} * p).Rd(I, p).Alu(pp).Rd(At::kAcc, pp).Wr(At::kAcc, pp);
   Latch(t), Classify(t, f), Latch(t), Classify(t, f);
   const int stages = f.subnormals ? CeilLog2(2 * p) : 1;
-  Normalise(t, {2 * p, At::Acc, At::Acc}, stages);
-  if (p - 2 > 0) t.Rd(At::Acc, p - 2).Alu(p - 2).Flag();  // the sticky bit
-  t.Alu().Wr(At::Acc);
+  Normalise(t, {2 * p, At::kAcc, At::kAcc}, stages);
+  if (p - 2 > 0) t.Rd(At::kAcc, p - 2).Alu(p - 2).Flag();  // the sticky bit
+  t.Alu().Wr(At::kAcc);
   const int64_t c = 2 - f.Bias() - (int64_t{1} << stages);
   const int x = ExpWidth((int64_t{2} << e) + (int64_t{1} << stages), c);
   t.Flag().Rd(I, 2).Rd(a, e - 1).Rd(b, e - 1).Alu(x).Wr(I, x);
   t.Flag().Rd(I, x + stages).Alu(x).Wr(I, x);
   t.Flags(5 + 2);  // NaN (NaN, inf x 0, 0 x inf), zero, inf
-  RoundPack(t, f, {p + 3, At::Acc, At::Acc}, x, c, x, I, out);
+  RoundPack(t, f, {p + 3, At::kAcc, At::kAcc}, x, c, x, I, out);
   return t.c;
 }
 
@@ -438,8 +443,8 @@ struct NormSig {
 };
 inline NormSig Normalised(Tally& t, const fixed::FloatFormat& f, At x, At to) {
   const int m = f.fracBits, p = f.Precision();
-  if (!f.subnormals) return {x, At::Internal, 0};
-  t.Rd(x, m).Rd(At::Internal).Alu(p).Wr(to, p);
+  if (!f.subnormals) return {x, At::kInternal, 0};
+  t.Rd(x, m).Rd(At::kInternal).Alu(p).Wr(to, p);
   const int stages = CeilLog2(p);
   Normalise(t, {p, to, to}, stages);
   return {to, to, stages};
@@ -454,7 +459,7 @@ inline NormSig Normalised(Tally& t, const fixed::FloatFormat& f, At x, At to) {
 // stage; the exponent xa - xb + ua - ub + un in two or three serial passes; round and pack.
 inline Counts Div(const fixed::FloatFormat& f, At a, At b, At out) {
   const int e = f.expBits, m = f.fracBits, p = f.Precision();
-  const At I = At::Internal, Acc = At::Acc;
+  const At I = At::kInternal, Acc = At::kAcc;
   Tally t;
   Unpack(t, f, a, false), Unpack(t, f, b, false);
   t.Logic({a, b}, I);
@@ -494,7 +499,7 @@ inline Counts Div(const fixed::FloatFormat& f, At a, At b, At out) {
 // round and pack. K = bias + 2p + 1 + 2^S is odd exactly when S = 0 (flush to zero).
 inline Counts Sqrt(const fixed::FloatFormat& f, At a, At out) {
   const int e = f.expBits, m = f.fracBits, p = f.Precision();
-  const At I = At::Internal, Acc = At::Acc;
+  const At I = At::kInternal, Acc = At::kAcc;
   Tally t;
   Unpack(t, f, a, false);
   const NormSig na = Normalised(t, f, a, Acc);
@@ -506,7 +511,7 @@ inline Counts Sqrt(const fixed::FloatFormat& f, At a, At out) {
   if (S > 0) t.Flag().Rd(I).Rd(a, e - 1).Rd(I, S).Alu(x).Wr(I, x);  // Y = xa + ua
   const bool kOdd = K & 1;
   if (kOdd) t.Logic({I});  // odd = !Y_0 (a flag), else Y_0 itself
-  t.Rd(kOdd ? At::Flag : I).Flag().Rd(na.frac, 2 * m).Rd(na.hidden, 2).Alu(p + 1).Wr(Acc, p + 1);
+  t.Rd(kOdd ? At::kFlag : I).Flag().Rd(na.frac, 2 * m).Rd(na.hidden, 2).Alu(p + 1).Wr(Acc, p + 1);
   const int64_t nr = p + 2;  // root bits
   const int64_t accReads = 3 + 3 * (nr - 1) * nr / 2 + 4 * (nr - 1) + 2 * (p + 1);
   t.Flag(2 * nr).Rd(I, nr * (nr + 1) / 2).Alu((nr - 1) * nr + 6 * nr);
@@ -527,21 +532,21 @@ inline Counts Sqrt(const fixed::FloatFormat& f, At a, At out) {
 // p + 2 ORed into a sticky bit; round and pack with the exponent u + c.
 inline Counts FromFixed(const fixed::Format& fa, At a, const fixed::FloatFormat& f, At out) {
   const int w = fa.Width(), p = f.Precision();
-  const At sign = fa.isSigned ? a : At::Const;
+  const At sign = fa.isSigned ? a : At::kConst;
   Tally t;
   const int n = std::max(w, p + 2);
-  t.Rd(sign).Flag(2).Rd(a, w).Alu(w).Wr(At::Acc, w);
+  t.Rd(sign).Flag(2).Rd(a, w).Alu(w).Wr(At::kAcc, w);
   Latch(t), t.Flags(1);  // zero
   const int S = CeilLog2(n);
-  Normalise(t, {n, At::Acc, At::Acc}, S);
+  Normalise(t, {n, At::kAcc, At::kAcc}, S);
   int kept = n;
   if (n > p + 3) {
-    t.Rd(At::Acc, n - p - 2).Alu(n - p - 2).Flag().Wr(At::Acc);
+    t.Rd(At::kAcc, n - p - 2).Alu(n - p - 2).Flag().Wr(At::kAcc);
     kept = p + 3;
   }
   const int64_t c = w - fa.fracBits + f.Bias() - (int64_t{1} << S);
   const int x = ExpWidth((int64_t{1} << S) + 2, c);
-  RoundPack(t, f, {kept, At::Acc, At::Acc}, x, c, S, sign, out);
+  RoundPack(t, f, {kept, At::kAcc, At::kAcc}, x, c, S, sign, out);
   return t.c;
 }
 
@@ -556,7 +561,7 @@ inline Counts FromFixed(const fixed::Format& fa, At a, const fixed::FloatFormat&
 inline Counts ToFixed(const fixed::FloatFormat& f, At a, const fixed::Format& fo,
                       fixed::Policy policy, Space out) {
   const int e = f.expBits, m = f.fracBits, p = f.Precision(), wo = fo.Width();
-  const At I = At::Internal, O = Of(out);
+  const At I = At::kInternal, O = Of(out);
   Tally t;
   Unpack(t, f, a, false);
   t.Rd(a, m).Alu(m).Flag();
@@ -566,9 +571,9 @@ inline Counts ToFixed(const fixed::FloatFormat& f, At a, const fixed::Format& fo
   t.Flag().Rd(I).Rd(a, e - 1).Alu(x).Wr(I, x);
   t.Logic({I}).Flags(1);
   const int n = wo + p + 2;
-  t.Rd(a, m).Rd(I).Alu(p).Wr(At::Acc, p);
-  ShiftRightBy(t, {n, At::Acc, At::Acc}, x - 1, I);
-  t.Rd(a).Flag(2).Rd(At::Acc, n).Alu(n + 1).Wr(O, n + 1);
+  t.Rd(a, m).Rd(I).Alu(p).Wr(At::kAcc, p);
+  ShiftRightBy(t, {n, At::kAcc, At::kAcc}, x - 1, I);
+  t.Rd(a).Flag(2).Rd(At::kAcc, n).Alu(n + 1).Wr(O, n + 1);
   const int W = wo + p + 3;
   t.Rd(O, W).Alu(W).Wr(O, wo);
   t.c += Extras(policy, true, true, out, wo);
@@ -592,7 +597,7 @@ inline void Order(Tally& t, const fixed::FloatFormat& f, At a, At b) {
   Latch(t), Latch(t), Latch(t);
   t.Flags(f.subnormals ? 6 : 4);
 }
-enum class CompareKind { Less, LessEqual, Equal };
+enum class CompareKind { kLess, kLessEqual, kEqual };
 // fcompare: the ordering, then flag logic (false for NaN, -0 = +0, the signs decide unless
 // they agree: a's sign read four times, b's twice), the result bit written.
 inline Counts Compare(const fixed::FloatFormat& f, At a, At b, At out, CompareKind kind) {
@@ -600,7 +605,7 @@ inline Counts Compare(const fixed::FloatFormat& f, At a, At b, At out, CompareKi
   Order(t, f, a, b);
   t.Flags(2).Logic({a, b}).Flags(1 + 2 + 2);
   t.Logic({a, b}).Logic({a}).Logic({a}).Flags(4);
-  if (kind == CompareKind::LessEqual) t.Flags(1);
+  if (kind == CompareKind::kLessEqual) t.Flags(1);
   t.Alu().Wr(out);
   return t.c;
 }

@@ -64,7 +64,7 @@ TEST(BitserialCycles, WaveTracerClosedForms) {
   // Operands in external memory: each read costs readExternal (2) instead of 1.
   Machine m(Profile("wavetracer"));
   const Format f = Format::Signed(15, 0);
-  Multi a(m, f, "a", Space::External), b(m, f, "b", Space::External);
+  Multi a(m, f, "a", Space::kExternal), b(m, f, "b", Space::kExternal);
   Multi r = Add(a, b, f);
   ExpectFormula(m.Report().OpCycles("add"), 4 * 16 + 2 + 2 * 16, "add external operands");
 }
@@ -74,7 +74,7 @@ TEST(BitserialCycles, WaveTracerClosedForms) {
 // operands and the result in internal or external memory (all eight placements), for
 // results that drop 0..3 fraction bits (Nearest's rounding pass; overflow possible or not).
 TEST(BitserialCycles, ClosedFormsUnderEveryPolicyAndPlacement) {
-  const Space I = Space::Internal, E = Space::External;
+  const Space I = Space::kInternal, E = Space::kExternal;
   const fixed::Fixed constant = fixed::Fixed{Format::Signed(7, 0), 0x35};  // 4 one bits
   int checked = 0;
   for (int n : {8, 13}) {
@@ -180,7 +180,7 @@ TEST(BitserialCycles, MulUniCostFollowsTheConstantsOneBits) {
 // exactly the closed form's micro-ops (an independent count, tests/bitserial/closed_forms.h),
 // and on 18 layers 18 times as many.
 TEST(BitserialCycles, CountsDoNotDependOnDataAndScaleWithLayers) {
-  const Policy p{fixed::Rounding::Nearest, fixed::OverflowPolicy::Saturate};
+  const Policy p{fixed::Rounding::kNearest, fixed::OverflowPolicy::kSaturate};
   const int n = 12;
   const Format f = closed::Operand(n);
   for (int data = 0; data < 5; ++data) {
@@ -197,7 +197,7 @@ TEST(BitserialCycles, CountsDoNotDependOnDataAndScaleWithLayers) {
     }
     Multi a(m, f, "a"), b(m, f, "b");
     a.LoadRaw(ra), b.LoadRaw(rb);
-    const Space I = Space::Internal;
+    const Space I = Space::kInternal;
     Multi r1 = Mul(a, b, closed::MulOut(n, 2), p);
     Multi r2 = Add(a, b, closed::Out(n, closed::kFrac - 1), p);
     EXPECT_EQ(ChargedMicroOps(m, "mul"), closed::Mul(n, 2, p, I, I, I, false).n) << "data " << data;
@@ -208,7 +208,7 @@ TEST(BitserialCycles, CountsDoNotDependOnDataAndScaleWithLayers) {
   Multi a(m, f, "a"), b(m, f, "b");
   Multi r = Mul(a, b, closed::MulOut(n, 2), p);
   closed::Counts want =
-      closed::Mul(n, 2, p, Space::Internal, Space::Internal, Space::Internal, false);
+      closed::Mul(n, 2, p, Space::kInternal, Space::kInternal, Space::kInternal, false);
   for (auto& [op, k] : want.n) k *= 18;
   EXPECT_EQ(ChargedMicroOps(m, "mul"), want.n);
 }
@@ -216,7 +216,7 @@ TEST(BitserialCycles, CountsDoNotDependOnDataAndScaleWithLayers) {
 TEST(BitserialCycles, ProfilesAreDataAndCheckedByName) {
   MachineProfile p = Profile("wavetracer");
   p.Override("readInternal=3");
-  EXPECT_EQ(p.Cost(MicroOp::ReadInternal), 3);
+  EXPECT_EQ(p.Cost(MicroOp::kReadInternal), 3);
   EXPECT_THROW(p.Override("warpDrive=1"), UserError);
   EXPECT_THROW(p.Override("readInternal=fast"), UserError);
   // Issue 11: every value a flag can give is checked: no infinite cost or clock, no clock of
@@ -307,8 +307,8 @@ TEST(BitserialCycles, CyclesCommandFollowsPolicyAndPlacement) {
             "--op",       op,
             "--bits",     "16",
             "--frac",     "8",
-            "--rounding", p.rounding == fixed::Rounding::Nearest ? "nearest" : "floor",
-            "--overflow", p.overflow == fixed::OverflowPolicy::Saturate ? "saturate" : "wrap",
+            "--rounding", p.rounding == fixed::Rounding::kNearest ? "nearest" : "floor",
+            "--overflow", p.overflow == fixed::OverflowPolicy::kSaturate ? "saturate" : "wrap",
             "--json"};
         if (external) args.push_back("--external");
         std::vector<const char*> argv;
@@ -318,7 +318,7 @@ TEST(BitserialCycles, CyclesCommandFollowsPolicyAndPlacement) {
         const auto j = nlohmann::json::parse(testing::internal::GetCapturedStdout());
         Machine m(Profile("wavetracer"));
         const std::optional<Space> s =
-            external ? std::optional<Space>(Space::External) : std::nullopt;
+            external ? std::optional<Space>(Space::kExternal) : std::nullopt;
         Multi a(m, f, "a", s), b(m, f, "b", s);
         const std::string name = op;
         Multi r = name == "add"   ? Add(a, b, f, p)
@@ -328,8 +328,8 @@ TEST(BitserialCycles, CyclesCommandFollowsPolicyAndPlacement) {
         EXPECT_EQ(j["cycles"].get<double>(), m.Report().OpCycles(name))
             << op << " rounding " << int(p.rounding) << " overflow " << int(p.overflow)
             << " external " << external;
-        if (name == "div" && p.rounding == fixed::Rounding::Nearest && !external &&
-            p.overflow == fixed::OverflowPolicy::Wrap) {
+        if (name == "div" && p.rounding == fixed::Rounding::kNearest && !external &&
+            p.overflow == fixed::OverflowPolicy::kWrap) {
           EXPECT_EQ(j["cycles"].get<double>(), 2899);
         }
       }
@@ -354,8 +354,8 @@ TEST(BitserialCycles, AUniDividendCostsItsMultiTwinLessItsReadsAndMagnitude) {
         const int64_t raw = isSigned ? -(int64_t(1) << (n - 2)) + 3 : (int64_t(1) << (n - 1)) + 3;
         const fixed::Fixed value{f, raw};
         Machine mm(Profile("wavetracer")), mu(Profile("wavetracer"));
-        Multi am(mm, f, "a", Space::Internal), bm(mm, f, "b", Space::Internal),
-            bu(mu, f, "b", Space::Internal);
+        Multi am(mm, f, "a", Space::kInternal), bm(mm, f, "b", Space::kInternal),
+            bu(mu, f, "b", Space::kInternal);
         std::vector<int64_t> ra(mm.VirtualPes(), raw), rb(mm.VirtualPes());
         for (size_t i = 0; i < rb.size(); ++i) rb[i] = int64_t(i % 7) + 1;
         am.LoadRaw(ra), bm.LoadRaw(rb), bu.LoadRaw(rb);
@@ -393,7 +393,7 @@ TEST(BitserialCycles, AUniDividendCostsItsMultiTwinLessItsReadsAndMagnitude) {
 TEST(BitserialReduce, NoActivePeGivesTheDocumentedIdentity) {
   for (const Format f : {Format::Signed(7, 4), Format::Unsigned(9, 0), Format::Signed(0, 15)}) {
     Machine m(Profile("wavetracer"));
-    Multi a(m, f, "a", Space::Internal), none(m, BoolFormat(), "none", Space::Internal);
+    Multi a(m, f, "a", Space::kInternal), none(m, BoolFormat(), "none", Space::kInternal);
     std::vector<int64_t> raw(m.VirtualPes(), 1), zero(m.VirtualPes(), 0);
     a.LoadRaw(raw), none.LoadRaw(zero);
     Where(none, [&] {
@@ -420,8 +420,8 @@ namespace {
 TEST(BitserialCycleReport, AddSumsRunsAndKeepsEach) {
   const MachineProfile profile = Profile("wavetracer");
   MicroOpCounts a, b;
-  a.Add(MicroOp::AluStep, 7), a.Add(MicroOp::ReadInternal, 3);
-  b.Add(MicroOp::HostPlane, 2), b.Add(MicroOp::AluStep, 5);
+  a.Add(MicroOp::kAluStep, 7), a.Add(MicroOp::kReadInternal, 3);
+  b.Add(MicroOp::kHostPlane, 2), b.Add(MicroOp::kAluStep, 5);
   CycleReport first(&profile, 3), second(&profile, 2);
   first.Charge("add", a), first.Charge("add", a);
   second.Charge("add", a), second.Charge("hostRead", b);

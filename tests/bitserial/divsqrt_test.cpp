@@ -208,7 +208,7 @@ TEST(BitserialDivSqrt, ActivityMaskKeepsInactivePes) {
   std::mt19937_64 rng(29);
   Machine m(Profile("wavetracer"));
   const Format f = Format::Signed(6, 5);
-  const Policy sat{fixed::Rounding::Nearest, fixed::OverflowPolicy::Saturate};
+  const Policy sat{fixed::Rounding::kNearest, fixed::OverflowPolicy::kSaturate};
   auto a = Values(f, 8192, rng), b = Values(f, 8192, rng), t0 = Values(f, 8192, rng);
   std::vector<int64_t> maskRaw(8192);
   for (auto& x : maskRaw) x = rng() & 1;
@@ -271,8 +271,8 @@ TEST(BitserialDivSqrt, ClosedFormCycles) {
 TEST(BitserialDivSqrt, CyclesDoNotDependOnDataAndScaleWithLayers) {
   const int n = 16;
   const Format f = Format::Signed(n - 1, 0);
-  const Policy p{fixed::Rounding::Nearest, fixed::OverflowPolicy::Saturate};
-  const Space I = Space::Internal;
+  const Policy p{fixed::Rounding::kNearest, fixed::OverflowPolicy::kSaturate};
+  const Space I = Space::kInternal;
   std::mt19937_64 rng(31);
   for (int data = 0; data < 4; ++data) {
     Machine m(Profile("wavetracer"));

@@ -28,12 +28,12 @@ using testutil::ChargedMicroOps;
 using testutil::kPolicies;
 
 // Where an operand is: a multi in internal or external memory, or a uni (UniFloat).
-enum class Place { Internal, External, Uni };
+enum class Place { kInternal, kExternal, kUni };
 At AtOf(Place p) {
-  return p == Place::Internal ? At::Internal : p == Place::External ? At::External : At::Const;
+  return p == Place::kInternal ? At::kInternal : p == Place::kExternal ? At::kExternal : At::kConst;
 }
 const char* NameOf(Place p) {
-  return p == Place::Internal ? "internal" : p == Place::External ? "external" : "uni";
+  return p == Place::kInternal ? "internal" : p == Place::kExternal ? "external" : "uni";
 }
 
 // Every format the engine allows: 2 <= e <= 11, 1 <= m <= 52, 1 + e + m <= 64.
@@ -71,7 +71,7 @@ struct Rig {
   Machine m;
   explicit Rig(const std::string& profile) : m(Profile(profile), 64) {}
   MultiFloat Operand(const FloatFormat& f, Place p, const char* name, uint64_t seed) {
-    MultiFloat x(m, f, name, p == Place::External ? Space::External : Space::Internal);
+    MultiFloat x(m, f, name, p == Place::kExternal ? Space::kExternal : Space::kInternal);
     std::vector<uint64_t> v(64);
     for (auto& b : v) b = (seed = seed * 6364136223846793005ULL + 1442695040888963407ULL) >> 3;
     x.Load(v);
@@ -80,8 +80,8 @@ struct Rig {
   UniFloat Uni(const FloatFormat& f) { return {f, f.Infinity(false) >> 1}; }
   void ResultIn(Space so) {
     PeMemory& mem = m.Memory();
-    const int64_t free = mem.Capacity(Space::Internal) - mem.Used(Space::Internal);
-    if (so == Space::External && free > 0) mem.Allocate("filler", free, Space::Internal);
+    const int64_t free = mem.Capacity(Space::kInternal) - mem.Used(Space::kInternal);
+    if (so == Space::kExternal && free > 0) mem.Allocate("filler", free, Space::kInternal);
     m.Report().Clear();
   }
 };
@@ -93,15 +93,15 @@ std::map<std::string, int64_t> Engine(const std::string& profile, const std::str
                                       double* cycles = nullptr) {
   Rig rig(profile);
   std::optional<MultiFloat> a, b;
-  if (pa != Place::Uni) a = rig.Operand(f, pa, "a", 1);
-  if (pb != Place::Uni) b = rig.Operand(f, pb, "b", 2);
+  if (pa != Place::kUni) a = rig.Operand(f, pa, "a", 1);
+  if (pb != Place::kUni) b = rig.Operand(f, pb, "b", 2);
   const UniFloat u = rig.Uni(f);
   rig.ResultIn(so);
   // Binary ops with either side uni (not both).
   auto bin = [&](auto fn) {
-    if (pa == Place::Uni)
+    if (pa == Place::kUni)
       fn(u, *b);
-    else if (pb == Place::Uni)
+    else if (pb == Place::kUni)
       fn(*a, u);
     else
       fn(*a, *b);
@@ -146,9 +146,9 @@ closed::Counts Form(const std::string& op, const FloatFormat& f, Place pa, Place
   if (op == "fsqrt") return fp::Sqrt(f, a, o);
   if (op == "fmin") return fp::MinMax(f, a, b, o, false);
   if (op == "fmax") return fp::MinMax(f, a, b, o, true);
-  if (op == "fless") return fp::Compare(f, a, b, o, fp::CompareKind::Less);
-  if (op == "flessEqual") return fp::Compare(f, a, b, o, fp::CompareKind::LessEqual);
-  return fp::Compare(f, a, b, o, fp::CompareKind::Equal);
+  if (op == "fless") return fp::Compare(f, a, b, o, fp::CompareKind::kLess);
+  if (op == "flessEqual") return fp::Compare(f, a, b, o, fp::CompareKind::kLessEqual);
+  return fp::Compare(f, a, b, o, fp::CompareKind::kEqual);
 }
 
 // The cycles of counts on a profile: each micro-op's count times its cost.
@@ -168,8 +168,8 @@ TEST(BitserialFloatCycles, EveryOpEqualsItsClosedFormInEveryFormat) {
   int checked = 0;
   for (const FloatFormat& f : AllFormats())
     for (const std::string& op : kOps) {
-      const auto want = Form(op, f, Place::Internal, Place::Internal, Space::Internal);
-      EXPECT_EQ(Engine("wavetracer", op, f, Place::Internal, Place::Internal, Space::Internal),
+      const auto want = Form(op, f, Place::kInternal, Place::kInternal, Space::kInternal);
+      EXPECT_EQ(Engine("wavetracer", op, f, Place::kInternal, Place::kInternal, Space::kInternal),
                 want.n)
           << op << " " << f.Name();
       ++checked;
@@ -185,16 +185,16 @@ TEST(BitserialFloatCycles, BoundaryFormatsEveryPlacementBothProfiles) {
   for (const std::string profile : {"wavetracer", "mpp"}) {
     const MachineProfile prof = Profile(profile);
     const bool external = prof.externalBitsPerPe > 0;
-    std::vector<Place> places = {Place::Internal, Place::Uni};
-    if (external) places.push_back(Place::External);
+    std::vector<Place> places = {Place::kInternal, Place::kUni};
+    if (external) places.push_back(Place::kExternal);
     for (const FloatFormat& f : BoundaryFormats())
       for (const std::string& op : kOps)
         for (Place pa : places)
           for (Place pb : places)
-            for (Space so : {Space::Internal, Space::External}) {
-              if (pa == Place::Uni && pb == Place::Uni) continue;
-              if (op == "fsqrt" && (pb != Place::Internal || pa == Place::Uni)) continue;
-              if (so == Space::External && !external) continue;
+            for (Space so : {Space::kInternal, Space::kExternal}) {
+              if (pa == Place::kUni && pb == Place::kUni) continue;
+              if (op == "fsqrt" && (pb != Place::kInternal || pa == Place::kUni)) continue;
+              if (so == Space::kExternal && !external) continue;
               const std::string what = fmt::format("{} {} {} a {} b {} out {}", profile, op,
                                                    f.Name(), NameOf(pa), NameOf(pb), SpaceName(so));
               double cycles = 0;
@@ -214,7 +214,7 @@ std::map<std::string, int64_t> EngineConversion(const std::string& profile, bool
                                                 fixed::Policy policy, Place pa, Space so,
                                                 double* cycles) {
   Rig rig(profile);
-  const Space sa = pa == Place::External ? Space::External : Space::Internal;
+  const Space sa = pa == Place::kExternal ? Space::kExternal : Space::kInternal;
   if (toFixed) {
     MultiFloat a = rig.Operand(f, pa, "a", 3);
     rig.ResultIn(so);
@@ -254,13 +254,13 @@ TEST(BitserialFloatCycles, ConversionsEveryFixedSidePolicyAndPlacement) {
     const MachineProfile prof = Profile(profile);
     const bool external = prof.externalBitsPerPe > 0;
     for (const FloatFormat& f : BoundaryFormats())
-      for (Place pa : {Place::Internal, Place::External})
-        for (Space so : {Space::Internal, Space::External}) {
-          if (!external && (pa == Place::External || so == Space::External)) continue;
+      for (Place pa : {Place::kInternal, Place::kExternal})
+        for (Space so : {Space::kInternal, Space::kExternal}) {
+          if (!external && (pa == Place::kExternal || so == Space::kExternal)) continue;
           // Every width on the WaveTracer with the operand and result internal, a sample
           // elsewhere.
           const bool full =
-              profile == "wavetracer" && pa == Place::Internal && so == Space::Internal;
+              profile == "wavetracer" && pa == Place::kInternal && so == Space::kInternal;
           const At a = AtOf(pa);
           for (const fixed::Format& fx : FixedSides(128)) {
             if (!full && fx.Width() % 7 != 1) continue;
@@ -309,14 +309,14 @@ TEST(BitserialFloatCycles, TheDocsTableOfCycleCounts) {
     EXPECT_EQ(f.Name(), profile == "mpp" ? "e8m23ftz" : "e8m23");
     for (const std::string& op : FloatOpNames()) {
       const double want = profile == "mpp" ? table.at(op).second : table.at(op).first;
-      EXPECT_EQ(FloatOpCycles(prof, op, f, Space::Internal, s31), want) << profile << " " << op;
+      EXPECT_EQ(FloatOpCycles(prof, op, f, Space::kInternal, s31), want) << profile << " " << op;
       namespace fp = closed::fp;
-      const At I = At::Internal;
+      const At I = At::kInternal;
       const closed::Counts form =
-          op == "fcompare"     ? fp::Compare(f, I, I, I, fp::CompareKind::Less)
-          : op == "ftofixed"   ? fp::ToFixed(f, I, s31, {}, Space::Internal)
+          op == "fcompare"     ? fp::Compare(f, I, I, I, fp::CompareKind::kLess)
+          : op == "ftofixed"   ? fp::ToFixed(f, I, s31, {}, Space::kInternal)
           : op == "ffromfixed" ? fp::FromFixed(s31, I, f, I)
-                               : Form(op, f, Place::Internal, Place::Internal, Space::Internal);
+                               : Form(op, f, Place::kInternal, Place::kInternal, Space::kInternal);
       EXPECT_EQ(CyclesOf(form, prof), want) << profile << " " << op << " (closed form)";
     }
   }
@@ -339,14 +339,14 @@ TEST(BitserialFloatCycles, MppPublishedFloatRows) {
   for (const Row& r : {Row{"fadd", 430, 380, 431, 436}, Row{"fmul", 216, 818, 200, 898}}) {
     const double c = FloatOpCycles(mpp, r.op, ftz);
     EXPECT_EQ(c, r.cycles) << r.op;
-    EXPECT_EQ(CyclesOf(Form(r.op, ftz, Place::Internal, Place::Internal, Space::Internal), mpp),
+    EXPECT_EQ(CyclesOf(Form(r.op, ftz, Place::kInternal, Place::kInternal, Space::kInternal), mpp),
               r.cycles)
         << r.op;
     EXPECT_EQ(std::round(pes / (c * cycle) / 1e6), r.mops) << r.op;  // MOPS, as the docs say
     const double published = pes / (r.batcherMops * 1e6 * cycle);    // Batcher's cycles
     EXPECT_NEAR(c, published, 0.1 * published) << r.op;
     EXPECT_EQ(FloatOpCycles(mpp, r.op, ieee), r.withSubnormals) << r.op;
-    EXPECT_EQ(CyclesOf(Form(r.op, ieee, Place::Internal, Place::Internal, Space::Internal), mpp),
+    EXPECT_EQ(CyclesOf(Form(r.op, ieee, Place::kInternal, Place::kInternal, Space::kInternal), mpp),
               r.withSubnormals)
         << r.op;
   }

@@ -378,9 +378,9 @@ TEST(BitserialFloat, ConversionCyclesDoNotDependOnTheData) {
     EXPECT_EQ(c1, toFixed);
     EXPECT_EQ(c2, toFloat);
   }
-  EXPECT_EQ(toFixed,
-            FloatOpCycles(Profile("wavetracer"), "ftofixed", f, Space::Internal, fx, kPolicies[3]));
-  EXPECT_EQ(toFloat, FloatOpCycles(Profile("wavetracer"), "ffromfixed", f, Space::Internal, fx));
+  EXPECT_EQ(toFixed, FloatOpCycles(Profile("wavetracer"), "ftofixed", f, Space::kInternal, fx,
+                                   kPolicies[3]));
+  EXPECT_EQ(toFloat, FloatOpCycles(Profile("wavetracer"), "ffromfixed", f, Space::kInternal, fx));
 }
 
 TEST(BitserialFloat, ToFixedRefusesAFrameWiderThanTheMachineWord) {
@@ -476,7 +476,7 @@ TEST(BitserialFloat, CyclesCommandKnowsEveryFloatOp) {
     EXPECT_EQ(RunZephyr(11, args), 0) << op;
     const nlohmann::json j = nlohmann::json::parse(testing::internal::GetCapturedStdout());
     const double want = FloatOpCycles(Profile("wavetracer"), op, FloatFormat{5, 10, true},
-                                      Space::Internal, fixed::Format::Signed(11, 4));
+                                      Space::kInternal, fixed::Format::Signed(11, 4));
     EXPECT_GT(want, 0) << op;
     EXPECT_EQ(j["cycles"].get<double>(), want) << op;
   }

@@ -24,7 +24,7 @@ using Ref = std::function<Fixed(const Fixed&, const Fixed&, fixed::Status*)>;
 
 TEST(BitserialLayers, OpsOnEighteenLayersMatchFixedOnEveryTarget) {
   const Format fa = Format::Signed(9, 12), fb = Format::Signed(5, 10), fo = Format::Signed(11, 9);
-  const Policy nearestSat{fixed::Rounding::Nearest, fixed::OverflowPolicy::Saturate};
+  const Policy nearestSat{fixed::Rounding::kNearest, fixed::OverflowPolicy::kSaturate};
   const Policy wrap{};
   const fixed::Fixed constant = fixed::FromDouble(-3.3125, Format::Signed(3, 6));
   testutil::ForEachTarget([&] {

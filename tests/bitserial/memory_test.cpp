@@ -20,14 +20,14 @@ std::string ErrorOf(const std::function<void()>& f) {
 
 TEST(BitserialMemory, ExactFillWorksOneBitMoreFails) {
   PeMemory mem(2048, 32 * 1024 * 8, 1);
-  mem.Allocate("block", 2048, Space::Internal);
-  mem.Allocate("heap", 32 * 1024 * 8, Space::External);
-  EXPECT_EQ(mem.Used(Space::Internal), mem.Capacity(Space::Internal));
-  std::string e = ErrorOf([&] { mem.Allocate("extra", 1, Space::Internal); });
+  mem.Allocate("block", 2048, Space::kInternal);
+  mem.Allocate("heap", 32 * 1024 * 8, Space::kExternal);
+  EXPECT_EQ(mem.Used(Space::kInternal), mem.Capacity(Space::kInternal));
+  std::string e = ErrorOf([&] { mem.Allocate("extra", 1, Space::kInternal); });
   EXPECT_NE(e.find("'extra'"), std::string::npos) << e;
   EXPECT_NE(e.find("needs 1 bits"), std::string::npos) << e;
   EXPECT_NE(e.find("0 of 2048"), std::string::npos) << e;
-  EXPECT_FALSE(ErrorOf([&] { mem.Allocate("extra2", 1, Space::External); }).empty());
+  EXPECT_FALSE(ErrorOf([&] { mem.Allocate("extra2", 1, Space::kExternal); }).empty());
   EXPECT_FALSE(ErrorOf([&] { mem.Allocate("auto", 1); }).empty());
 }
 
@@ -38,33 +38,33 @@ TEST(BitserialMemory, ExactFillWorksOneBitMoreFails) {
 TEST(BitserialMemory, FirstFitAtItsBoundaries) {
   for (int layers = 1; layers <= 64; ++layers) {
     PeMemory mem(2048, 32 * 1024 * 8, layers);
-    const int64_t cap = mem.Capacity(Space::Internal);
+    const int64_t cap = mem.Capacity(Space::kInternal);
     ASSERT_EQ(cap, 2048 / layers) << layers;
     const std::string at = " with " + std::to_string(layers) + " layers";
     // Layout: a(1) b(g1) c(1) d(g2) e(rest), g1 < g2, then b and d freed: two gaps.
     const int64_t g1 = std::max<int64_t>(1, cap / 8), g2 = g1 + 1, rest = cap - 2 - g1 - g2;
     ASSERT_GE(rest, 1) << at;
-    const Allocation a = mem.Allocate("a", 1, Space::Internal),
-                     b = mem.Allocate("b", g1, Space::Internal),
-                     c = mem.Allocate("c", 1, Space::Internal),
-                     d = mem.Allocate("d", g2, Space::Internal),
-                     e = mem.Allocate("e", rest, Space::Internal);
+    const Allocation a = mem.Allocate("a", 1, Space::kInternal),
+                     b = mem.Allocate("b", g1, Space::kInternal),
+                     c = mem.Allocate("c", 1, Space::kInternal),
+                     d = mem.Allocate("d", g2, Space::kInternal),
+                     e = mem.Allocate("e", rest, Space::kInternal);
     EXPECT_EQ(e.address + e.bits, cap) << at;  // the last bit is usable...
-    EXPECT_FALSE(ErrorOf([&] { mem.Allocate("over", 1, Space::Internal); }).empty())
+    EXPECT_FALSE(ErrorOf([&] { mem.Allocate("over", 1, Space::kInternal); }).empty())
         << at;  // ...the next not
     mem.Free(b.id), mem.Free(d.id);
     // One bit more than both gaps fits nowhere.
-    EXPECT_FALSE(ErrorOf([&] { mem.Allocate("tooBig", g2 + 1, Space::Internal); }).empty()) << at;
+    EXPECT_FALSE(ErrorOf([&] { mem.Allocate("tooBig", g2 + 1, Space::kInternal); }).empty()) << at;
     // g2 bits skip the smaller first gap; then g1 bits fill the first gap exactly.
-    const Allocation x = mem.Allocate("x", g2, Space::Internal);
+    const Allocation x = mem.Allocate("x", g2, Space::kInternal);
     EXPECT_EQ(x.address, d.address) << at;
-    const Allocation y = mem.Allocate("y", g1, Space::Internal);
+    const Allocation y = mem.Allocate("y", g1, Space::kInternal);
     EXPECT_EQ(y.address, b.address) << at;
-    EXPECT_EQ(mem.Used(Space::Internal), cap) << at;
+    EXPECT_EQ(mem.Used(Space::kInternal), cap) << at;
     // Without a space a request that no internal gap holds goes external.
-    EXPECT_EQ(mem.Allocate("spill", 1).space, Space::External) << at;
+    EXPECT_EQ(mem.Allocate("spill", 1).space, Space::kExternal) << at;
     for (const Allocation& z : {a, c, e, x, y}) mem.Free(z.id);
-    EXPECT_EQ(mem.Allocate("all", cap, Space::Internal).address, 0) << at;
+    EXPECT_EQ(mem.Allocate("all", cap, Space::kInternal).address, 0) << at;
   }
 }
 
@@ -72,18 +72,18 @@ TEST(BitserialMemory, VirtualLayersSplitTheMemory) {
   Machine m(Profile("wavetracer"), 384 * 384);
   EXPECT_EQ(m.Layers(), 18);
   EXPECT_EQ(m.WordsPerPlane(), 18u * 128u);
-  EXPECT_EQ(m.Memory().Capacity(Space::Internal), 2048 / 18);
-  EXPECT_EQ(m.Memory().Capacity(Space::External), 32 * 1024 * 8 / 18);
+  EXPECT_EQ(m.Memory().Capacity(Space::kInternal), 2048 / 18);
+  EXPECT_EQ(m.Memory().Capacity(Space::kExternal), 32 * 1024 * 8 / 18);
   // Exactly filling a virtual PE's internal share works through the Multi layer...
-  Multi big(m, Format::Signed(100, 0), "big", Space::Internal);
-  Multi rest(m, Format::Unsigned(2048 / 18 - 101, 0), "rest", Space::Internal);
-  EXPECT_EQ(m.Memory().Used(Space::Internal), 2048 / 18);
+  Multi big(m, Format::Signed(100, 0), "big", Space::kInternal);
+  Multi rest(m, Format::Unsigned(2048 / 18 - 101, 0), "rest", Space::kInternal);
+  EXPECT_EQ(m.Memory().Used(Space::kInternal), 2048 / 18);
   // ...one bit more fails, naming the variable; without a space it goes external.
-  std::string e = ErrorOf([&] { Multi x(m, Format::Unsigned(1, 0), "oneMore", Space::Internal); });
+  std::string e = ErrorOf([&] { Multi x(m, Format::Unsigned(1, 0), "oneMore", Space::kInternal); });
   EXPECT_NE(e.find("'oneMore'"), std::string::npos) << e;
   EXPECT_NE(e.find("18 virtual-PE layers"), std::string::npos) << e;
   Multi spill(m, Format::Unsigned(1, 0), "spill");
-  EXPECT_EQ(spill.GetSpace(), Space::External);
+  EXPECT_EQ(spill.GetSpace(), Space::kExternal);
   EXPECT_EQ(Machine(Profile("wavetracer"), 8193).Layers(), 2);
   EXPECT_EQ(Machine(Profile("wavetracer"), 8192).Layers(), 1);
 }

@@ -18,10 +18,10 @@
 namespace zephyr::bitserial::testutil {
 
 inline const fixed::Policy kPolicies[] = {
-    {fixed::Rounding::Floor, fixed::OverflowPolicy::Wrap},
-    {fixed::Rounding::Nearest, fixed::OverflowPolicy::Wrap},
-    {fixed::Rounding::Floor, fixed::OverflowPolicy::Saturate},
-    {fixed::Rounding::Nearest, fixed::OverflowPolicy::Saturate}};
+    {fixed::Rounding::kFloor, fixed::OverflowPolicy::kWrap},
+    {fixed::Rounding::kNearest, fixed::OverflowPolicy::kWrap},
+    {fixed::Rounding::kFloor, fixed::OverflowPolicy::kSaturate},
+    {fixed::Rounding::kNearest, fixed::OverflowPolicy::kSaturate}};
 
 // Runs `body` once per compiled Highway target (hwy's own test pattern).
 inline void ForEachTarget(const std::function<void()>& body) {

@@ -97,8 +97,8 @@ TEST(BitserialVirtualMesh, ChargeIsTheBlockMappingsClosedForm) {
     EXPECT_EQ(testutil::ChargedMicroOps(m, "virtualShift"), want) << axis << " " << d;
     const MachineProfile& p = m.Profile();
     EXPECT_DOUBLE_EQ(m.Report().OpCycles("virtualShift"),
-                     18 * w * (p.Cost(MicroOp::ReadInternal) + p.Cost(MicroOp::WriteInternal)) +
-                         w * std::abs(d) * 18 / block * p.Cost(MicroOp::MeshHop));
+                     18 * w * (p.Cost(MicroOp::kReadInternal) + p.Cost(MicroOp::kWriteInternal)) +
+                         w * std::abs(d) * 18 / block * p.Cost(MicroOp::kMeshHop));
   }
 }
 

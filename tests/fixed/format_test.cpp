@@ -32,10 +32,10 @@ std::vector<Format> FormatsUpToWidth(int maxWidth) {
   return all;
 }
 
-const Policy kPolicies[4] = {{Rounding::Floor, OverflowPolicy::Wrap},
-                             {Rounding::Floor, OverflowPolicy::Saturate},
-                             {Rounding::Nearest, OverflowPolicy::Wrap},
-                             {Rounding::Nearest, OverflowPolicy::Saturate}};
+const Policy kPolicies[4] = {{Rounding::kFloor, OverflowPolicy::kWrap},
+                             {Rounding::kFloor, OverflowPolicy::kSaturate},
+                             {Rounding::kNearest, OverflowPolicy::kWrap},
+                             {Rounding::kNearest, OverflowPolicy::kSaturate}};
 
 std::string Describe(const Status& s) {
   return std::string(s.overflow ? "O" : "-") + (s.divideByZero ? "Z" : "-") +
@@ -77,8 +77,8 @@ const UnaryOp kUnaryOps[] = {{"Neg", Neg, ref::Neg},
 std::string Operands(const Fixed& a, const Fixed* b, Format out, Policy p) {
   std::string s = "(" + ToString(a);
   if (b) s += ", " + ToString(*b);
-  return s + ") -> " + out.Name() + (p.rounding == Rounding::Floor ? " floor" : " nearest") +
-         (p.overflow == OverflowPolicy::Wrap ? " wrap" : " saturate");
+  return s + ") -> " + out.Name() + (p.rounding == Rounding::kFloor ? " floor" : " nearest") +
+         (p.overflow == OverflowPolicy::kWrap ? " wrap" : " saturate");
 }
 
 // Collects failures from worker threads; reports at most a few.
@@ -300,14 +300,14 @@ TEST(FixedRules, RoundingAndOverflowExamples) {
   Status st;
   // -1.5 -> floor gives -2, nearest (half up) gives -1.
   Fixed m15 = FromDouble(-1.5, s34, {}, &st);
-  EXPECT_EQ(Convert(m15, s30, {Rounding::Floor}).raw, -2);
-  EXPECT_EQ(Convert(m15, s30, {Rounding::Nearest}).raw, -1);
-  EXPECT_EQ(Convert(FromDouble(2.5, s34), s30, {Rounding::Nearest}).raw, 3);
+  EXPECT_EQ(Convert(m15, s30, {Rounding::kFloor}).raw, -2);
+  EXPECT_EQ(Convert(m15, s30, {Rounding::kNearest}).raw, -1);
+  EXPECT_EQ(Convert(FromDouble(2.5, s34), s30, {Rounding::kNearest}).raw, 3);
   // 7 + 1 overflows s3.0: wrap gives -8, saturate gives 7, both flag it.
   Fixed seven{s30, 7}, one{s30, 1};
   Status wrap, sat;
-  EXPECT_EQ(Add(seven, one, s30, {Rounding::Floor, OverflowPolicy::Wrap}, &wrap).raw, -8);
-  EXPECT_EQ(Add(seven, one, s30, {Rounding::Floor, OverflowPolicy::Saturate}, &sat).raw, 7);
+  EXPECT_EQ(Add(seven, one, s30, {Rounding::kFloor, OverflowPolicy::kWrap}, &wrap).raw, -8);
+  EXPECT_EQ(Add(seven, one, s30, {Rounding::kFloor, OverflowPolicy::kSaturate}, &sat).raw, 7);
   EXPECT_TRUE(wrap.overflow);
   EXPECT_TRUE(sat.overflow);
   // Negating the most negative value overflows.

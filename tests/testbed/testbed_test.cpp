@@ -258,10 +258,10 @@ TEST(TestbedClosedForm, TheHostRecomputeCostsOneRayAndOneTestPerObjectPerPixel) 
   const bitserial::MachineProfile profile = bitserial::Profile("wavetracer");
   bitserial::CycleReport pass(&profile, 1);
   bitserial::MicroOpCounts counts;
-  counts.Add(bitserial::MicroOp::HostPlane, 10);
-  counts.Add(bitserial::MicroOp::AluStep, 102976);
+  counts.Add(bitserial::MicroOp::kHostPlane, 10);
+  counts.Add(bitserial::MicroOp::kAluStep, 102976);
   pass.Charge("probe", counts);
-  const double c = pass.TotalCycles(), h = pass.ClassCycles(bitserial::CycleClass::Host);
+  const double c = pass.TotalCycles(), h = pass.ClassCycles(bitserial::CycleClass::kHost);
   ASSERT_EQ(h, 10 * kPlaneCycles);
   ASSERT_EQ(c, 123456);
   for (const int spheres : {0, 1, 3})

@@ -28,7 +28,7 @@ inline bitserial::Multi Blur3x3(const bitserial::Multi& pix, const bitserial::Me
   const Multi block =
       Add(Add(MeshShift(row, grid, 1, 1), MeshShift(row, grid, 1, -1), sum), row, sum);
   const bitserial::Uni nine{fixed::Fixed{fixed::Format::Unsigned(4, 0), 9}};
-  return Div(block, nine, fixed::Format::Unsigned(8, 0), {fixed::Rounding::Nearest});
+  return Div(block, nine, fixed::Format::Unsigned(8, 0), {fixed::Rounding::kNearest});
 }
 
 // The same on a plain w × h grid of 0..255 values (row-major).
