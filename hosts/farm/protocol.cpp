@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "fixed/check.h"
+#include "fixed/named.h"
 #include "hosts/farm/frame.h"
 
 namespace zephyr {
@@ -24,23 +25,15 @@ T Get(const std::byte* at) {
 }  // namespace
 
 const char* MessageKindName(MessageKind kind) {
-  switch (kind) {
-    case MessageKind::kSetup:
-      return "setup";
-    case MessageKind::kReady:
-      return "ready";
-    case MessageKind::kWork:
-      return "work";
-    case MessageKind::kResult:
-      return "result";
-    case MessageKind::kStop:
-      return "stop";
-    case MessageKind::kStats:
-      return "stats";
-    case MessageKind::kFailed:
-      return "failed";
-  }
-  return "?";
+  static constexpr NamedValues<MessageKind, kMessageKindCount> kNames{
+      {{{MessageKind::kSetup, "setup"},
+        {MessageKind::kReady, "ready"},
+        {MessageKind::kWork, "work"},
+        {MessageKind::kResult, "result"},
+        {MessageKind::kStop, "stop"},
+        {MessageKind::kStats, "stats"},
+        {MessageKind::kFailed, "failed"}}}};
+  return kNames.NameOf(kind);
 }
 
 bool TravelsToChild(MessageKind kind) {

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "fixed/named.h"
+
 namespace zephyr {
 
 std::string SourceLocation::ToString() const {
@@ -10,15 +12,10 @@ std::string SourceLocation::ToString() const {
 }
 
 const char* ShapeKindName(ShapeKind kind) {
-  switch (kind) {
-    case ShapeKind::kSphere:
-      return "sphere";
-    case ShapeKind::kCone:
-      return "cone";
-    case ShapeKind::kPolygon:
-      return "polygon";
-  }
-  return "?";
+  static constexpr NamedValues<ShapeKind, 3> kNames{{{{ShapeKind::kSphere, "sphere"},
+                                                      {ShapeKind::kCone, "cone"},
+                                                      {ShapeKind::kPolygon, "polygon"}}}};
+  return kNames.NameOf(kind);
 }
 
 Vec3 Scene::LightColour(size_t i) const {
