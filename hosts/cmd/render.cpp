@@ -79,10 +79,17 @@ CommandRegistration reg("render", [](CLI::App& program) {
                 kNoUpperEnd, "dist/hetero: seconds a child may hold frames without answering"),
       AddInteger(*cmd, "--in-flight", o->dist.framesInFlight, 1, kMaxFramesInFlight,
                  "dist/hetero: frames handed to a child before it returns one")};
+  const std::vector<CLI::Option*> wavefrontFlags = {
+      AddNamed(*cmd, "--compact", o->wavefront.compaction, wavefront::kCompactionNames,
+               "array: between bounces, none (every layer runs) or local (each PE packs its "
+               "live rays into its lowest layers)"),
+      AddInteger(*cmd, "--array-frac-bits", o->wavefront.fracBits, 8, 40,
+                 "array: fraction bits of the secondary rays' numbers (default: the primary "
+                 "plan's, at least 16)")};
   cmd->add_option("--testbed", o->testbed,
                   "Model the paper's 1992 system (ufmg1992): the report's \"testbed\" gives "
                   "modelled seconds (dist/hetero: under smpirun, docs/testbed.md)");
-  cmd->callback([o, positional, noProgress, simdFlags, outputs, farmFlags] {
+  cmd->callback([o, positional, noProgress, simdFlags, outputs, farmFlags, wavefrontFlags] {
     RenderOptions options = *o;
     for (CLI::Option* flag : outputs)  // `--out ''` is a mistake, not "no output"
       if (flag->count() > 0 && flag->as<std::string>().empty())
@@ -108,6 +115,10 @@ CommandRegistration reg("render", [](CLI::App& program) {
         throw UserError(flag->get_name() + ": --method " + options.method +
                         " has no frame farm (the flag applies to " +
                         RenderMethodsUsing(false, true) + ")");
+    for (const CLI::Option* flag : wavefrontFlags)
+      if (!use.wavefront && flag->count() > 0)
+        throw UserError(flag->get_name() + ": --method " + options.method +
+                        " traces no secondary ray on the array (the flag applies to array)");
     RenderOutput out = RunRender(options);
     std::printf("%s\n", RenderSummary(options, out).c_str());
   });

@@ -32,11 +32,14 @@ struct RenderMethodEntry {
   // docs/errors.md "Memory". RunRender refuses a run that cannot fit before any work.
   double bytesPerPixel = 0;
   double dumpBytesPerPixel = 0;
-  bool usesArray = false;  // runs the SIMD pass on the emulated array (--machine applies)
+  bool usesArray = false;      // runs the SIMD pass on the emulated array (--machine applies)
+  bool usesWavefront = false;  // traces the secondary rays on the array (--compact applies)
 };
 
 void RenderSeq(const Scene& scene, const RenderOptions& options, RenderOutput& out);   // seq.cpp
 void RenderSimd(const Scene& scene, const RenderOptions& options, RenderOutput& out);  // simd.cpp
+void RenderArray(const Scene& scene, const RenderOptions& options,
+                 RenderOutput& out);                                                   // array.cpp
 void RenderDist(const Scene& scene, const RenderOptions& options, RenderOutput& out);  // dist.cpp
 void DistChildEntry(const RenderOptions& options);                                     // dist.cpp
 void CheckDistOptions(const RenderOptions& options);                                   // dist.cpp

@@ -28,6 +28,11 @@ constexpr RenderMethodEntry kMethods[] = {
      "the host",
      RenderSimd, nullptr, nullptr, /*bytesPerPixel=*/104, /*dumpBytesPerPixel=*/60,
      /*usesArray=*/true},
+    {"array",
+     "all rays on the array: the SIMD primary pass, then every secondary and shadow ray on the "
+     "emulated array bounce by bounce; the host shades the local term from its records",
+     RenderArray, nullptr, nullptr, /*bytesPerPixel=*/400, /*dumpBytesPerPixel=*/60,
+     /*usesArray=*/true, /*usesWavefront=*/true},
     {"dist",
      "distributed: under mpirun, children trace whole F×F frames handed out on demand "
      "(bit-identical to seq)",
@@ -91,7 +96,7 @@ const RenderMethodEntry& MethodNamed(const std::string& method) {
 
 RenderMethodUse RenderMethodUses(const std::string& method) {
   const RenderMethodEntry& m = MethodNamed(method);
-  return {.array = m.usesArray, .farm = m.child != nullptr};
+  return {.array = m.usesArray, .farm = m.child != nullptr, .wavefront = m.usesWavefront};
 }
 
 std::string RenderMethodsUsing(bool array, bool farm) {
@@ -138,8 +143,14 @@ RenderOutput RunRender(const RenderOptions& options) {
   // --testbed: modelled 1992 seconds of the counted work.
   testbed::CountedWork work;
   if (out.hostWork) work.host = &*out.hostWork;
+  bitserial::CycleReport everyBounce;  // array: the primary pass's and the wavefront's
   if (out.simd) {
     work.arrayCycles = &out.simd->array.cycles;
+    if (out.wavefront) {
+      everyBounce.Add(out.simd->array.cycles);
+      everyBounce.Add(out.wavefront->cycles);
+      work.arrayCycles = &everyBounce;
+    }
     if (out.simd->refine) work.refineCycles = &out.simd->refine->array.cycles;
     work.recomputedPixels = uint64_t(out.simd->recomputedPixels);
   }

@@ -20,6 +20,7 @@
 #include "hosts/testbed/testbed.h"
 #include "hosts/trace/image.h"
 #include "hosts/trace/tracer.h"
+#include "hosts/wavefront/wavefront.h"
 
 namespace zephyr {
 
@@ -48,6 +49,7 @@ struct RenderOptions {
   bool progress = true;     // progress bar when stderr is a terminal
   simd::SimdOptions simd;   // simd and hetero: formats, uncertain pixels, machine profile
   DistOptions dist;         // dist and hetero
+  wavefront::WavefrontOptions wavefront;  // array: the compaction and the secondary formats
   // --testbed: the modelled system whose seconds the report gives ("" = none; the names are
   // testbed::TestbedNames(), docs/testbed.md). UserError for an unknown name.
   std::string testbed;
@@ -76,8 +78,9 @@ struct RenderOutput {
   std::optional<TraceStats> hostWork;  // seq, simd: the host's counted work
   // simd, hetero: the primary pass (its matrix emptied once the image and dump have it).
   std::optional<simd::PrimaryPass> simd;
-  std::optional<FarmReport> farm;                // dist, hetero: the frame farm's figures
-  std::optional<testbed::ModelledTime> testbed;  // --testbed: modelled seconds
+  std::optional<FarmReport> farm;                       // dist, hetero: the frame farm's figures
+  std::optional<wavefront::WavefrontResult> wavefront;  // array: every bounce on the array
+  std::optional<testbed::ModelledTime> testbed;         // --testbed: modelled seconds
   // Files deleted once every output is written (dist/hetero's frame checkpoint); kept when
   // a write fails, so --resume can finish the job.
   std::vector<std::string> removeWhenWritten;
@@ -91,6 +94,7 @@ std::vector<std::string> RenderMethodNames();
 // --threads), the frame farm under mpirun (--frame, --resume, --child-timeout, --in-flight).
 struct RenderMethodUse {
   bool array = false, farm = false;
+  bool wavefront = false;  // the secondary rays on the array (--compact, --array-frac-bits)
 };
 // UserError for an unknown method (listing the known ones).
 RenderMethodUse RenderMethodUses(const std::string& method);

@@ -76,6 +76,37 @@ nlohmann::json PrimaryPassJson(const simd::PrimaryPass& pass) {
   return j;
 }
 
+nlohmann::json WavefrontJson(const wavefront::WavefrontResult& w) {
+  static constexpr const char* kKinds[kRayKinds] = {"primary", "shadow", "reflected", "refracted"};
+  nlohmann::json rays;
+  for (int k = 0; k < kRayKinds; ++k) rays[kKinds[k]] = w.arrayRays[k];
+  nlohmann::json bounces = nlohmann::json::array();
+  for (const wavefront::BounceReport& b : w.bounces)
+    bounces.push_back({{"bounce", b.bounce},
+                       {"rays", b.rays},
+                       {"hits", b.hits},
+                       {"layers", b.layers},
+                       {"slots", b.slots},
+                       {"passes", b.passes},
+                       {"utilisation", b.utilisation},
+                       {"uncertainRays", b.uncertainRays},
+                       {"uncertainShadows", b.uncertainShadows},
+                       {"spawned", b.spawned},
+                       {"hostLinkBytes", b.hostLinkBytes},
+                       {"cycles", b.cycles.TotalCycles()},
+                       {"compactionCycles", b.compactionCycles},
+                       {"modelledSeconds", b.cycles.ModelledSeconds()},
+                       {"hostSeconds", b.hostSeconds}});
+  return {{"compaction", wavefront::kCompactionNames.NameOf(w.compaction)},
+          {"format", {{"intBits", w.intBits}, {"fracBits", w.fracBits}}},
+          {"tErrorBound", w.tErrorBound},
+          {"epsilon", w.epsilon},
+          {"arrayRays", rays},
+          {"bounces", bounces},
+          {"cycles", w.cycles.TotalCycles()},
+          {"modelledSeconds", w.cycles.ModelledSeconds()}};
+}
+
 nlohmann::json RenderReportJson(const RenderOutput& out) {
   nlohmann::json r = nlohmann::json::object();
   r["method"] = out.method;
@@ -90,6 +121,7 @@ nlohmann::json RenderReportJson(const RenderOutput& out) {
   r["phases"] = out.phases;
   if (out.hostWork) r.update(out.hostWork->ToJson());  // the counters at the top level
   if (out.simd) r["simd"] = PrimaryPassJson(*out.simd);
+  if (out.wavefront) r["wavefront"] = WavefrontJson(*out.wavefront);
   if (out.farm) r["distributed"] = out.farm->Json();
   if (out.testbed) r["testbed"] = out.testbed->Json();
   return r;

@@ -420,7 +420,6 @@ class TracerT final : public Tracer {
     V colour = surface * (T(m.kd) * ambient_);
     for (size_t i = 0; i < scene_.lights.size(); ++i) {
       ++stats.lightSamples;
-      const V& lightColour = lightColour_[i];
       V toLight = V(scene_.lights[i].position) - p;
       const T dist = Length(toLight);
       toLight = toLight / dist;
@@ -428,14 +427,9 @@ class TracerT final : public Tracer {
       if (nl <= T(0)) continue;
       const T through = Transmission(p, toLight, dist, leave, stats);
       if (through == T(0)) continue;
-      V local = Mul(surface, lightColour) * (T(m.kd) * nl);
-      if (m.ks > 0) {
-        // Phong: the mirror direction of the light against the direction to the eye.
-        const V r = n * (T(2) * nl) - toLight;
-        const T rv = -Dot(r, d);
-        if (rv > T(0)) local += lightColour * (T(m.ks) * std::pow(rv, T(m.shine)));
-      }
-      colour += local * through;
+      // Phong: the mirror direction of the light against the direction to the eye.
+      const V r = n * (T(2) * nl) - toLight;
+      colour += LightTerm(m, surface, i, nl, -Dot(r, d)) * through;
     }
     if (depth < options_.depth) {
       const T dn = Dot(d, n);  // < 0: n faces the incoming ray
@@ -455,6 +449,44 @@ class TracerT final : public Tracer {
     return colour;
   }
 
+  // One light's unshadowed local term at a surface of material m and colour `surface` with
+  // nl = N·L > 0 and rv = R·(−D) (docs/shading.md, "The colour at a hit").
+  V LightTerm(const Material& m, const V& surface, size_t light, T nl, T rv) const {
+    const V& lightColour = lightColour_[light];
+    V local = Mul(surface, lightColour) * (T(m.kd) * nl);
+    if (m.ks > 0 && rv > T(0)) local += lightColour * (T(m.ks) * std::pow(rv, T(m.shine)));
+    return local;
+  }
+
+ public:
+  Vec3 TraceRay(const Vec3& origin, const Vec3& direction, double tMin, int level, RayKind kind,
+                TraceStats& stats) const override {
+    return Vec3(Trace(V(origin), V(direction), T(tMin), level, kind, stats));
+  }
+
+  double LightThrough(const Vec3& p, int light, double tMin, TraceStats& stats) const override {
+    ZEPHYR_CHECK(light >= 0 && size_t(light) < scene_.lights.size());
+    V toLight = V(scene_.lights[light].position) - V(p);
+    const T dist = Length(toLight);
+    return double(Transmission(V(p), toLight / dist, dist, T(tMin), stats));
+  }
+
+  Vec3 LocalFromRecord(int object, const double* nl, const double* rv, const double* through,
+                       TraceStats& stats) const override {
+    ZEPHYR_CHECK(object >= 0 && size_t(object) < objects_.size());
+    ++stats.shades;
+    const Material& m = scene_.materials[objects_[object].material];
+    const V surface(m.colour);
+    V colour = surface * (T(m.kd) * ambient_);
+    for (size_t i = 0; i < scene_.lights.size(); ++i) {
+      ++stats.lightSamples;
+      if (nl[i] <= 0 || through[i] <= 0) continue;
+      colour += LightTerm(m, surface, i, T(nl[i]), T(rv[i])) * T(through[i]);
+    }
+    return Vec3(colour);
+  }
+
+ private:
   std::vector<Prepared<T>> objects_;
   SphereArrays<T> spheres_;         // the untransformed spheres, for NearestSphere
   std::vector<int> sphereObject_;   // spheres_ index -> objects_ index (increasing)

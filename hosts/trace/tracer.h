@@ -108,6 +108,24 @@ class Tracer {
 
   Vec3 TracePixel(int x, int y, TraceStats& stats, PrimaryHit* primary = nullptr) const;
 
+  // For a method that traces the rays elsewhere and shades here (the all-rays-on-the-array
+  // method, hosts/wavefront/wavefront.h):
+  // The colour the recursion gives a ray from `origin` along the unit `direction` at ray-tree
+  // level `level` (1 = a primary ray; it spawns secondary rays below options.depth), hits
+  // nearer than tMin (scene units) ignored; counted as one ray of `kind` with its subtree.
+  virtual Vec3 TraceRay(const Vec3& origin, const Vec3& direction, double tMin, int level,
+                        RayKind kind, TraceStats& stats) const = 0;
+  // The light of light `light` let through to p: the product of T over every surface along
+  // the segment to it, hits nearer than tMin ignored (docs/shading.md, "Shadows"); counted
+  // as one shadow ray.
+  virtual double LightThrough(const Vec3& p, int light, double tMin, TraceStats& stats) const = 0;
+  // The local term of docs/shading.md at a hit of `object` from what another computed per
+  // light i: nl[i] = N·Lᵢ, rv[i] = Rᵢ·(−D) and through[i] = Sᵢ (each of the scene's lights;
+  // N faces the ray): the ambient term plus every light with nl > 0 and through > 0. Counted
+  // as one shade and one light sample per light.
+  virtual Vec3 LocalFromRecord(int object, const double* nl, const double* rv,
+                               const double* through, TraceStats& stats) const = 0;
+
  protected:
   Tracer(const Scene& scene, const TraceOptions& options)
       : scene_(scene), options_(options), rays_(scene.camera) {}

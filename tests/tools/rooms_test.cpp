@@ -27,16 +27,19 @@ const std::map<std::string, std::set<std::string>>& Allowed() {
       {"hosts/simd",
        {"fixed", "bitserial", "hosts/io", "hosts/scene", "hosts/trace", "hosts/simd"}},
       {"hosts/farm", {"fixed", "hosts/io", "hosts/farm"}},
+      {"hosts/wavefront",
+       {"fixed", "bitserial", "hosts/io", "hosts/scene", "hosts/trace", "hosts/simd",
+        "hosts/wavefront"}},
       // The testbed prices counted work (TraceStats, cycle reports, the farm's times): it
       // needs neither the SIMD pass's code nor any method's.
       {"hosts/testbed",
        {"fixed", "bitserial", "hosts/io", "hosts/scene", "hosts/trace", "hosts/testbed"}},
       {"hosts/methods",
        {"fixed", "bitserial", "hosts/io", "hosts/scene", "hosts/trace", "hosts/simd", "hosts/farm",
-        "hosts/testbed", "hosts/methods"}},
+        "hosts/testbed", "hosts/wavefront", "hosts/methods"}},
       {"hosts/cmd",
        {"fixed", "bitserial", "hosts/io", "hosts/scene", "hosts/trace", "hosts/simd", "hosts/farm",
-        "hosts/testbed", "hosts/methods", "hosts/cmd"}},
+        "hosts/testbed", "hosts/wavefront", "hosts/methods", "hosts/cmd"}},
   };
   return allowed;
 }

@@ -1,0 +1,99 @@
+// hosts/wavefront/program.h — the array program of one wavefront bounce (docs/wavefront.md,
+// "The bounce program"), and its formats and error bounds planned per scene. Internal to
+// hosts/wavefront/: wavefront.cpp runs it pass by pass.
+//
+// A bounce runs on the live rays of one ray-tree level, each in one virtual PE: its origin o
+// and direction d are multis (the primary pass's eye is a uni; here every term is multi).
+// With `intersect` it finds each ray's first sphere (Hearn–Baker through the cross product,
+// f = c − o per PE); then, where a ray hit, the hit point, the unit normal turned to face the
+// ray, the mirror and the Snell directions (total internal reflection flagged), and per light
+// the shadow ray's transparent-shadow product with N·L and R·(−D) for the host's local term.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "bitserial/machine.h"
+#include "fixed/format.h"
+#include "hosts/scene/scene.h"
+
+namespace zephyr::wavefront {
+
+// One sphere's constants and bounds on the array (scene units).
+struct SphereTerms {
+  fixed::Fixed centre[3], r2, inverseRadius;
+  fixed::Format clamped, square, disc, root;  // the cross clamp and what follows it
+  double grazeBand = 0;                       // G: |disc| < G is grazing
+  double tError = 0;                          // |t − t_exact| of a certain root
+  double slack = 0;                           // a grazing ray's true root is >= t0 − slack
+  double transparency = 0;                    // the material's T (the shadow product's factor)
+  double ior = 1;
+  std::vector<bool> lightOutside;  // per light: the light is outside the sphere
+};
+
+// The formats and bounds every bounce shares (planned once per scene).
+struct SecondaryPlan {
+  int fracBits = 0, intBits = 0;
+  double ulp = 0;             // 2^-F
+  fixed::Format coord;        // s<I>.F: origins and hit points (|x|∞ <= the scene's extent)
+  fixed::Format offset;       // s<I+1>.F: f = c − o
+  fixed::Format t;            // s<I+2>.F: t, f·d, the cross products before their clamp
+  fixed::Format direction;    // s1.F: unit directions and normals
+  fixed::Format toLight;      // s<IL>.F: L − P
+  fixed::Format distance;     // u<IL>.F: |L − P|
+  fixed::Format eta;          // u<IE>.F: the relative index of refraction
+  fixed::Format index;        // u<k>.0: object index + 1 (0 = none)
+  fixed::Format unit;         // u1.F: transmissions
+  double tError = 0;          // the largest sphere's tError (near ties: |t_i − t_j| < 2·tError)
+  double epsilon = 0;         // rays ignore roots at or below it (their own surface)
+  double directionError = 0;  // | |d|² − 1 | of a direction normalised on the array
+  bool anyMirror = false, anyTransparent = false;
+  std::vector<SphereTerms> spheres;
+  std::vector<fixed::Fixed> lights[3];  // light positions, per axis
+  double primaryTError = 0;             // the primary pass's bound on t (bounce 1's hits)
+};
+
+// UserError naming the object's file:line when the scene holds anything but untransformed
+// spheres. fracBits: F (8..40); primaryTError: the primary plan's bound on t.
+SecondaryPlan PlanSecondary(const Scene& scene, int fracBits, double primaryTError);
+
+// One pass's rays, per virtual PE of the pass (raw two's-complement values of the plan's
+// formats): origin (coord), direction (direction; need not be unit when `intersect`), and
+// for a bounce without `intersect` (bounce 1: the primary pass found the hits) the object
+// index + 1 and t. `live` marks the PEs holding a ray.
+// `from` is the object the ray leaves (index + 1; 0 for the eye) and `outward` whether it
+// leaves it outward: a sphere is convex, so an outward ray cannot meet it again and an inward
+// one meets it at its far root (docs/wavefront.md, "The surface a ray leaves").
+struct BounceInputs {
+  std::vector<int64_t> o[3], d[3], object, t, from;
+  std::vector<uint8_t> live, outward;
+};
+
+// What a pass gives per virtual PE. Read over the host link (charged): object, uncertain,
+// tir, and per light nl, rv, through, shadowUncertain; and, only when the host needs them
+// (some ray or shadow uncertain), the rays and the hit points. Left on the array (read
+// uncharged for the emulation's next bounce): the children's origin and directions.
+struct BounceOutputs {
+  std::vector<int64_t> object;     // index + 1 (0: a miss)
+  std::vector<uint8_t> uncertain;  // the first hit is not certain (host traces the ray)
+  std::vector<uint8_t> tir;        // total internal reflection at the hit
+  std::vector<uint8_t> inside;     // the ray met its object from inside
+  std::vector<std::vector<int64_t>> nl, rv, through;  // [light][pe]
+  std::vector<std::vector<uint8_t>> shadowUncertain;  // [light][pe]
+  std::vector<int64_t> o[3], d[3];               // the rays as the array holds them (when read)
+  std::vector<int64_t> p[3];                     // hit points (children's origin)
+  std::vector<int64_t> mirror[3], refracted[3];  // the children's directions
+  int64_t hostLinkBits = 0;                      // bits read over the host link
+};
+
+// Runs the bounce on machine m (one virtual PE per ray of `in`), charging m's report.
+void RunBounce(bitserial::Machine& m, const SecondaryPlan& plan, bool intersect,
+               const BounceInputs& in, BounceOutputs& out);
+
+// Whether the bounce's program fits `layers` layers of `profile`'s PE memory: run once on one
+// virtual PE of those capacities (allocation is first fit in program order and reads no PE
+// value, as the primary pass's MeasureProgram).
+bool BounceFits(const bitserial::MachineProfile& profile, int layers, const SecondaryPlan& plan,
+                bool intersect);
+
+}  // namespace zephyr::wavefront

@@ -1,0 +1,273 @@
+// hosts/wavefront/wavefront.cpp — the wavefront driver (hosts/wavefront/wavefront.h): the
+// bounces, the array passes each runs, the host's shading from the records, the children's
+// slots and the compaction between bounces (docs/wavefront.md).
+#include "hosts/wavefront/wavefront.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <memory>
+
+#include "bitserial/cost.h"
+#include "bitserial/machine.h"
+#include "bitserial/multi.h"
+#include "fixed/check.h"
+#include "hosts/wavefront/program.h"
+
+namespace zephyr::wavefront {
+
+using bitserial::Machine;
+using bitserial::MicroOpCounts;
+using bitserial::Operand;
+using bitserial::Space;
+using fixed::Format;
+
+namespace {
+
+// One ray slot of a bounce's layout (virtual PE = layer · physical PEs + PE).
+struct Slot {
+  int32_t pixel = -1;  // -1: no ray
+  double weight = 0;   // the product of Ks / T from the primary ray to this one
+  RayKind kind = RayKind::kPrimary;
+  int64_t o[3] = {}, d[3] = {};  // raw, in the plan's coord and direction formats
+  int64_t object = 0, t = 0;     // bounce 1 only: the primary pass's hit (index + 1, raw t)
+  int64_t from = 0;              // the object the ray leaves (index + 1; 0: the eye)
+  bool outward = true;           // it leaves that object outward
+};
+
+int64_t RawOf(double x, int frac) { return int64_t(std::llround(std::ldexp(x, frac))); }
+double ValueOf(int64_t raw, int frac) { return std::ldexp(double(raw), -frac); }
+
+// The bits of one ray record (origin and direction): what a move between layers copies.
+Operand CoordOperand(const SecondaryPlan& p) { return {p.coord, Space::kExternal, false}; }
+Operand DirectionOperand(const SecondaryPlan& p) { return {p.direction, Space::kExternal, false}; }
+MicroOpCounts RecordCopy(const SecondaryPlan& p) {
+  MicroOpCounts c;
+  for (int k = 0; k < 3; ++k) {
+    c += bitserial::CopyCost(CoordOperand(p), CoordOperand(p));
+    c += bitserial::CopyCost(DirectionOperand(p), DirectionOperand(p));
+  }
+  const Operand from{p.index, Space::kExternal, false},
+      flag{bitserial::BoolFormat(), Space::kExternal, false};
+  c += bitserial::CopyCost(from, from);
+  c += bitserial::CopyCost(flag, flag);
+  return c;
+}
+
+// Lays `children` (the next bounce's rays, in the layout without compaction: `layers` layers
+// of `pes` PEs) out for the next bounce, charging `cm` (one layer of the machine) for the
+// moves. kNone keeps the layout; kLocal packs each PE's rays into its lowest layers, in layer
+// order: for every source layer, one masked move per destination layer some PE needs (each
+// PE compares its counter with the destination), one counter increment per source layer, and
+// the global max of the counters that tells the controller how many layers to run.
+std::vector<Slot> LayOut(std::vector<Slot> children, int64_t layers, int pes, Compaction policy,
+                         const SecondaryPlan& p, Machine& cm) {
+  if (policy == Compaction::kNone) {
+    // Trailing layers no PE uses are not allocated (the controller knows which it wrote).
+    int64_t last = 0;
+    for (int64_t s = 0; s < int64_t(children.size()); ++s)
+      if (children[s].pixel >= 0) last = s / pes + 1;
+    children.resize(size_t(last) * pes);
+    return children;
+  }
+  const Format counter = Format::Unsigned(simd::IntBitsFor(double(layers)) + 1, 0);
+  const Operand cnt{counter, Space::kInternal, false};
+  std::vector<int64_t> next(pes, 0);
+  std::vector<Slot> packed(children.size());
+  int64_t used = 0;
+  for (int64_t l = 0; l < layers; ++l) {
+    std::map<int64_t, bool> moves;  // destination layers some PE moves this layer's ray to
+    for (int pe = 0; pe < pes; ++pe) {
+      Slot& s = children[size_t(l) * pes + pe];
+      if (s.pixel < 0) continue;
+      const int64_t to = next[pe]++;
+      if (to != l) moves[to] = true;
+      packed[size_t(to) * pes + pe] = s;
+      used = std::max(used, to + 1);
+    }
+    MicroOpCounts step = bitserial::AddCost(cnt, {counter, Space::kInternal, true}, cnt, {});
+    for (size_t k = 0; k < moves.size(); ++k) {
+      step += bitserial::CompareCost(cnt, {counter, Space::kInternal, true}, Space::kInternal);
+      step += RecordCopy(p);
+    }
+    cm.Charge("compactMove", step);
+  }
+  cm.Charge("compactMax", bitserial::ReduceCost(bitserial::ReduceKind::kMax, cnt));
+  packed.resize(size_t(used) * pes);
+  return packed;
+}
+
+// The layers per array pass: the most (up to `layers`) whose program fits the PE memory.
+int LayersPerPass(const bitserial::MachineProfile& profile, int64_t layers,
+                  const SecondaryPlan& plan, bool intersect) {
+  int l = int(std::min<int64_t>(layers, 1 << 20));
+  while (!BounceFits(profile, l, plan, intersect)) {
+    if (l == 1)
+      throw UserError("the wavefront's bounce program does not fit one virtual-PE layer of the " +
+                      profile.name + " PE memory (docs/wavefront.md, \"Several array passes\")");
+    l = (l + 1) / 2;
+  }
+  return l;
+}
+
+}  // namespace
+
+WavefrontResult RenderWavefront(const Tracer& tracer, const simd::PrimaryPass& pass,
+                                const WavefrontOptions& options, std::vector<Vec3>& pixels,
+                                TraceStats& hostWork) {
+  const Scene& scene = tracer.GetScene();
+  const int depth = tracer.Options().depth;
+  const int F =
+      options.fracBits > 0 ? options.fracBits : std::max(pass.plan.fracBits, kMinSecondaryFracBits);
+  const SecondaryPlan plan = PlanSecondary(scene, F, pass.plan.tErrorBound);
+  const bitserial::MachineProfile& profile = pass.array.cycles.Profile();
+  const int pes = profile.physicalPes;
+  const size_t lights = scene.lights.size();
+  WavefrontResult result;
+  result.compaction = options.compaction;
+  result.fracBits = F, result.intBits = plan.intBits;
+  result.tErrorBound = plan.tError, result.epsilon = plan.epsilon;
+
+  const simd::PrimaryMatrix& matrix = pass.matrix;
+  const int64_t pixelCount = int64_t(matrix.hits.size());
+  pixels.assign(size_t(pixelCount), Vec3{});
+  hostWork.pixels += uint64_t(pixelCount);
+  // Bounce 1: the primary pass's hits, in its layout (pixel k in virtual PE k).
+  const int64_t primaryLayers = (pixelCount + pes - 1) / pes;
+  std::vector<Slot> slots(size_t(primaryLayers) * pes);
+  for (int64_t i = 0; i < pixelCount; ++i) {
+    const PrimaryHit& h = matrix.hits[i];
+    if (h.object < 0) {
+      pixels[i] = scene.background;
+      continue;
+    }
+    Slot& s = slots[i];
+    s.pixel = int32_t(i), s.weight = 1, s.kind = RayKind::kPrimary;
+    for (int k = 0; k < 3; ++k)
+      s.o[k] = RawOf(scene.camera.from[k], F), s.d[k] = RawOf(h.direction[k], F);
+    s.object = h.object + 1, s.t = RawOf(h.t, F);
+  }
+  // The compaction before a bounce is charged to it: bounce 1's packs the primary layout.
+  auto pending = std::make_unique<Machine>(profile, pes);
+  slots = LayOut(std::move(slots), primaryLayers, pes, options.compaction, plan, *pending);
+  std::map<std::pair<int, bool>, int> fitted;
+  for (int bounce = 1; bounce <= depth && !slots.empty(); ++bounce) {
+    const auto start = std::chrono::steady_clock::now();
+    BounceReport& report = result.bounces.emplace_back();
+    report.bounce = bounce;
+    report.cycles.Add(pending->Report());
+    result.cycles.Add(pending->Report());
+    report.compactionCycles = pending->Report().TotalCycles();
+    pending = std::make_unique<Machine>(profile, pes);
+    const bool intersect = bounce > 1;
+    const int64_t layers = int64_t(slots.size()) / pes;
+    auto key = std::make_pair(int(layers), intersect);
+    if (!fitted.count(key)) fitted[key] = LayersPerPass(profile, layers, plan, intersect);
+    const int perPass = fitted[key];
+    report.layers = layers, report.slots = layers * pes;
+    for (const Slot& s : slots) report.rays += s.pixel >= 0;
+    report.utilisation = report.slots ? double(report.rays) / double(report.slots) : 0;
+    // The next bounce's rays, laid out without compaction: a first child in its parent's
+    // slot, a second (the refracted ray of a surface that also reflects) `layers` layers on.
+    std::vector<Slot> children(slots.size() * 2);
+    bool anySecond = false;
+    for (int64_t first = 0; first < layers; first += perPass) {
+      const int64_t count = std::min<int64_t>(perPass, layers - first);
+      const size_t begin = size_t(first) * pes, n = size_t(count) * pes;
+      BounceInputs in;
+      for (int k = 0; k < 3; ++k) in.o[k].resize(n), in.d[k].resize(n);
+      in.object.resize(n), in.t.resize(n), in.from.resize(n);
+      in.live.resize(n), in.outward.resize(n);
+      for (size_t i = 0; i < n; ++i) {
+        const Slot& s = slots[begin + i];
+        for (int k = 0; k < 3; ++k) in.o[k][i] = s.o[k], in.d[k][i] = s.d[k];
+        in.object[i] = s.object, in.t[i] = s.t, in.live[i] = s.pixel >= 0;
+        in.from[i] = s.from, in.outward[i] = s.outward;
+      }
+      Machine m(profile, int64_t(n));
+      BounceOutputs out;
+      RunBounce(m, plan, intersect, in, out);
+      report.cycles.Add(m.Report());
+      result.cycles.Add(m.Report());
+      report.hostLinkBytes += out.hostLinkBits / 8;
+      ++report.passes;
+      // The host: shade each live slot from its record, sum the tree, spawn the children.
+      for (size_t i = 0; i < n; ++i) {
+        const Slot& s = slots[begin + i];
+        if (s.pixel < 0) continue;
+        if (intersect) ++result.arrayRays[int(s.kind)];
+        Vec3& pixel = pixels[s.pixel];
+        if (intersect && out.uncertain[i]) {
+          // The array could not certify this ray's first hit: its whole subtree on the host,
+          // from the ray as the array holds it.
+          ++report.uncertainRays;
+          const Vec3 o{ValueOf(out.o[0][i], F), ValueOf(out.o[1][i], F), ValueOf(out.o[2][i], F)};
+          const Vec3 d = Normalize(
+              Vec3{ValueOf(out.d[0][i], F), ValueOf(out.d[1][i], F), ValueOf(out.d[2][i], F)});
+          pixel += tracer.TraceRay(o, d, plan.epsilon, bounce, s.kind, hostWork) * s.weight;
+          continue;
+        }
+        const int64_t object = out.object[i] - 1;
+        if (object < 0) {
+          pixel += scene.background * s.weight;
+          continue;
+        }
+        ++report.hits;
+        result.arrayRays[int(RayKind::kShadow)] += lights;
+        std::vector<double> nl(lights), rv(lights), through(lights);
+        const Vec3 p{ValueOf(out.p[0][i], F), ValueOf(out.p[1][i], F), ValueOf(out.p[2][i], F)};
+        for (size_t j = 0; j < lights; ++j) {
+          nl[j] = ValueOf(out.nl[j][i], F), rv[j] = ValueOf(out.rv[j][i], F);
+          through[j] = ValueOf(out.through[j][i], F);
+          if (out.shadowUncertain[j][i] && nl[j] > 0) {
+            ++report.uncertainShadows;
+            through[j] = tracer.LightThrough(p, int(j), plan.epsilon, hostWork);
+          }
+        }
+        pixel +=
+            tracer.LocalFromRecord(int(object), nl.data(), rv.data(), through.data(), hostWork) *
+            s.weight;
+        if (bounce >= depth) continue;
+        const Material& mat = scene.materials[scene.objects[object].material];
+        Slot child;
+        child.pixel = s.pixel;
+        child.from = object + 1;
+        for (int k = 0; k < 3; ++k) child.o[k] = out.p[k][i];
+        size_t to = begin + i;
+        if (mat.ks > 0) {
+          child.weight = s.weight * mat.ks, child.kind = RayKind::kReflected;
+          child.outward = !out.inside[i];
+          for (int k = 0; k < 3; ++k) child.d[k] = out.mirror[k][i];
+          children[to] = child;
+          to += slots.size();
+          ++report.spawned;
+        }
+        if (mat.t > 0) {
+          const bool tir = out.tir[i];
+          child.weight = s.weight * mat.t;
+          child.kind = tir ? RayKind::kReflected : RayKind::kRefracted;
+          child.outward = tir ? !out.inside[i] : bool(out.inside[i]);
+          for (int k = 0; k < 3; ++k) child.d[k] = tir ? out.mirror[k][i] : out.refracted[k][i];
+          children[to] = child;
+          anySecond |= to >= slots.size();
+          ++report.spawned;
+        }
+      }
+    }
+    if (!anySecond) children.resize(slots.size());
+    // The second children's masked copies into their layers (one per source layer), then
+    // the next bounce's layout; both charged to the next bounce.
+    for (int64_t l = 0; anySecond && l < layers; ++l)
+      pending->Charge("childCopy", RecordCopy(plan));
+    const int64_t childLayers = int64_t(children.size()) / pes;
+    slots = bounce < depth
+                ? LayOut(std::move(children), childLayers, pes, options.compaction, plan, *pending)
+                : std::vector<Slot>{};
+    report.hostSeconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
+  return result;
+}
+
+}  // namespace zephyr::wavefront

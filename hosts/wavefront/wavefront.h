@@ -1,0 +1,84 @@
+// hosts/wavefront/wavefront.h — every ray on the array (the fifth method, `--method array`;
+// docs/wavefront.md): after the SIMD primary pass, bounce by bounce (a wavefront), the
+// emulated array computes every hit point, normal, shadow ray (with the transparent-shadow
+// product), reflected and refracted ray, and every secondary ray's first hit, in fixed point
+// with multi origins; the host only shades the local term from the records the array returns
+// and sums the ray tree. Between bounces each physical PE may pack its live rays into its
+// lowest virtual-PE layers (--compact local), so the controller runs only the layers some PE
+// still needs.
+//
+//   simd::PrimaryPass pass = simd::RunPrimaryPass(scene, simdOptions);
+//   wavefront::WavefrontResult r = wavefront::RenderWavefront(*tracer, pass, options, pixels,
+//                                                            hostWork);
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "bitserial/report.h"
+#include "fixed/named.h"
+#include "hosts/simd/pass.h"
+#include "hosts/trace/tracer.h"
+
+namespace zephyr::wavefront {
+
+// Between bounces (docs/wavefront.md, "Compaction"): keep every ray in its slot (a second
+// child goes to a new layer block) and run every layer; or pack each physical PE's live rays
+// into its lowest layers (PE-local masked moves, charged) and run only as many layers as the
+// fullest PE holds (found by a charged global max).
+enum class Compaction { kNone, kLocal };
+inline constexpr NamedValues<Compaction, 2> kCompactionNames{
+    {{{Compaction::kNone, "none"}, {Compaction::kLocal, "local"}}}};
+
+// The fraction bits of the secondary rays' numbers when the primary plan's are fewer: the
+// multi origins carry each bounce's rounding (docs/wavefront.md, "Formats").
+inline constexpr int kMinSecondaryFracBits = 16;
+
+struct WavefrontOptions {
+  Compaction compaction = Compaction::kLocal;
+  // Fraction bits F of the secondary rays' coordinates, directions and t (-1: the primary
+  // plan's, at least kMinSecondaryFracBits); 8..40.
+  int fracBits = -1;
+};
+
+// One bounce of the wavefront (bounce 1: the primary rays' hits; bounce k: the rays of ray-tree
+// level k): what ran on the array and what the host did.
+struct BounceReport {
+  int bounce = 0;
+  int64_t rays = 0;               // live rays (slots holding a ray of this level)
+  int64_t hits = 0;               // of them, rays that met an object (shaded)
+  int64_t layers = 0;             // virtual-PE layers the controller ran
+  int64_t slots = 0;              // layers × physical PEs
+  int passes = 0;                 // array passes (layers per pass limited by the PE memory)
+  double utilisation = 0;         // rays ÷ slots
+  int64_t uncertainRays = 0;      // first hits the array could not certify (host traced them)
+  int64_t uncertainShadows = 0;   // shadow products it could not certify (host recomputed them)
+  int64_t spawned = 0;            // rays this bounce's hits spawned for the next
+  int64_t hostLinkBytes = 0;      // records read back over the host link
+  bitserial::CycleReport cycles;  // the bounce's array passes and its compaction, summed
+  double compactionCycles = 0;    // of which the compaction (moves and the global max)
+  double hostSeconds = 0;         // wall time of the bounce on this host (emulation + shading)
+};
+
+struct WavefrontResult {
+  Compaction compaction = Compaction::kLocal;
+  int fracBits = 0, intBits = 0;  // the coordinates' format s<intBits>.<fracBits>
+  double tErrorBound = 0;         // |t − t_exact| of a certain secondary hit (scene units)
+  double epsilon = 0;             // secondary and shadow rays ignore hits nearer than this
+  std::vector<BounceReport> bounces;
+  bitserial::CycleReport cycles;  // every bounce's (not the primary pass's)
+  // Every ray traced on the array by kind (RayKind order), for the report.
+  uint64_t arrayRays[kRayKinds] = {};
+};
+
+// The primary pass's hits shaded by the wavefront: fills `pixels` (linear RGB, row-major,
+// resized to the image) and the host's counted work (`hostWork`: the local shading from
+// records, and the subtrees and shadow products the array could not certify). UserError for a
+// scene the method cannot run (an object that is not an untransformed sphere, naming its
+// file:line; a program PE memory cannot hold).
+WavefrontResult RenderWavefront(const Tracer& tracer, const simd::PrimaryPass& pass,
+                                const WavefrontOptions& options, std::vector<Vec3>& pixels,
+                                TraceStats& hostWork);
+
+}  // namespace zephyr::wavefront
