@@ -76,7 +76,7 @@ struct RenderOutput {
   TraceOptions trace;
   Phases phases;                       // wall seconds per phase
   std::optional<TraceStats> hostWork;  // seq, simd: the host's counted work
-  // simd, hetero: the primary pass (its matrix emptied once the image and dump have it).
+  // simd, array, hetero: the primary pass (its matrix emptied once the image and dump have it).
   std::optional<simd::PrimaryPass> simd;
   std::optional<FarmReport> farm;                       // dist, hetero: the frame farm's figures
   std::optional<wavefront::WavefrontResult> wavefront;  // array: every bounce on the array

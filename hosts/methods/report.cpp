@@ -80,6 +80,8 @@ nlohmann::json WavefrontJson(const wavefront::WavefrontResult& w) {
   static constexpr const char* kKinds[kRayKinds] = {"primary", "shadow", "reflected", "refracted"};
   nlohmann::json rays;
   for (int k = 0; k < kRayKinds; ++k) rays[kKinds[k]] = w.arrayRays[k];
+  // Every bounce's cycles by class and operation (each bounce's own: "bounces"[].cycles).
+  const nlohmann::json cycles = w.cycles.Json();
   nlohmann::json bounces = nlohmann::json::array();
   for (const wavefront::BounceReport& b : w.bounces)
     bounces.push_back({{"bounce", b.bounce},
@@ -92,6 +94,7 @@ nlohmann::json WavefrontJson(const wavefront::WavefrontResult& w) {
                        {"uncertainRays", b.uncertainRays},
                        {"uncertainShadows", b.uncertainShadows},
                        {"spawned", b.spawned},
+                       {"totalInternalReflections", b.totalInternalReflections},
                        {"hostLinkBytes", b.hostLinkBytes},
                        {"cycles", b.cycles.TotalCycles()},
                        {"compactionCycles", b.compactionCycles},
@@ -104,6 +107,8 @@ nlohmann::json WavefrontJson(const wavefront::WavefrontResult& w) {
           {"arrayRays", rays},
           {"bounces", bounces},
           {"cycles", w.cycles.TotalCycles()},
+          {"byClass", cycles["byClass"]},
+          {"byOp", cycles["byOp"]},
           {"modelledSeconds", w.cycles.ModelledSeconds()}};
 }
 

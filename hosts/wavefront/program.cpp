@@ -28,9 +28,10 @@ SecondaryPlan PlanSecondary(const Scene& scene, int fracBits, double primaryTErr
   for (const Primitive& o : scene.objects) {
     const auto* s = std::get_if<Sphere>(&o.shape);
     if (!s || o.transform)
-      throw UserError(o.where.ToString() + ": --method array traces untransformed spheres only " +
-                      "(docs/wavefront.md); this object is " +
-                      (s ? std::string("a transformed sphere") : ShapeKindName(o.Kind())));
+      throw UserError(
+          o.where.ToString() + ": --method array traces untransformed spheres only " +
+          "(docs/wavefront.md); this object is " +
+          (s ? std::string("a transformed sphere") : "a " + std::string(ShapeKindName(o.Kind()))));
     extent = std::max(extent, MaxAbs(s->centre) + s->radius);
     minRadius = std::min(minRadius, s->radius);
     const Material& m = scene.materials[o.material];
@@ -248,7 +249,7 @@ void ShadowProduct(Machine& m, const Multi (&pt)[3], const Multi (&l)[3], const 
 
 // The whole program; read = false runs it for its allocation only (BounceFits).
 void Run(Machine& m, const SecondaryPlan& p, bool intersect, const BounceInputs& in,
-         BounceOutputs* out) {
+         BounceOutputs* out, bool audit) {
   const int F = p.fracBits;
   Multi o[3], d[3];
   for (int k = 0; k < 3; ++k)
@@ -383,6 +384,8 @@ void Run(Machine& m, const SecondaryPlan& p, bool intersect, const BounceInputs&
   }
   bool anyUnsure = false;
   for (int64_t pe = 0; pe < n; ++pe) anyUnsure |= in.live[pe] && out->uncertain[pe];
+  if (audit)
+    for (int k = 0; k < 3; ++k) peek(o[k], out->audit.o[k]), peek(d[k], out->audit.d[k]);
   {
     std::vector<int64_t> raw;
     peek(inside, raw);
@@ -402,8 +405,8 @@ void Run(Machine& m, const SecondaryPlan& p, bool intersect, const BounceInputs&
 }  // namespace
 
 void RunBounce(Machine& m, const SecondaryPlan& plan, bool intersect, const BounceInputs& in,
-               BounceOutputs& out) {
-  Run(m, plan, intersect, in, &out);
+               BounceOutputs& out, bool audit) {
+  Run(m, plan, intersect, in, &out, audit);
 }
 
 bool BounceFits(const bitserial::MachineProfile& profile, int layers, const SecondaryPlan& plan,
@@ -419,7 +422,7 @@ bool BounceFits(const bitserial::MachineProfile& profile, int layers, const Seco
   in.live.assign(1, 0), in.outward.assign(1, 0);
   try {
     Machine m(one, 1);
-    Run(m, plan, intersect, in, nullptr);
+    Run(m, plan, intersect, in, nullptr, false);
     return true;
   } catch (const UserError&) {
     return false;

@@ -84,11 +84,15 @@ struct BounceOutputs {
   std::vector<int64_t> p[3];                     // hit points (children's origin)
   std::vector<int64_t> mirror[3], refracted[3];  // the children's directions
   int64_t hostLinkBits = 0;                      // bits read over the host link
+  struct {
+    std::vector<int64_t> o[3], d[3];  // with `audit`: every ray as the array held it (uncharged)
+  } audit;
 };
 
 // Runs the bounce on machine m (one virtual PE per ray of `in`), charging m's report.
+// With `audit` (tests) out.audit gets every ray's origin and normalised direction, uncharged.
 void RunBounce(bitserial::Machine& m, const SecondaryPlan& plan, bool intersect,
-               const BounceInputs& in, BounceOutputs& out);
+               const BounceInputs& in, BounceOutputs& out, bool audit = false);
 
 // Whether the bounce's program fits `layers` layers of `profile`'s PE memory: run once on one
 // virtual PE of those capacities (allocation is first fit in program order and reads no PE

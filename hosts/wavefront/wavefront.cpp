@@ -55,12 +55,38 @@ MicroOpCounts RecordCopy(const SecondaryPlan& p) {
   return c;
 }
 
+}  // namespace
+
+Packing PackLayers(const std::vector<uint8_t>& live, int pes) {
+  ZEPHYR_CHECK(pes > 0 && live.size() % size_t(pes) == 0);
+  const int64_t layers = int64_t(live.size()) / pes;
+  Packing r;
+  r.destination.assign(live.size(), -1);
+  std::vector<int64_t> next(pes, 0);
+  for (int64_t l = 0; l < layers; ++l) {
+    std::vector<int64_t> to;  // this layer's destinations other than itself
+    for (int pe = 0; pe < pes; ++pe) {
+      const size_t s = size_t(l) * pes + pe;
+      if (!live[s]) continue;
+      const int64_t d = next[pe]++;
+      r.destination[s] = d * pes + pe;
+      r.layers = std::max(r.layers, d + 1);
+      if (d != l) to.push_back(d);
+    }
+    std::sort(to.begin(), to.end());
+    r.moves += std::unique(to.begin(), to.end()) - to.begin();
+  }
+  return r;
+}
+
+namespace {
+
 // Lays `children` (the next bounce's rays, in the layout without compaction: `layers` layers
 // of `pes` PEs) out for the next bounce, charging `cm` (one layer of the machine) for the
-// moves. kNone keeps the layout; kLocal packs each PE's rays into its lowest layers, in layer
-// order: for every source layer, one masked move per destination layer some PE needs (each
-// PE compares its counter with the destination), one counter increment per source layer, and
-// the global max of the counters that tells the controller how many layers to run.
+// moves. kNone keeps the layout; kLocal packs each PE's rays into its lowest layers
+// (PackLayers): per source layer a counter increment, per move a compare of the counter with
+// the destination (the mask) and the record's masked copy, and the global max of the
+// counters that tells the controller how many layers to run.
 std::vector<Slot> LayOut(std::vector<Slot> children, int64_t layers, int pes, Compaction policy,
                          const SecondaryPlan& p, Machine& cm) {
   if (policy == Compaction::kNone) {
@@ -71,30 +97,20 @@ std::vector<Slot> LayOut(std::vector<Slot> children, int64_t layers, int pes, Co
     children.resize(size_t(last) * pes);
     return children;
   }
+  std::vector<uint8_t> live(children.size());
+  for (size_t s = 0; s < children.size(); ++s) live[s] = children[s].pixel >= 0;
+  const Packing packing = PackLayers(live, pes);
+  std::vector<Slot> packed(size_t(packing.layers) * pes);
+  for (size_t s = 0; s < children.size(); ++s)
+    if (live[s]) packed[size_t(packing.destination[s])] = std::move(children[s]);
   const Format counter = Format::Unsigned(simd::IntBitsFor(double(layers)) + 1, 0);
-  const Operand cnt{counter, Space::kInternal, false};
-  std::vector<int64_t> next(pes, 0);
-  std::vector<Slot> packed(children.size());
-  int64_t used = 0;
-  for (int64_t l = 0; l < layers; ++l) {
-    std::map<int64_t, bool> moves;  // destination layers some PE moves this layer's ray to
-    for (int pe = 0; pe < pes; ++pe) {
-      Slot& s = children[size_t(l) * pes + pe];
-      if (s.pixel < 0) continue;
-      const int64_t to = next[pe]++;
-      if (to != l) moves[to] = true;
-      packed[size_t(to) * pes + pe] = s;
-      used = std::max(used, to + 1);
-    }
-    MicroOpCounts step = bitserial::AddCost(cnt, {counter, Space::kInternal, true}, cnt, {});
-    for (size_t k = 0; k < moves.size(); ++k) {
-      step += bitserial::CompareCost(cnt, {counter, Space::kInternal, true}, Space::kInternal);
-      step += RecordCopy(p);
-    }
-    cm.Charge("compactMove", step);
-  }
+  const Operand cnt{counter, Space::kInternal, false}, uni{counter, Space::kInternal, true};
+  MicroOpCounts move = bitserial::CompareCost(cnt, uni, Space::kInternal);
+  move += RecordCopy(p);
+  for (int64_t l = 0; l < layers; ++l)
+    cm.Charge("compactCount", bitserial::AddCost(cnt, uni, cnt, {}));
+  for (int64_t k = 0; k < packing.moves; ++k) cm.Charge("compactMove", move);
   cm.Charge("compactMax", bitserial::ReduceCost(bitserial::ReduceKind::kMax, cnt));
-  packed.resize(size_t(used) * pes);
   return packed;
 }
 
@@ -187,7 +203,7 @@ WavefrontResult RenderWavefront(const Tracer& tracer, const simd::PrimaryPass& p
       }
       Machine m(profile, int64_t(n));
       BounceOutputs out;
-      RunBounce(m, plan, intersect, in, out);
+      RunBounce(m, plan, intersect, in, out, bool(options.audit));
       report.cycles.Add(m.Report());
       result.cycles.Add(m.Report());
       report.hostLinkBytes += out.hostLinkBits / 8;
@@ -197,6 +213,17 @@ WavefrontResult RenderWavefront(const Tracer& tracer, const simd::PrimaryPass& p
         const Slot& s = slots[begin + i];
         if (s.pixel < 0) continue;
         if (intersect) ++result.arrayRays[int(s.kind)];
+        if (intersect && options.audit) {
+          AuditRay a;
+          a.bounce = bounce, a.from = int(s.from) - 1, a.outward = s.outward;
+          a.object = int(out.object[i]) - 1, a.uncertain = out.uncertain[i];
+          a.epsilon = plan.epsilon;
+          auto vec = [&](const std::vector<int64_t>(&v)[3]) {
+            return Vec3{ValueOf(v[0][i], F), ValueOf(v[1][i], F), ValueOf(v[2][i], F)};
+          };
+          a.origin = vec(out.audit.o), a.direction = vec(out.audit.d);
+          options.audit(a);
+        }
         Vec3& pixel = pixels[s.pixel];
         if (intersect && out.uncertain[i]) {
           // The array could not certify this ray's first hit: its whole subtree on the host,
@@ -245,6 +272,7 @@ WavefrontResult RenderWavefront(const Tracer& tracer, const simd::PrimaryPass& p
         }
         if (mat.t > 0) {
           const bool tir = out.tir[i];
+          report.totalInternalReflections += tir;
           child.weight = s.weight * mat.t;
           child.kind = tir ? RayKind::kReflected : RayKind::kRefracted;
           child.outward = tir ? !out.inside[i] : bool(out.inside[i]);

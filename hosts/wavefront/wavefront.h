@@ -13,6 +13,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -35,30 +36,58 @@ inline constexpr NamedValues<Compaction, 2> kCompactionNames{
 // multi origins carry each bounce's rounding (docs/wavefront.md, "Formats").
 inline constexpr int kMinSecondaryFracBits = 16;
 
+// One secondary ray as the array held it and what the array found (tests: the exact check
+// of every bounce, docs/wavefront.md "Accuracy"). The origin and direction are the array's
+// fixed-point values, exactly; the ray ignores roots at or below epsilon, never meets `from`
+// again when it leaves it outward, and meets it at its far root when it enters it.
+struct AuditRay {
+  int bounce = 0;
+  Vec3 origin, direction;  // direction as the array normalised it (not exactly unit)
+  int from = -1;           // the object it leaves (-1: none)
+  bool outward = true;
+  int object = -1;         // the array's first object (-1: none)
+  bool uncertain = false;  // flagged: the host traced it instead
+  double epsilon = 0;
+};
+
 struct WavefrontOptions {
   Compaction compaction = Compaction::kLocal;
   // Fraction bits F of the secondary rays' coordinates, directions and t (-1: the primary
   // plan's, at least kMinSecondaryFracBits); 8..40.
   int fracBits = -1;
+  // Tests only: called for every live ray of every bounce after the first (none in a render).
+  std::function<void(const AuditRay&)> audit;
 };
+
+// Local compaction of one bounce's slots (`live`, layer-major: slot = layer · pes + PE):
+// each PE's live rays packed into its lowest layers in layer order. `destination` is each
+// live slot's new slot (-1 for the others); `layers` the layers the controller then runs (the
+// fullest PE's count); `moves` the masked moves it issues: for each source layer, one per
+// destination layer some PE moves that layer's ray to (docs/wavefront.md, "Compaction").
+struct Packing {
+  std::vector<int64_t> destination;
+  int64_t layers = 0, moves = 0;
+};
+Packing PackLayers(const std::vector<uint8_t>& live, int pes);
 
 // One bounce of the wavefront (bounce 1: the primary rays' hits; bounce k: the rays of ray-tree
 // level k): what ran on the array and what the host did.
 struct BounceReport {
   int bounce = 0;
-  int64_t rays = 0;               // live rays (slots holding a ray of this level)
-  int64_t hits = 0;               // of them, rays that met an object (shaded)
-  int64_t layers = 0;             // virtual-PE layers the controller ran
-  int64_t slots = 0;              // layers × physical PEs
-  int passes = 0;                 // array passes (layers per pass limited by the PE memory)
-  double utilisation = 0;         // rays ÷ slots
-  int64_t uncertainRays = 0;      // first hits the array could not certify (host traced them)
-  int64_t uncertainShadows = 0;   // shadow products it could not certify (host recomputed them)
-  int64_t spawned = 0;            // rays this bounce's hits spawned for the next
-  int64_t hostLinkBytes = 0;      // records read back over the host link
-  bitserial::CycleReport cycles;  // the bounce's array passes and its compaction, summed
-  double compactionCycles = 0;    // of which the compaction (moves and the global max)
-  double hostSeconds = 0;         // wall time of the bounce on this host (emulation + shading)
+  int64_t rays = 0;              // live rays (slots holding a ray of this level)
+  int64_t hits = 0;              // of them, rays that met an object (shaded)
+  int64_t layers = 0;            // virtual-PE layers the controller ran
+  int64_t slots = 0;             // layers × physical PEs
+  int passes = 0;                // array passes (layers per pass limited by the PE memory)
+  double utilisation = 0;        // rays ÷ slots
+  int64_t uncertainRays = 0;     // first hits the array could not certify (host traced them)
+  int64_t uncertainShadows = 0;  // shadow products it could not certify (host recomputed them)
+  int64_t spawned = 0;           // rays this bounce's hits spawned for the next
+  int64_t totalInternalReflections = 0;  // of the hits on glass, those the array found TIR
+  int64_t hostLinkBytes = 0;             // records read back over the host link
+  bitserial::CycleReport cycles;         // the bounce's array passes and its compaction, summed
+  double compactionCycles = 0;           // of which the compaction (moves and the global max)
+  double hostSeconds = 0;  // wall time of the bounce on this host (emulation + shading)
 };
 
 struct WavefrontResult {

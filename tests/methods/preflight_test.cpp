@@ -214,7 +214,7 @@ TEST(FlagPreflight, RenderRefusesAFlagItsMethodIgnores) {
   const std::string missing = dir / "no-such-scene.nff";
   const std::vector<std::tuple<std::string, std::string, std::string>> cases = {
       {"seq", "--frac-bits 12",
-       "--frac-bits: --method seq runs no SIMD pass (the flag applies to simd, hetero)"},
+       "--frac-bits: --method seq runs no SIMD pass (the flag applies to simd, array, hetero)"},
       {"seq", "--uncertain keep", "--uncertain: --method seq runs no SIMD pass"},
       {"seq", "--machine mpp", "--machine: --method seq runs no SIMD pass"},
       {"dist", "--threads 2", "--threads: --method dist runs no SIMD pass"},
@@ -224,6 +224,9 @@ TEST(FlagPreflight, RenderRefusesAFlagItsMethodIgnores) {
       {"simd", "--resume", "--resume: --method simd has no frame farm"},
       {"seq", "--in-flight 4", "--in-flight: --method seq has no frame farm"},
       {"simd", "--child-timeout 5", "--child-timeout: --method simd has no frame farm"},
+      {"array", "--frame 8", "--frame: --method array has no frame farm"},
+      {"simd", "--compact none",
+       "--compact: --method simd traces no secondary ray on the array (the flag applies to array)"},
   };
   for (const auto& [method, flag, message] : cases) {
     const std::string args = "render --no-progress --method " + method + " " + missing + " " + flag;

@@ -460,7 +460,7 @@ TEST(TestbedCharts, QuickRunDrawsEveryFigureInModelledSeconds) {
   for (const char* name :
        {"fig05_seq_vs_simd", "fig06_seq_vs_dist", "fig07_hetero_vs_dist_2children",
         "fig10_data_flow", "fig11_pixels", "fig12_all_methods", "past_efficiency", "past_ethernet",
-        "past_parent", "past_time", "where_each_wins"}) {
+        "past_parent", "past_time", "where_each_wins", "array_utilisation"}) {
     const auto table = rows(name);
     ASSERT_GE(table.size(), 3u) << name;  // a header and 2 points at least
     for (size_t i = 1; i < table.size(); ++i)
@@ -479,10 +479,10 @@ TEST(TestbedCharts, QuickRunDrawsEveryFigureInModelledSeconds) {
   }
   for (const auto& row : rows("where_each_wins")) {
     if (row[0] == "ethernet_bps")
-      continue;  // ethernet_bps,objects,winner,seq_s,simd_s,dist_s,hetero_s
-    ASSERT_EQ(row.size(), 7u);
+      continue;  // ethernet_bps,objects,winner,seq_s,simd_s,dist_s,hetero_s,array_s
+    ASSERT_EQ(row.size(), 8u);
     int fastest = 1;
-    for (int m = 2; m <= 4; ++m)
+    for (int m = 2; m <= 5; ++m)
       if (std::stod(row[2 + m]) < std::stod(row[2 + fastest])) fastest = m;
     EXPECT_EQ(std::stoi(row[2]), fastest) << row[0] << " bit/s, " << row[1] << " objects";
   }

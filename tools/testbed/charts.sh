@@ -105,7 +105,7 @@ MODEL=$(col model_s) BYTES=$(col bytes) PIXELS=$(col pixels) BUSY=$(col child_bu
 ETH=$(col ethernet_busy) PARENT=$(col parent_busy)
 
 LAST_FRAME=${FRAMES##* }
-for n in $COUNTS; do local_run seq "$n"; local_run simd "$n"; done
+for n in $COUNTS; do local_run seq "$n"; local_run simd "$n"; local_run array "$n"; done
 for n in $COUNTS; do for k in $CHILDREN; do for f in $FRAMES; do
   sim_run dist "$n" "$k" "$f"; sim_run hetero "$n" "$k" "$f"
 done; done; say "objects $n done (${SECONDS} s)"; done
@@ -162,10 +162,28 @@ table "$OUT/fig11_pixels.csv" "frame,distributed,heterogeneous" "$FRAMES" \
   "pick dist $REF_COUNT $MAXK @ 0 $PIXELS" "pick hetero $REF_COUNT $MAXK @ 0 $PIXELS"
 chart fig11_pixels "Fig 11: pixels processed by the children" "frame size" pixels 1 0 "$NOTE"
 
-table "$OUT/fig12_all_methods.csv" "objects,sequential,SIMD/sequential,distributed $MAXK,heterogeneous $MAXK" "$COUNTS" \
+table "$OUT/fig12_all_methods.csv" "objects,sequential,SIMD/sequential,distributed $MAXK,heterogeneous $MAXK,all rays on the array" "$COUNTS" \
   "pick seq @ 0 0 0 $MODEL" "pick simd @ 0 0 0 $MODEL" \
-  "pick dist @ $MAXK $LAST_FRAME 0 $MODEL" "pick hetero @ $MAXK $LAST_FRAME 0 $MODEL"
+  "pick dist @ $MAXK $LAST_FRAME 0 $MODEL" "pick hetero @ $MAXK $LAST_FRAME 0 $MODEL" \
+  "pick array @ 0 0 0 $MODEL"
 chart fig12_all_methods "Fig 12: all methods ($MAXK children, frames $LAST_FRAME)" objects "modelled s" 1 1 "$NOTE"
+
+# ---- All rays on the array: SIMD utilisation per bounce, with and without compaction -------
+# (docs/wavefront.md, "Compaction"): live rays ÷ the slots the controller ran, and the cycles.
+for c in local none; do
+  "$ZEPHYR" render --no-progress --method array --compact "$c" "$(scene "$REF_COUNT")" \
+    --testbed "$TESTBED" --report "$WORK/compact-$c.json" >/dev/null 2>&1 || say "failed: array --compact $c"
+done
+{
+  echo "bounce,utilisation local,utilisation none,layers local,layers none,cycles local,cycles none"
+  paste -d, <(jq -r '.wavefront.bounces[] | [.bounce, .utilisation, .layers, .cycles] | @csv' "$WORK/compact-local.json") \
+            <(jq -r '.wavefront.bounces[] | [.utilisation, .layers, .cycles] | @csv' "$WORK/compact-none.json") |
+    awk -F, '{ printf "%s,%s,%s,%s,%s,%s,%s\n", $1, $2, $5, $3, $6, $4, $7 }'
+} >"$OUT/array_utilisation.csv"
+cut -d, -f1-3 "$OUT/array_utilisation.csv" >"$WORK/util.csv"
+gnuplot -e "in='$WORK/util.csv'; out='$OUT/array_utilisation.png'; ttl='All rays on the array: SIMD utilisation per bounce ($REF_COUNT spheres)'; \
+xl='bounce (1 = the primary hits)'; yl='live rays / slots run'; logx=0; logy=0; note='$NOTE'; ncols=3; empty=0" "$GP/lines.gp" ||
+  say "gnuplot failed for array_utilisation"
 
 # ---- Past the paper: children busy fraction (efficiency) and the Ethernet's load ------------
 # past NAME TITLE YLABEL LOGY SPEC: one column per method and series (objects:frame) over
@@ -194,16 +212,18 @@ past past_time "Past the paper: modelled time vs children (series: method, spher
 
 # ---- Where each method wins: Ethernet bandwidth x objects, $MAXK children ----------------------
 {
-  echo "ethernet_bps,objects,winner,seq_s,simd_s,dist_s,hetero_s"
+  echo "ethernet_bps,objects,winner,seq_s,simd_s,dist_s,hetero_s,array_s"
   for bw in $MAP_BW; do for n in $MAP_COUNTS; do
-    s=$(pick seq "$n" 0 0 0 "$MODEL"); d=$(pick simd "$n" 0 0 0 "$MODEL")
-    if [ "$s" = NaN ]; then local_run seq "$n"; local_run simd "$n"; s=$(pick seq "$n" 0 0 0 "$MODEL"); d=$(pick simd "$n" 0 0 0 "$MODEL"); fi
+    s=$(pick seq "$n" 0 0 0 "$MODEL"); d=$(pick simd "$n" 0 0 0 "$MODEL"); a=$(pick array "$n" 0 0 0 "$MODEL")
+    if [ "$s" = NaN ] || [ "$a" = NaN ]; then
+      local_run seq "$n"; local_run simd "$n"; local_run array "$n"
+      s=$(pick seq "$n" 0 0 0 "$MODEL"); d=$(pick simd "$n" 0 0 0 "$MODEL"); a=$(pick array "$n" 0 0 0 "$MODEL")
+    fi
     di=$(pick dist "$n" "$MAXK" "$LAST_FRAME" "$bw" "$MODEL"); h=$(pick hetero "$n" "$MAXK" "$LAST_FRAME" "$bw" "$MODEL")
-    awk -v bw="$bw" -v n="$n" -v s="$s" -v d="$d" -v di="$di" -v h="$h" 'BEGIN {
-      split("sequential SIMD/sequential distributed heterogeneous", names, " ")
-      v[1] = s; v[2] = d; v[3] = di; v[4] = h; best = 0
-      for (i = 1; i <= 4; ++i) if (v[i] != "NaN" && (best == 0 || v[i] + 0 < v[best] + 0)) best = i
-      printf "%s,%s,%d,%s,%s,%s,%s\n", bw, n, best, s, d, di, h }'
+    awk -v bw="$bw" -v n="$n" -v s="$s" -v d="$d" -v di="$di" -v h="$h" -v a="$a" 'BEGIN {
+      v[1] = s; v[2] = d; v[3] = di; v[4] = h; v[5] = a; best = 0
+      for (i = 1; i <= 5; ++i) if (v[i] != "NaN" && (best == 0 || v[i] + 0 < v[best] + 0)) best = i
+      printf "%s,%s,%d,%s,%s,%s,%s,%s\n", bw, n, best, s, d, di, h, a }'
   done; done
 } >"$OUT/where_each_wins.csv"
 gnuplot -e "in='$OUT/where_each_wins.csv'; out='$OUT/where_each_wins.png'; paperbw=10e6; note='dist/hetero: $MAXK children, frames $LAST_FRAME; $NOTE'" \

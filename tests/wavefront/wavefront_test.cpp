@@ -1,0 +1,204 @@
+// Every ray on the array (hosts/wavefront/wavefront.h, docs/wavefront.md): the image against
+// the sequential tracer's on scenes where each bounce kind occurs, every certain secondary
+// hit against the exact reference along the array's own rays, the compaction by hand, and
+// the policies' images against each other.
+#include "hosts/wavefront/wavefront.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+
+#include "fixed/check.h"
+#include "hosts/scene/gen.h"
+#include "hosts/scene/nff.h"
+#include "hosts/simd/pass.h"
+#include "hosts/trace/exact.h"
+#include "hosts/trace/image.h"
+#include "tests/farm/mpi_launch.h"
+
+namespace zephyr::wavefront {
+namespace {
+
+struct Rendered {
+  Image seq, array;
+  WavefrontResult wave;
+  TraceStats host;
+};
+
+Rendered Render(const Scene& scene, WavefrontOptions options = {}, int depth = 5, int threads = 0) {
+  TraceOptions t;
+  t.depth = depth;
+  const auto tracer = Tracer::Create(scene, t);
+  const Camera& c = scene.camera;
+  Rendered r;
+  r.seq = Image(c.width, c.height);
+  TraceStats seqStats;
+  RenderRegion(*tracer, 0, 0, c.width, c.height, r.seq.pixels, seqStats);
+  simd::SimdOptions simdOptions;
+  simdOptions.threads = threads;
+  const simd::PrimaryPass pass = simd::RunPrimaryPass(scene, simdOptions);
+  r.array = Image(c.width, c.height);
+  r.wave = RenderWavefront(*tracer, pass, options, r.array.pixels, r.host);
+  return r;
+}
+
+// A camera, a light and `body` (materials and spheres) as NFF, 64×64.
+Scene SceneOf(const std::string& body) {
+  return ParseNffOrThrow(
+      "b 0.1 0.1 0.2\n"
+      "v\nfrom 0 1 8\nat 0 0 0\nup 0 1 0\nangle 40\nhither 0.001\nresolution 64 64\n"
+      "l 4 8 6 1 1 1\n" +
+          body,
+      "scene.nff");
+}
+
+int64_t Sum(const WavefrontResult& w, int64_t BounceReport::*field) {
+  int64_t n = 0;
+  for (const BounceReport& b : w.bounces) n += b.*field;
+  return n;
+}
+
+// Two facing mirrors and a diffuse sphere between them: rays bounce mirror to mirror to the
+// depth limit.
+TEST(Wavefront, AMirrorPairMatchesSeq) {
+  const Scene scene = SceneOf(
+      "f 0.9 0.9 0.9 0.1 0.9 40 0 1\n"
+      "s -1.25 0 0 1.2\n"
+      "s 1.25 0 0 1.2\n"
+      "f 0.9 0.2 0.2 0.8 0.1 20 0 1\n"
+      "s 0 -0.2 1.5 0.4\n");
+  const Rendered r = Render(scene);
+  EXPECT_GE(Psnr(r.array, r.seq), 40);
+  ASSERT_EQ(r.wave.bounces.size(), 5u);
+  EXPECT_GT(r.wave.bounces[4].hits, 0) << "rays still bounce between the mirrors at level 5";
+  EXPECT_GT(r.wave.arrayRays[int(RayKind::kReflected)], 0u);
+}
+
+// A glass sphere (ior 1.5: the refracted rays cross it) and an air bubble (ior 0.7: rays
+// meeting it obliquely are totally reflected), in front of a diffuse backdrop.
+TEST(Wavefront, GlassAndTotalInternalReflectionMatchSeq) {
+  const Scene scene = SceneOf(
+      "f 1 1 1 0.05 0.1 100 0.85 1.5\n"
+      "s -0.9 0 1 0.8\n"
+      "f 1 1 1 0.05 0.1 100 0.85 0.7\n"
+      "s 0.9 0 1 0.8\n"
+      "f 0.3 0.8 0.3 0.8 0 1 0 1\n"
+      "s 0 0 -6 5\n");
+  const Rendered r = Render(scene);
+  EXPECT_GE(Psnr(r.array, r.seq), 40);
+  EXPECT_GT(r.wave.arrayRays[int(RayKind::kRefracted)], 0u);
+  EXPECT_GT(Sum(r.wave, &BounceReport::totalInternalReflections), 0);
+}
+
+// A glass sphere over a floor (a large diffuse sphere) casts a transparent shadow: the
+// product of T over both of its surfaces. Made opaque, the shadow changes: the product counts.
+TEST(Wavefront, ATransparentShadowOverAFloorMatchesSeq) {
+  const std::string floor = "f 0.8 0.8 0.8 0.9 0 1 0 1\ns 0 -101 0 100\n";
+  const Rendered glass = Render(SceneOf(floor + "f 1 1 1 0.05 0.1 100 0.8 1.5\ns 0 0.2 0 0.9\n"));
+  const Rendered opaque = Render(SceneOf(floor + "f 1 1 1 0.05 0.1 100 0 1.5\ns 0 0.2 0 0.9\n"));
+  EXPECT_GE(Psnr(glass.array, glass.seq), 40);
+  EXPECT_GE(Psnr(opaque.array, opaque.seq), 40);
+  EXPECT_LT(Psnr(glass.array, opaque.array), 30) << "the shadow's transparency shows";
+}
+
+// The exact first object along every certain secondary ray as the array held it, with the
+// rules the array states (AuditRay): none differs.
+TEST(Wavefront, EveryCertainSecondaryHitIsTheExactFirstHit) {
+  const Scene scene = GenerateRandomSpheres({.count = 32, .seed = 7, .width = 64, .height = 64});
+  int64_t rays = 0, uncertain = 0, wrong = 0;
+  WavefrontOptions options;
+  options.audit = [&](const AuditRay& a) {
+    ++rays;
+    if (a.uncertain) {
+      ++uncertain;
+      return;
+    }
+    int best = -1;
+    exact::Real bestT = 0;
+    for (int i = 0; i < int(scene.objects.size()); ++i) {
+      if (i == a.from && a.outward) continue;  // a sphere is convex
+      const auto t = exact::ObjectHit(scene, i, a.origin, a.direction, a.epsilon);
+      if (t && (best < 0 || *t < bestT)) best = i, bestT = *t;
+    }
+    if (best != a.object) ++wrong;
+  };
+  const Rendered r = Render(scene, options);
+  EXPECT_GT(rays, 1000);
+  EXPECT_EQ(wrong, 0) << "of " << rays << " secondary rays (" << uncertain << " uncertain)";
+  EXPECT_LE(uncertain, rays / 50) << "the host traces at most 2 % of the rays";
+}
+
+// Four PEs, three layers (layer-major): PE 0 holds rays in layers 0 and 2, PE 1 in 1 and 2,
+// PE 2 in 0 and 1, PE 3 in 2. Packed: two layers run (PE 0, 1, 2 hold two rays each); the
+// moves are layer 1 → 0 (PE 1) and layer 2 → 1 (PEs 0, 1) and 2 → 0 (PE 3): three masked
+// moves, the second and third from the same source layer to two destinations.
+TEST(Wavefront, LocalCompactionPacksAsCountedByHand) {
+  const std::vector<uint8_t> live = {1, 0, 1, 0, /**/ 0, 1, 1, 0, /**/ 1, 1, 0, 1};
+  const Packing p = PackLayers(live, 4);
+  EXPECT_EQ(p.layers, 2);
+  EXPECT_EQ(p.moves, 3);
+  const std::vector<int64_t> want = {0, -1, 2, -1, /**/ -1, 1, 6, -1, /**/ 4, 5, -1, 3};
+  EXPECT_EQ(p.destination, want);
+  // Utilisation: 7 rays in 12 slots unpacked, in 8 packed.
+  EXPECT_DOUBLE_EQ(7.0 / (p.layers * 4), 0.875);
+}
+
+TEST(Wavefront, CompactionChangesTheCyclesNotTheImage) {
+  const Scene scene = GenerateRandomSpheres({.count = 16, .seed = 2, .width = 128, .height = 128});
+  WavefrontOptions none, local;
+  none.compaction = Compaction::kNone;
+  const Rendered a = Render(scene, none), b = Render(scene, local);
+  EXPECT_EQ(a.array.pixels, b.array.pixels);
+  EXPECT_GT(a.wave.cycles.TotalCycles(), b.wave.cycles.TotalCycles());
+  ASSERT_EQ(a.wave.bounces.size(), b.wave.bounces.size());
+  for (size_t k = 0; k < a.wave.bounces.size(); ++k) {
+    EXPECT_EQ(a.wave.bounces[k].rays, b.wave.bounces[k].rays);
+    EXPECT_GE(a.wave.bounces[k].layers, b.wave.bounces[k].layers);
+    EXPECT_DOUBLE_EQ(b.wave.bounces[k].utilisation,
+                     double(b.wave.bounces[k].rays) / double(b.wave.bounces[k].slots));
+  }
+  EXPECT_GE(Psnr(b.array, b.seq), 40);
+}
+
+TEST(Wavefront, TheHostThreadsChangeNothing) {
+  const Scene scene = GenerateRandomSpheres({.count = 16, .seed = 4, .width = 96, .height = 96});
+  const Rendered one = Render(scene, {}, 5, 1), two = Render(scene, {}, 5, 2);
+  EXPECT_EQ(one.array.pixels, two.array.pixels);
+  EXPECT_EQ(one.wave.cycles.Json().dump(), two.wave.cycles.Json().dump());
+}
+
+TEST(Wavefront, APrimitiveItCannotTraceIsAClearError) {
+  const Scene scene = SceneOf("f 1 1 1 1 0 1 0 1\ns 0 0 0 1\np 3\n-1 -1 -2\n1 -1 -2\n0 1 -2\n");
+  try {
+    Render(scene);
+    FAIL() << "a polygon is not a sphere";
+  } catch (const UserError& e) {
+    EXPECT_NE(std::string(e.what()).find("scene.nff:12:1: --method array traces untransformed "
+                                         "spheres only (docs/wavefront.md); this object is a "
+                                         "polygon"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+TEST(Wavefront, ItsFlagsAreRefusedByTheOtherMethods) {
+  testing::TempDir dir;
+  const std::string scene = dir / "s.nff";
+  std::ofstream(scene) << WriteNff(
+      GenerateRandomSpheres({.count = 4, .seed = 1, .width = 16, .height = 16}));
+  auto r = testing::RunZephyrProcess("render " + scene + " --method seq --compact none");
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.output.find("--compact: --method seq traces no secondary ray on the array"),
+            std::string::npos)
+      << r.output;
+  r = testing::RunZephyrProcess("render " + scene + " --method array --compact all");
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.output.find("--compact"), std::string::npos) << r.output;
+  r = testing::RunZephyrProcess("render " + scene + " --method array --compact none --report " +
+                                dir / "r.json");
+  EXPECT_EQ(r.status, 0) << r.output;
+}
+
+}  // namespace
+}  // namespace zephyr::wavefront
