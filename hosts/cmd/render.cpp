@@ -81,8 +81,9 @@ CommandRegistration reg("render", [](CLI::App& program) {
                  "dist/hetero: frames handed to a child before it returns one")};
   const std::vector<CLI::Option*> wavefrontFlags = {
       AddNamed(*cmd, "--compact", o->wavefront.compaction, wavefront::kCompactionNames,
-               "array: between bounces, none (every layer runs) or local (each PE packs its "
-               "live rays into its lowest layers)"),
+               "array: between bounces, none (every layer runs), local (each PE packs its live "
+               "rays into its lowest layers) or mesh (local, then the PEs' counts evened over "
+               "the mesh)"),
       AddInteger(*cmd, "--array-frac-bits", o->wavefront.fracBits, 8, 40,
                  "array: fraction bits of the secondary rays' numbers (default: the primary "
                  "plan's, at least 16)")};

@@ -34,6 +34,20 @@ struct Slot {
   int64_t object = 0, t = 0;     // bounce 1 only: the primary pass's hit (index + 1, raw t)
   int64_t from = 0;              // the object the ray leaves (index + 1; 0: the eye)
   bool outward = true;           // it leaves that object outward
+  // Which ray of its pixel's tree: one bit per bounce below the primary (0: the first child,
+  // 1: the second). The host sums a pixel's rays of a bounce in this order, so the image does
+  // not depend on which PE or layer held them.
+  uint64_t path = 0;
+};
+
+// One ray's share of its pixel, summed bounce by bounce in (pixel, path) order.
+struct Share {
+  int32_t pixel;
+  uint64_t path;
+  Vec3 colour;
+  bool operator<(const Share& o) const {
+    return pixel != o.pixel ? pixel < o.pixel : path < o.path;
+  }
 };
 
 int64_t RawOf(double x, int frac) { return int64_t(std::llround(std::ldexp(x, frac))); }
@@ -79,7 +93,30 @@ Packing PackLayers(const std::vector<uint8_t>& live, int pes) {
   return r;
 }
 
+MeshBalance BalanceOverMesh(std::vector<int64_t> counts) {
+  const int pes = int(counts.size());
+  ZEPHYR_CHECK(pes > 0 && (pes & (pes - 1)) == 0);
+  MeshBalance b;
+  for (int bit = 1; bit < pes; bit <<= 1) {
+    int64_t round = 0;
+    for (int p = 0; p < pes; ++p) {
+      const int q = p ^ bit;
+      if (q < p) continue;
+      const int from = counts[p] > counts[q] ? p : q, to = from == p ? q : p;
+      const int64_t m = (counts[from] - counts[to]) / 2;
+      for (int64_t j = 0; j < m; ++j) b.moves.push_back({from, to, --counts[from], counts[to]++});
+      round = std::max(round, m);
+    }
+    b.rounds.push_back(round);
+  }
+  b.counts = counts;
+  for (int64_t c : counts) b.layers = std::max(b.layers, c);
+  return b;
+}
+
 namespace {
+
+std::vector<Slot> Balance(std::vector<Slot> packed, int pes, const SecondaryPlan& p, Machine& cm);
 
 // Lays `children` (the next bounce's rays, in the layout without compaction: `layers` layers
 // of `pes` PEs) out for the next bounce, charging `cm` (one layer of the machine) for the
@@ -110,8 +147,81 @@ std::vector<Slot> LayOut(std::vector<Slot> children, int64_t layers, int pes, Co
   for (int64_t l = 0; l < layers; ++l)
     cm.Charge("compactCount", bitserial::AddCost(cnt, uni, cnt, {}));
   for (int64_t k = 0; k < packing.moves; ++k) cm.Charge("compactMove", move);
+  if (policy == Compaction::kMesh) packed = Balance(std::move(packed), pes, p, cm);
   cm.Charge("compactMax", bitserial::ReduceCost(bitserial::ReduceKind::kMax, cnt));
   return packed;
+}
+
+// --compact mesh: the packed layout evened over the mesh (BalanceOverMesh). Charged per round
+// k: the counts exchanged with the partner (a shift each way by its mesh distance, a compare,
+// a subtract and a halving); per transfer of the round: each sender's record copied from its
+// top layer into a buffer (one masked copy per distinct source layer), the buffer shifted
+// both ways over the partner's distance, and the receivers' masked copies into their layers
+// (one per distinct destination layer). PE p sits at (p mod X, p div X) of the profile's
+// first shape (X its first extent): bit k < log2 X is 2^k PEs along the first axis, a higher
+// bit 2^k / X along the second.
+std::vector<Slot> Balance(std::vector<Slot> packed, int pes, const SecondaryPlan& p, Machine& cm) {
+  const int64_t layers = int64_t(packed.size()) / pes;
+  std::vector<int64_t> counts(pes, 0);
+  for (int64_t s = 0; s < int64_t(packed.size()); ++s)
+    if (packed[s].pixel >= 0) counts[s % pes] = s / pes + 1;
+  const MeshBalance b = BalanceOverMesh(counts);
+  std::vector<std::vector<Slot>> perPe(pes);
+  for (int pe = 0; pe < pes; ++pe)
+    for (int64_t l = 0; l < counts[pe]; ++l) perPe[pe].push_back(packed[size_t(l) * pes + pe]);
+  for (const MeshBalance::Move& m : b.moves) {
+    perPe[m.to].push_back(std::move(perPe[m.from].back()));
+    perPe[m.from].pop_back();
+  }
+  std::vector<Slot> out(size_t(b.layers) * pes);
+  for (int pe = 0; pe < pes; ++pe)
+    for (size_t l = 0; l < perPe[pe].size(); ++l) out[l * pes + pe] = std::move(perPe[pe][l]);
+  // The charges.
+  const std::vector<int>& extent = cm.Shape().extent;
+  const int x = extent.empty() ? pes : extent[0];
+  const Format counter = Format::Unsigned(simd::IntBitsFor(double(layers + b.layers)) + 1, 0);
+  const Operand cnt{counter, Space::kInternal, false};
+  const Operand fields[] = {CoordOperand(p),
+                            DirectionOperand(p),
+                            {p.index, Space::kExternal, false},
+                            {bitserial::BoolFormat(), Space::kExternal, false}};
+  const int copies[] = {3, 3, 1, 1};
+  size_t next = 0;
+  int round = 0;
+  for (int bit = 1; bit < pes; bit <<= 1, ++round) {
+    const int distance = bit < x ? bit : bit / x;
+    MicroOpCounts exchange = bitserial::MeshShiftCost(cnt, distance);
+    exchange += exchange;
+    exchange += bitserial::CompareCost(cnt, cnt, Space::kInternal);
+    exchange += bitserial::SubCost(cnt, cnt, cnt, {});
+    cm.Charge("balanceCounts", exchange);
+    // This round's moves, step by step (the j-th transfer of every pair at once).
+    std::map<int64_t, std::pair<std::vector<int64_t>, std::vector<int64_t>>> steps;
+    std::map<std::pair<int, int>, int64_t> sent;
+    for (; next < b.moves.size(); ++next) {
+      const MeshBalance::Move& m = b.moves[next];
+      if ((m.from ^ m.to) != bit) break;
+      const int64_t j = sent[{std::min(m.from, m.to), std::max(m.from, m.to)}]++;
+      steps[j].first.push_back(m.fromLayer), steps[j].second.push_back(m.toLayer);
+    }
+    for (auto& [j, layersOf] : steps) {
+      for (auto* v : {&layersOf.first, &layersOf.second}) {
+        std::sort(v->begin(), v->end());
+        v->erase(std::unique(v->begin(), v->end()), v->end());
+      }
+      MicroOpCounts transfer;
+      for (int f = 0; f < 4; ++f)
+        for (int c = 0; c < copies[f]; ++c) {
+          MicroOpCounts shift = bitserial::MeshShiftCost(fields[f], distance);
+          transfer += shift;
+          transfer += shift;  // both ways
+          for (size_t k = 0; k < layersOf.first.size() + layersOf.second.size(); ++k)
+            transfer += bitserial::CopyCost(fields[f], fields[f]);
+        }
+      cm.Charge("balanceMove", transfer);
+    }
+  }
+  return out;
 }
 
 // The layers per array pass: the most (up to `layers`) whose program fits the PE memory.
@@ -187,6 +297,7 @@ WavefrontResult RenderWavefront(const Tracer& tracer, const simd::PrimaryPass& p
     // The next bounce's rays, laid out without compaction: a first child in its parent's
     // slot, a second (the refracted ray of a surface that also reflects) `layers` layers on.
     std::vector<Slot> children(slots.size() * 2);
+    std::vector<Share> shares;
     bool anySecond = false;
     for (int64_t first = 0; first < layers; first += perPass) {
       const int64_t count = std::min<int64_t>(perPass, layers - first);
@@ -224,7 +335,6 @@ WavefrontResult RenderWavefront(const Tracer& tracer, const simd::PrimaryPass& p
           a.origin = vec(out.audit.o), a.direction = vec(out.audit.d);
           options.audit(a);
         }
-        Vec3& pixel = pixels[s.pixel];
         if (intersect && out.uncertain[i]) {
           // The array could not certify this ray's first hit: its whole subtree on the host,
           // from the ray as the array holds it.
@@ -232,12 +342,14 @@ WavefrontResult RenderWavefront(const Tracer& tracer, const simd::PrimaryPass& p
           const Vec3 o{ValueOf(out.o[0][i], F), ValueOf(out.o[1][i], F), ValueOf(out.o[2][i], F)};
           const Vec3 d = Normalize(
               Vec3{ValueOf(out.d[0][i], F), ValueOf(out.d[1][i], F), ValueOf(out.d[2][i], F)});
-          pixel += tracer.TraceRay(o, d, plan.epsilon, bounce, s.kind, hostWork) * s.weight;
+          shares.push_back(
+              {s.pixel, s.path,
+               tracer.TraceRay(o, d, plan.epsilon, bounce, s.kind, hostWork) * s.weight});
           continue;
         }
         const int64_t object = out.object[i] - 1;
         if (object < 0) {
-          pixel += scene.background * s.weight;
+          shares.push_back({s.pixel, s.path, scene.background * s.weight});
           continue;
         }
         ++report.hits;
@@ -252,14 +364,16 @@ WavefrontResult RenderWavefront(const Tracer& tracer, const simd::PrimaryPass& p
             through[j] = tracer.LightThrough(p, int(j), plan.epsilon, hostWork);
           }
         }
-        pixel +=
-            tracer.LocalFromRecord(int(object), nl.data(), rv.data(), through.data(), hostWork) *
-            s.weight;
+        shares.push_back(
+            {s.pixel, s.path,
+             tracer.LocalFromRecord(int(object), nl.data(), rv.data(), through.data(), hostWork) *
+                 s.weight});
         if (bounce >= depth) continue;
         const Material& mat = scene.materials[scene.objects[object].material];
         Slot child;
         child.pixel = s.pixel;
         child.from = object + 1;
+        child.path = s.path << 1;
         for (int k = 0; k < 3; ++k) child.o[k] = out.p[k][i];
         size_t to = begin + i;
         if (mat.ks > 0) {
@@ -268,6 +382,7 @@ WavefrontResult RenderWavefront(const Tracer& tracer, const simd::PrimaryPass& p
           for (int k = 0; k < 3; ++k) child.d[k] = out.mirror[k][i];
           children[to] = child;
           to += slots.size();
+          child.path |= 1;
           ++report.spawned;
         }
         if (mat.t > 0) {
@@ -283,6 +398,8 @@ WavefrontResult RenderWavefront(const Tracer& tracer, const simd::PrimaryPass& p
         }
       }
     }
+    std::sort(shares.begin(), shares.end());
+    for (const Share& share : shares) pixels[share.pixel] += share.colour;
     if (!anySecond) children.resize(slots.size());
     // The second children's masked copies into their layers (one per source layer), then
     // the next bounce's layout; both charged to the next bounce.

@@ -25,12 +25,14 @@
 namespace zephyr::wavefront {
 
 // Between bounces (docs/wavefront.md, "Compaction"): keep every ray in its slot (a second
-// child goes to a new layer block) and run every layer; or pack each physical PE's live rays
+// child goes to a new layer block) and run every layer; pack each physical PE's live rays
 // into its lowest layers (PE-local masked moves, charged) and run only as many layers as the
-// fullest PE holds (found by a charged global max).
-enum class Compaction { kNone, kLocal };
-inline constexpr NamedValues<Compaction, 2> kCompactionNames{
-    {{{Compaction::kNone, "none"}, {Compaction::kLocal, "local"}}}};
+// fullest PE holds (found by a charged global max); or pack them and then even the PEs' counts
+// over the mesh (dimension exchange: PE p with p xor 2^k for every bit k of the PE index, the
+// fuller sending half the difference; mesh shifts and moves charged).
+enum class Compaction { kNone, kLocal, kMesh };
+inline constexpr NamedValues<Compaction, 3> kCompactionNames{
+    {{{Compaction::kNone, "none"}, {Compaction::kLocal, "local"}, {Compaction::kMesh, "mesh"}}}};
 
 // The fraction bits of the secondary rays' numbers when the primary plan's are fewer: the
 // multi origins carry each bounce's rounding (docs/wavefront.md, "Formats").
@@ -51,7 +53,7 @@ struct AuditRay {
 };
 
 struct WavefrontOptions {
-  Compaction compaction = Compaction::kLocal;
+  Compaction compaction = Compaction::kMesh;
   // Fraction bits F of the secondary rays' coordinates, directions and t (-1: the primary
   // plan's, at least kMinSecondaryFracBits); 8..40.
   int fracBits = -1;
@@ -69,6 +71,23 @@ struct Packing {
   int64_t layers = 0, moves = 0;
 };
 Packing PackLayers(const std::vector<uint8_t>& live, int pes);
+
+// The mesh balance after PackLayers, from each PE's count of rays (in its lowest layers):
+// for each bit k of the PE index (partner p xor 2^k, `pes` a power of two), each pair's fuller
+// PE sends floor(difference / 2) of its top rays to the other's next free layers. `rounds[k]`
+// is the transfers round k issues (the largest any pair needs: each a record shifted both
+// ways over the mesh); `counts` the counts after; `layers` the fullest PE's count after;
+// `moves` each PE's sent (PE, layer) → (PE, layer) in order.
+struct MeshBalance {
+  std::vector<int64_t> counts, rounds;
+  int64_t layers = 0;
+  struct Move {
+    int from, to;
+    int64_t fromLayer, toLayer;
+  };
+  std::vector<Move> moves;
+};
+MeshBalance BalanceOverMesh(std::vector<int64_t> counts);
 
 // One bounce of the wavefront (bounce 1: the primary rays' hits; bounce k: the rays of ray-tree
 // level k): what ran on the array and what the host did.
@@ -91,7 +110,7 @@ struct BounceReport {
 };
 
 struct WavefrontResult {
-  Compaction compaction = Compaction::kLocal;
+  Compaction compaction = Compaction::kMesh;
   int fracBits = 0, intBits = 0;  // the coordinates' format s<intBits>.<fracBits>
   double tErrorBound = 0;         // |t − t_exact| of a certain secondary hit (scene units)
   double epsilon = 0;             // secondary and shadow rays ignore hits nearer than this

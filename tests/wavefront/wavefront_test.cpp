@@ -144,17 +144,44 @@ TEST(Wavefront, LocalCompactionPacksAsCountedByHand) {
   EXPECT_DOUBLE_EQ(7.0 / (p.layers * 4), 0.875);
 }
 
+// Four PEs holding 5, 1, 0 and 2 rays. Bit 1: PE 0 sends 2 to PE 1 (3, 3), PE 3 one to PE 2
+// (1, 1); bit 2: PE 0 one to PE 2 and PE 1 one to PE 3: two rays each, in two rounds of 2 and
+// 1 transfers.
+TEST(Wavefront, MeshBalanceEvensTheCountsAsCountedByHand) {
+  const MeshBalance b = BalanceOverMesh({5, 1, 0, 2});
+  EXPECT_EQ(b.counts, (std::vector<int64_t>{2, 2, 2, 2}));
+  EXPECT_EQ(b.layers, 2);
+  EXPECT_EQ(b.rounds, (std::vector<int64_t>{2, 1}));
+  ASSERT_EQ(b.moves.size(), 5u);
+  const int64_t want[5][4] = {{0, 1, 4, 1}, {0, 1, 3, 2}, {3, 2, 1, 0}, {0, 2, 2, 1}, {1, 3, 2, 1}};
+  for (int k = 0; k < 5; ++k) {
+    EXPECT_EQ(b.moves[k].from, want[k][0]) << k;
+    EXPECT_EQ(b.moves[k].to, want[k][1]) << k;
+    EXPECT_EQ(b.moves[k].fromLayer, want[k][2]) << k;
+    EXPECT_EQ(b.moves[k].toLayer, want[k][3]) << k;
+  }
+}
+
 TEST(Wavefront, CompactionChangesTheCyclesNotTheImage) {
   const Scene scene = GenerateRandomSpheres({.count = 16, .seed = 2, .width = 128, .height = 128});
-  WavefrontOptions none, local;
+  WavefrontOptions none, local, mesh;
   none.compaction = Compaction::kNone;
-  const Rendered a = Render(scene, none), b = Render(scene, local);
+  local.compaction = Compaction::kLocal;
+  mesh.compaction = Compaction::kMesh;
+  const Rendered a = Render(scene, none), b = Render(scene, local), c = Render(scene, mesh);
   EXPECT_EQ(a.array.pixels, b.array.pixels);
+  EXPECT_EQ(a.array.pixels, c.array.pixels);
   EXPECT_GT(a.wave.cycles.TotalCycles(), b.wave.cycles.TotalCycles());
+  EXPECT_GT(b.wave.cycles.TotalCycles(), c.wave.cycles.TotalCycles());
   ASSERT_EQ(a.wave.bounces.size(), b.wave.bounces.size());
+  ASSERT_EQ(a.wave.bounces.size(), c.wave.bounces.size());
   for (size_t k = 0; k < a.wave.bounces.size(); ++k) {
     EXPECT_EQ(a.wave.bounces[k].rays, b.wave.bounces[k].rays);
+    EXPECT_EQ(a.wave.bounces[k].rays, c.wave.bounces[k].rays);
     EXPECT_GE(a.wave.bounces[k].layers, b.wave.bounces[k].layers);
+    EXPECT_GE(b.wave.bounces[k].layers, c.wave.bounces[k].layers);
+    // The mesh leaves at most one more layer than an even split per bit of the PE index.
+    EXPECT_LE(c.wave.bounces[k].layers, (c.wave.bounces[k].rays + 8191) / 8192 + 13);
     EXPECT_DOUBLE_EQ(b.wave.bounces[k].utilisation,
                      double(b.wave.bounces[k].rays) / double(b.wave.bounces[k].slots));
   }

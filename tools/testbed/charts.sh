@@ -170,19 +170,20 @@ chart fig12_all_methods "Fig 12: all methods ($MAXK children, frames $LAST_FRAME
 
 # ---- All rays on the array: SIMD utilisation per bounce, with and without compaction -------
 # (docs/wavefront.md, "Compaction"): live rays ÷ the slots the controller ran, and the cycles.
-for c in local none; do
+for c in none local mesh; do
   "$ZEPHYR" render --no-progress --method array --compact "$c" "$(scene "$REF_COUNT")" \
     --testbed "$TESTBED" --report "$WORK/compact-$c.json" >/dev/null 2>&1 || say "failed: array --compact $c"
 done
 {
-  echo "bounce,utilisation local,utilisation none,layers local,layers none,cycles local,cycles none"
-  paste -d, <(jq -r '.wavefront.bounces[] | [.bounce, .utilisation, .layers, .cycles] | @csv' "$WORK/compact-local.json") \
-            <(jq -r '.wavefront.bounces[] | [.utilisation, .layers, .cycles] | @csv' "$WORK/compact-none.json") |
-    awk -F, '{ printf "%s,%s,%s,%s,%s,%s,%s\n", $1, $2, $5, $3, $6, $4, $7 }'
+  echo "bounce,utilisation none,utilisation local,utilisation mesh,layers none,layers local,layers mesh,cycles none,cycles local,cycles mesh"
+  paste -d, <(jq -r '.wavefront.bounces[] | [.bounce, .utilisation, .layers, .cycles] | @csv' "$WORK/compact-none.json") \
+            <(jq -r '.wavefront.bounces[] | [.utilisation, .layers, .cycles] | @csv' "$WORK/compact-local.json") \
+            <(jq -r '.wavefront.bounces[] | [.utilisation, .layers, .cycles] | @csv' "$WORK/compact-mesh.json") |
+    awk -F, '{ printf "%s,%s,%s,%s,%s,%s,%s,%s,%s,%s\n", $1, $2, $5, $8, $3, $6, $9, $4, $7, $10 }'
 } >"$OUT/array_utilisation.csv"
-cut -d, -f1-3 "$OUT/array_utilisation.csv" >"$WORK/util.csv"
+cut -d, -f1-4 "$OUT/array_utilisation.csv" >"$WORK/util.csv"
 gnuplot -e "in='$WORK/util.csv'; out='$OUT/array_utilisation.png'; ttl='All rays on the array: SIMD utilisation per bounce ($REF_COUNT spheres)'; \
-xl='bounce (1 = the primary hits)'; yl='live rays / slots run'; logx=0; logy=0; note='$NOTE'; ncols=3; empty=0" "$GP/lines.gp" ||
+xl='bounce (1 = the primary hits)'; yl='live rays / slots run'; logx=0; logy=0; note='$NOTE'; ncols=4; empty=0" "$GP/lines.gp" ||
   say "gnuplot failed for array_utilisation"
 
 # ---- Past the paper: children busy fraction (efficiency) and the Ethernet's load ------------
