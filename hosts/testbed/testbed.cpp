@@ -226,16 +226,17 @@ nlohmann::json ModelledTime::Json() const {
   t["hostProfile"] = hostProfile->Json();
   if (array) {
     const ArraySplit& a = array->split;
-    t["array"] = {
-        {"profile", array->profile},
-        {"clockHz", a.clockHz},
-        {"cycles", a.arrayCycles},
-        {"seconds", a.arraySeconds},
-        {"scsiBytes", a.scsiBytes},
-        {"scsiSeconds", a.scsiSeconds},
-        {"refineCycles", a.refineCycles},
-        {"cyclesSource", "the first pass's cycle report, and the refine pass's if one ran"},
-        {"scsiSource", "the cycle reports' host class (hostPlane cycles of the matrix)"}};
+    t["array"] = {{"profile", array->profile},
+                  {"clockHz", a.clockHz},
+                  {"cycles", a.arrayCycles},
+                  {"seconds", a.arraySeconds},
+                  {"scsiBytes", a.scsiBytes},
+                  {"scsiSeconds", a.scsiSeconds},
+                  {"refineCycles", a.refineCycles},
+                  {"cyclesSource",
+                   "every array run's cycle report: the first pass, the refine pass if one ran, "
+                   "every wavefront bounce (all rays on the array)"},
+                  {"scsiSource", "the cycle reports' host class (hostPlane cycles of the matrix)"}};
   }
   t["host"] = host->Json();
   t["modelledSeconds"] = modelledSeconds;

@@ -88,8 +88,9 @@ struct FarmTimes {
 // it prices what was counted.
 struct CountedWork {
   const TraceStats* host = nullptr;  // the host's counted work (seq; simd's shading); null: none
-  // The SIMD pass (simd, hetero): the first pass's cycle report, the refine pass's (null when
-  // none ran), and the uncertain pixels the host recomputed in double.
+  // The array (simd, array, hetero): the first pass's cycle report (with all rays on the array,
+  // the sum of it and every wavefront bounce's), the refine pass's (null when none ran), and the
+  // uncertain pixels the host recomputed in double.
   const bitserial::CycleReport* arrayCycles = nullptr;
   const bitserial::CycleReport* refineCycles = nullptr;
   uint64_t recomputedPixels = 0;
