@@ -31,6 +31,7 @@ constexpr RenderMethodEntry kMethods[] = {
     {"array",
      "all rays on the array: the SIMD primary pass, then every secondary and shadow ray on the "
      "emulated array bounce by bounce; the host shades the local term from its records",
+     // 295 bytes per pixel measured at 2048x2048 (docs/errors.md, "Memory").
      RenderArray, nullptr, nullptr, /*bytesPerPixel=*/400, /*dumpBytesPerPixel=*/60,
      /*usesArray=*/true, /*usesWavefront=*/true},
     {"dist",
