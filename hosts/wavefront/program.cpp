@@ -25,15 +25,43 @@ SecondaryPlan PlanSecondary(const Scene& scene, int fracBits, double primaryTErr
                     std::to_string(fracBits));
   SecondaryPlan p;
   double extent = MaxAbs(scene.camera.from), light = 0, maxIor = 1, minRadius = 1e300;
+  // Each polygon's world vertices and front normal, as the tracer takes them.
+  std::vector<std::vector<Vec3>> worldVertices;
+  std::vector<Vec3> worldNormals;
   for (const Primitive& o : scene.objects) {
     const auto* s = std::get_if<Sphere>(&o.shape);
-    if (!s || o.transform)
-      throw UserError(
-          o.where.ToString() + ": --method array traces untransformed spheres only " +
-          "(docs/wavefront.md); this object is " +
-          (s ? std::string("a transformed sphere") : "a " + std::string(ShapeKindName(o.Kind()))));
-    extent = std::max(extent, MaxAbs(s->centre) + s->radius);
-    minRadius = std::min(minRadius, s->radius);
+    const auto* q = std::get_if<Polygon>(&o.shape);
+    const bool sphere = s && !o.transform, flat = q && q->normals.empty();
+    if (!sphere && !flat)
+      throw UserError(o.where.ToString() +
+                      ": --method array traces untransformed spheres and flat polygons only " +
+                      "(docs/wavefront.md); this object is " +
+                      (s   ? std::string("a transformed sphere")
+                       : q ? std::string("a polygon patch (vertex normals)")
+                           : "a " + std::string(ShapeKindName(o.Kind()))));
+    p.objects.push_back({sphere, int(sphere ? p.spheres.size() + 0 : worldVertices.size())});
+    if (sphere) {
+      extent = std::max(extent, MaxAbs(s->centre) + s->radius);
+      minRadius = std::min(minRadius, s->radius);
+      p.spheres.emplace_back();  // filled below
+    } else {
+      std::vector<Vec3> v = q->vertices;
+      int front = 1;
+      if (o.transform) {
+        for (Vec3& x : v) x = o.transform->ApplyPoint(x);
+        front = o.transform->RelativeDeterminant() < 0 ? -1 : 1;
+      }
+      Vec3 n;  // Newell's normal, as hosts/trace/tracer.cpp Prepare
+      for (size_t i = 0; i < v.size(); ++i) {
+        const Vec3& a = v[i];
+        const Vec3& b = v[(i + 1) % v.size()];
+        n += Vec3{(a.y - b.y) * (a.z + b.z), (a.z - b.z) * (a.x + b.x), (a.x - b.x) * (a.y + b.y)};
+      }
+      n = Normalize(ScaledDown(n));
+      for (const Vec3& x : v) extent = std::max(extent, MaxAbs(x));
+      worldVertices.push_back(v);
+      worldNormals.push_back(n * double(front));
+    }
     const Material& m = scene.materials[o.material];
     maxIor = std::max({maxIor, m.ior, 1 / m.ior});
     p.anyMirror |= m.ks > 0;
@@ -55,13 +83,44 @@ SecondaryPlan PlanSecondary(const Scene& scene, int fracBits, double primaryTErr
   p.eta = Format::Unsigned(IntBitsFor(maxIor) + 1, F);
   p.unit = Format::Unsigned(1, F);
   p.index = Format::Unsigned(IntBitsFor(double(scene.objects.size()) + 1) + 1, 0);
+  p.edgeVector = Format::Signed(I + 2, F);
+  p.edgeCross = Format::Signed(2 * I + 5, F);
+  p.edgeValue = Format::Signed(2 * I + 7, F);
   // A direction normalised on the array (d·(1/|d|), each step floor-rounded): | |d|² − 1 |
   // below 12u (docs/wavefront.md, "Error bounds"); 16u taken.
   p.directionError = 16 * u;
   const double diameter = 2 * std::sqrt(3.0) * extent;
   const double eTca = 4 * u;    // Σ d_k (c_k − o_k): c rounded to nearest, 3 floor products
   const double eCross = 3 * u;  // f_j d_l − f_l d_j
-  for (const Primitive& o : scene.objects) {
+  // Polygons (docs/wavefront.md, "Error bounds"): each edge function's error from the vertices
+  // rounded to nearest (|p − o|, |q − o| <= the diameter D) and five floor products; t =
+  // (n·v0 − n·o)/(n·d) with n and n·v0 rounded to nearest, where |n·d| >= the parallel band.
+  {
+    const double D = diameter;
+    const double eNum = 3 * std::ldexp(1.0, I) * u / 2 + 3 * u + u / 2, eNd = 1.75 * u / 2 + 3 * u;
+    const double edgeBand = 1.25 * (1.75 * (2 * D * u + 2 * u + u * u) + 3 * u);
+    const double tError = (eNum + D * eNd) / (p.parallelBand - eNd) + D * p.directionError + 2 * u;
+    for (size_t j = 0; j < worldVertices.size(); ++j) {
+      PolygonTerms t;
+      const Vec3& n = worldNormals[j];
+      for (int k = 0; k < 3; ++k) t.normal[k] = Tight(n[k], F);
+      t.offset = Tight(Dot(n, worldVertices[j][0]), F);
+      for (const Vec3& x : worldVertices[j])
+        t.vertices.push_back({Tight(x.x, F), Tight(x.y, F), Tight(x.z, F)});
+      t.groups = PolygonEdgeGroups(worldVertices[j], n);
+      t.edgeBand = edgeBand, t.tError = tError;
+      p.polygons.push_back(t);
+    }
+  }
+  for (size_t j = 0; j < scene.objects.size(); ++j) {
+    const Primitive& o = scene.objects[j];
+    const Material& m = scene.materials[o.material];
+    if (!p.objects[j].sphere) {
+      PolygonTerms& t = p.polygons[p.objects[j].index];
+      t.transparency = m.t, t.ior = m.ior;
+      p.tError = std::max(p.tError, t.tError);
+      continue;
+    }
     const Sphere& s = std::get<Sphere>(o.shape);
     SphereTerms t;
     for (int k = 0; k < 3; ++k) t.centre[k] = Tight(s.centre[k], F);
@@ -85,19 +144,23 @@ SecondaryPlan PlanSecondary(const Scene& scene, int fracBits, double primaryTErr
     const double eDir = diameter * p.directionError;
     t.tError = eTca + eDir + eDisc / std::sqrt(g) + 2 * u;
     t.slack = std::max(t.tError, eTca + eDir + std::sqrt(g + eDisc)) + u;
-    const Material& m = scene.materials[o.material];
     t.transparency = m.t, t.ior = m.ior;
     for (const Light& l : scene.lights)
       t.lightOutside.push_back(Length(l.position - s.centre) > s.radius);
     p.tError = std::max(p.tError, t.tError);
-    p.spheres.push_back(t);
+    p.spheres[p.objects[j].index] = t;
   }
   p.primaryTError = primaryTError;
   // A hit point's distance from its surface: t's error along |d| <= 1 + δ, t·| |d| − 1 |, and
   // the point's own rounding; a ray leaving it ignores roots up to four times that.
   const double pointError =
       1.01 * std::max(p.tError, primaryTError) + diameter * p.directionError + 2 * u;
-  p.epsilon = 4 * (p.tError + pointError);
+  // The surface a ray leaves is handled by the rule above (never met again, or at its far
+  // root), so the array's own cut-off only keeps roots at the origin from counting: 2(E + u).
+  // The host, which traces an uncertain ray without that rule, skips four times the point's
+  // error instead.
+  p.epsilon = 2 * (p.tError + u);
+  p.hostOffset = 4 * (p.tError + pointError);
   for (const Light& l : scene.lights)
     for (int k = 0; k < 3; ++k) p.lights[k].push_back(Tight(l.position[k], F));
   return p;
@@ -159,6 +222,62 @@ Roots SphereRoots(Machine& m, const Multi (&o)[3], const Multi (&d)[3], const Sp
   return r;
 }
 
+// One polygon along o + t·d: t (where |n·d| is not within the parallel band), whether the ray
+// certainly passes inside, whether it might (the edge functions and the facing as the
+// tracer's InsideAlongRay, each edge certain beyond ±edgeBand), and `parallel` (|n·d| small:
+// t not computed, not certified).
+struct PolygonCross {
+  Multi t, inside, possible, parallel;
+};
+
+PolygonCross PolygonAlong(Machine& m, const Multi (&o)[3], const Multi (&d)[3],
+                          const PolygonTerms& g, const SecondaryPlan& p) {
+  const int F = p.fracBits;
+  const Format wide = Format::Signed(p.intBits + 3, F);
+  const Multi nd =
+      Add(Add(Mul(d[0], Uni{g.normal[0]}, wide), Mul(d[1], Uni{g.normal[1]}, wide), wide),
+          Mul(d[2], Uni{g.normal[2]}, wide), wide);
+  const Multi no =
+      Add(Add(Mul(o[0], Uni{g.normal[0]}, wide), Mul(o[1], Uni{g.normal[1]}, wide), wide),
+          Mul(o[2], Uni{g.normal[2]}, wide), wide);
+  const Multi num = Sub(Uni{g.offset}, no, wide);
+  PolygonCross c;
+  c.parallel = simd::Near(m, nd, p.parallelBand, F);
+  c.t = Broadcast(m, Fixed{p.t, p.t.MaxRaw()});
+  Where(!c.parallel, [&] {
+    simd::WithExpectedSaturation(m, [&] { c.t = Div(num, nd, p.t, simd::kSaturate); });
+  });
+  const Multi facing = simd::Zero(m) < nd;  // s = sign(d·n) > 0
+  std::vector<std::array<Multi, 3>> rel(g.vertices.size());
+  for (size_t v = 0; v < g.vertices.size(); ++v)
+    for (int k = 0; k < 3; ++k) rel[v][k] = Sub(Uni{g.vertices[v][k]}, o[k], p.edgeVector);
+  const Multi band = Const(m, g.edgeBand, F), minusBand = Const(m, -g.edgeBand, F);
+  Multi inside = simd::Zero(m), unsure = simd::Zero(m);
+  for (const PolygonEdgeGroup& group : g.groups) {
+    Multi in = Broadcast(m, Fixed{bitserial::BoolFormat(), 1}), out = simd::Zero(m);
+    for (const PolygonEdge& e : group) {
+      const auto& pa = rel[e.p];
+      const auto& qa = rel[e.q];
+      const Multi cross[3] = {
+          Sub(Mul(pa[1], qa[2], p.edgeCross), Mul(pa[2], qa[1], p.edgeCross), p.edgeCross),
+          Sub(Mul(pa[2], qa[0], p.edgeCross), Mul(pa[0], qa[2], p.edgeCross), p.edgeCross),
+          Sub(Mul(pa[0], qa[1], p.edgeCross), Mul(pa[1], qa[0], p.edgeCross), p.edgeCross)};
+      const Multi value = Dot(d, cross, p.edgeValue);
+      // side·s·e > 0 is the inside: with side < 0 the comparisons swap.
+      const Multi above = band < value, below = value < minusBand;
+      const Multi& pos = e.side > 0 ? above : below;
+      const Multi& neg = e.side > 0 ? below : above;
+      in = in && ((facing && pos) || (!facing && neg));
+      out = out || (facing && neg) || (!facing && pos);
+    }
+    unsure = unsure || (!in && !out);
+    inside = Xor(inside, in);
+  }
+  c.possible = inside || unsure;
+  c.inside = inside && !unsure && !c.parallel;
+  return c;
+}
+
 // The first sphere along every ray: object (index + 1, 0 = none), t, and whether that is
 // uncertain (a grazing or near-ε candidate that may lie in front, or two hits within their
 // bounds of each other).
@@ -175,11 +294,33 @@ Nearest FindNearest(Machine& m, const Multi (&o)[3], const Multi (&d)[3], const 
   n.object = Broadcast(m, Fixed{p.index, 0});
   Multi tie = simd::Zero(m), tGraze = Broadcast(m, tMax);
   const Multi eps = Const(m, p.epsilon, F), none = Broadcast(m, tMax);
-  for (size_t i = 0; i < p.spheres.size(); ++i) {
-    const SphereTerms& s = p.spheres[i];
+  for (size_t i = 0; i < p.objects.size(); ++i) {
+    const Multi self = from == Multi::Constant(m, Fixed{p.index, int64_t(i) + 1});
+    if (!p.objects[i].sphere) {
+      // A plane is met once: the polygon a ray leaves is never its next hit.
+      const PolygonTerms& g = p.polygons[p.objects[i].index];
+      const PolygonCross c = PolygonAlong(m, o, d, g, p);
+      const Multi hit = c.inside && (eps < c.t) && !self;
+      const Multi front = c.parallel || (Const(m, p.epsilon - g.tError - p.ulp, F) < c.t);
+      const Multi unsure = c.possible && !self && front &&
+                           (!c.inside || simd::Near(m, c.t - eps, g.tError + p.ulp, F));
+      Multi low;
+      simd::WithExpectedSaturation(m, [&] {
+        low = Select(c.parallel, Broadcast(m, Fixed{p.t, p.t.MinRaw()}),
+                     simd::SubBound(m, c.t, g.tError + p.ulp, p.t), p.t);
+      });
+      Where(unsure, [&] { tGraze = Min(tGraze, low, p.t); });
+      tie = tie || (hit && (n.t < none) && simd::Near(m, c.t - n.t, 2 * p.tError, F));
+      const Multi closer = hit && (c.t < n.t);
+      Where(closer, [&] {
+        n.t = c.t;
+        n.object = Broadcast(m, Fixed{p.index, int64_t(i) + 1});
+      });
+      continue;
+    }
+    const SphereTerms& s = p.spheres[p.objects[i].index];
     const Roots r = SphereRoots(m, o, d, s, p);
     // The sphere the ray leaves: outward, no hit; inward, its far root.
-    const Multi self = from == Multi::Constant(m, Fixed{p.index, int64_t(i) + 1});
     const Multi leaving = self && outward, entering = self && !outward;
     const Multi t = Select(entering || (eps < r.t0), Select(entering, r.t1, r.t0, p.t), r.t1, p.t);
     const Multi real = simd::Zero(m) <= r.disc;
@@ -221,10 +362,27 @@ void ShadowProduct(Machine& m, const Multi (&pt)[3], const Multi (&l)[3], const 
   uncertain = simd::Zero(m);
   const Multi eps = Const(m, p.epsilon, F);
   const Multi zero = Broadcast(m, Fixed{p.unit, 0});
-  for (size_t i = 0; i < p.spheres.size(); ++i) {
-    const SphereTerms& s = p.spheres[i];
-    const Roots r = SphereRoots(m, pt, l, s, p);
+  for (size_t i = 0; i < p.objects.size(); ++i) {
     const Multi self = object == Multi::Constant(m, Fixed{p.index, int64_t(i) + 1});
+    if (!p.objects[i].sphere) {
+      const PolygonTerms& g = p.polygons[p.objects[i].index];
+      const PolygonCross c = PolygonAlong(m, pt, l, g, p);
+      const Multi cross = c.inside && (eps < c.t) && (c.t < dist) && !self;
+      if (g.transparency <= 0) {
+        Where(cross, [&] { through = zero; });
+      } else {
+        const Uni kt{Tight(g.transparency, F)};
+        Where(cross, [&] { through = Mul(through, kt, p.unit); });
+      }
+      const double band = g.tError + p.ulp;
+      const Multi inRange = c.parallel || ((Const(m, p.epsilon - band, F) < c.t) &&
+                                           (simd::SubBound(m, c.t, band, p.t) < dist));
+      const Multi near = simd::Near(m, c.t - eps, band, F) || simd::Near(m, c.t - dist, band, F);
+      uncertain = uncertain || (c.possible && !self && inRange && (!c.inside || near));
+      continue;
+    }
+    const SphereTerms& s = p.spheres[p.objects[i].index];
+    const Roots r = SphereRoots(m, pt, l, s, p);
     const Multi real = simd::Zero(m) <= r.disc;
     const Multi cross0 = real && (eps < r.t0) && (r.t0 < dist) && !self;
     const Multi exits =
@@ -284,9 +442,14 @@ void Run(Machine& m, const SecondaryPlan& p, bool intersect, const BounceInputs&
     for (int k = 0; k < 3; ++k) pt[k] = Add(o[k], Mul(t, d[k], p.t), p.coord);
     // The unit normal (P − c)/r of the sphere hit, normalised, turned to face the ray.
     for (int k = 0; k < 3; ++k) normal[k] = Multi(m, p.direction, "normal");
-    for (size_t i = 0; i < p.spheres.size(); ++i) {
-      const SphereTerms& s = p.spheres[i];
+    for (size_t i = 0; i < p.objects.size(); ++i) {
       bitserial::WhereScope one(object == Multi::Constant(m, Fixed{p.index, int64_t(i) + 1}));
+      if (!p.objects[i].sphere) {  // the polygon's front normal
+        const PolygonTerms& g = p.polygons[p.objects[i].index];
+        for (int k = 0; k < 3; ++k) normal[k] = Broadcast(m, g.normal[k]);
+        continue;
+      }
+      const SphereTerms& s = p.spheres[p.objects[i].index];
       for (int k = 0; k < 3; ++k)
         normal[k] = Mul(Sub(pt[k], Uni{s.centre[k]}, p.offset), Uni{s.inverseRadius}, p.direction,
                         simd::kSaturate);
@@ -305,12 +468,15 @@ void Run(Machine& m, const SecondaryPlan& p, bool intersect, const BounceInputs&
     if (p.anyTransparent) {
       // Snell (hosts/trace/tracer.h Refract): eta = ior leaving, 1/ior entering.
       Multi eta = Const(m, 1, F);
-      for (size_t i = 0; i < p.spheres.size(); ++i) {
-        const SphereTerms& s = p.spheres[i];
-        if (s.transparency <= 0) continue;
+      for (size_t i = 0; i < p.objects.size(); ++i) {
+        const ObjectTerms& ob = p.objects[i];
+        const double t =
+            ob.sphere ? p.spheres[ob.index].transparency : p.polygons[ob.index].transparency;
+        const double ior = ob.sphere ? p.spheres[ob.index].ior : p.polygons[ob.index].ior;
+        if (t <= 0) continue;
         const Multi one = object == Multi::Constant(m, Fixed{p.index, int64_t(i) + 1});
-        Where(one && inside, [&] { eta = Const(m, s.ior, F); });
-        Where(one && !inside, [&] { eta = Const(m, 1 / s.ior, F); });
+        Where(one && inside, [&] { eta = Const(m, ior, F); });
+        Where(one && !inside, [&] { eta = Const(m, 1 / ior, F); });
       }
       const Multi cosi = Neg(dn, Format::Signed(2, F));
       const Multi sin2 =

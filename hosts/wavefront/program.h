@@ -10,12 +10,14 @@
 // the shadow ray's transparent-shadow product with N·L and R·(−D) for the host's local term.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
 #include "bitserial/machine.h"
 #include "fixed/format.h"
 #include "hosts/scene/scene.h"
+#include "hosts/trace/intersect.h"
 
 namespace zephyr::wavefront {
 
@@ -29,6 +31,26 @@ struct SphereTerms {
   double transparency = 0;                    // the material's T (the shadow product's factor)
   double ior = 1;
   std::vector<bool> lightOutside;  // per light: the light is outside the sphere
+};
+
+// One flat polygon's constants and bounds (world space: a transformed polygon's vertices are
+// mapped on the host, as the tracer does). Its inside is the tracer's: edge functions
+// e = d·((p − o) × (q − o)) per edge in canonical order, by groups with the even-odd rule
+// (hosts/trace/intersect.h PolygonEdgeGroups), each e certain beyond ±edgeBand.
+struct PolygonTerms {
+  fixed::Fixed normal[3];  // the unit front normal (Newell's, turned by a mirroring transform)
+  fixed::Fixed offset;     // normal·v0
+  std::vector<std::array<fixed::Fixed, 3>> vertices;
+  std::vector<PolygonEdgeGroup> groups;
+  double edgeBand = 0;  // |e| below it: which side the ray passes is uncertain
+  double tError = 0;    // |t − t_exact| of a certain hit with |n·d| >= the plan's parallelBand
+  double transparency = 0, ior = 1;
+};
+
+// An object of the scene in the plan, in scene order: its kind and its index in the kind's list.
+struct ObjectTerms {
+  bool sphere = true;
+  int index = 0;
 };
 
 // The formats and bounds every bounce shares (planned once per scene).
@@ -45,16 +67,24 @@ struct SecondaryPlan {
   fixed::Format index;        // u<k>.0: object index + 1 (0 = none)
   fixed::Format unit;         // u1.F: transmissions
   double tError = 0;          // the largest sphere's tError (near ties: |t_i − t_j| < 2·tError)
-  double epsilon = 0;         // rays ignore roots at or below it (their own surface)
+  double epsilon = 0;         // the array's rays ignore roots at or below it (scene units)
+  double hostOffset = 0;      // the host's tMin for a ray or shadow ray it traces instead
   double directionError = 0;  // | |d|² − 1 | of a direction normalised on the array
   bool anyMirror = false, anyTransparent = false;
   std::vector<SphereTerms> spheres;
+  std::vector<PolygonTerms> polygons;
+  std::vector<ObjectTerms> objects;     // every object of the scene, in order
+  double parallelBand = 1.0 / 32;       // |n·d| below it: a polygon's t is not certified
+  fixed::Format edgeVector;             // s<I+2>.F: a vertex − o
+  fixed::Format edgeCross;              // s<2I+5>.F: (p − o) × (q − o)
+  fixed::Format edgeValue;              // s<2I+7>.F: d · that
   std::vector<fixed::Fixed> lights[3];  // light positions, per axis
   double primaryTError = 0;             // the primary pass's bound on t (bounce 1's hits)
 };
 
 // UserError naming the object's file:line when the scene holds anything but untransformed
-// spheres. fracBits: F (8..40); primaryTError: the primary plan's bound on t.
+// spheres and flat polygons (no vertex normals). fracBits: F (8..40); primaryTError: the
+// primary plan's bound on t.
 SecondaryPlan PlanSecondary(const Scene& scene, int fracBits, double primaryTError);
 
 // One pass's rays, per virtual PE of the pass (raw two's-complement values of the plan's

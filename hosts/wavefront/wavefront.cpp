@@ -344,7 +344,7 @@ WavefrontResult RenderWavefront(const Tracer& tracer, const simd::PrimaryPass& p
               Vec3{ValueOf(out.d[0][i], F), ValueOf(out.d[1][i], F), ValueOf(out.d[2][i], F)});
           shares.push_back(
               {s.pixel, s.path,
-               tracer.TraceRay(o, d, plan.epsilon, bounce, s.kind, hostWork) * s.weight});
+               tracer.TraceRay(o, d, plan.hostOffset, bounce, s.kind, hostWork) * s.weight});
           continue;
         }
         const int64_t object = out.object[i] - 1;
@@ -361,7 +361,7 @@ WavefrontResult RenderWavefront(const Tracer& tracer, const simd::PrimaryPass& p
           through[j] = ValueOf(out.through[j][i], F);
           if (out.shadowUncertain[j][i] && nl[j] > 0) {
             ++report.uncertainShadows;
-            through[j] = tracer.LightThrough(p, int(j), plan.epsilon, hostWork);
+            through[j] = tracer.LightThrough(p, int(j), plan.hostOffset, hostWork);
           }
         }
         shares.push_back(
