@@ -249,6 +249,11 @@ WavefrontResult RenderWavefront(const Tracer& tracer, const simd::PrimaryPass& p
   const SecondaryPlan plan = PlanSecondary(scene, F, pass.plan.tErrorBound);
   const bitserial::MachineProfile& profile = pass.array.cycles.Profile();
   const int pes = profile.physicalPes;
+  if (options.compaction == Compaction::kMesh && (pes & (pes - 1)) != 0)
+    throw UserError(
+        "the mesh compaction pairs PE p with p xor 2^k: it needs a power-of-two "
+        "number of PEs, and profile " +
+        profile.name + " has " + std::to_string(pes) + " (the local compaction needs none)");
   const size_t lights = scene.lights.size();
   WavefrontResult result;
   result.compaction = options.compaction;

@@ -124,7 +124,8 @@ struct WavefrontResult {
 // resized to the image) and the host's counted work (`hostWork`: the local shading from
 // records, and the subtrees and shadow products the array could not certify). UserError for a
 // scene the method cannot run (an object that is not an untransformed sphere, naming its
-// file:line; a program PE memory cannot hold).
+// file:line; a program PE memory cannot hold; the mesh compaction on a PE count that is not a
+// power of two).
 WavefrontResult RenderWavefront(const Tracer& tracer, const simd::PrimaryPass& pass,
                                 const WavefrontOptions& options, std::vector<Vec3>& pixels,
                                 TraceStats& hostWork);

@@ -155,7 +155,7 @@ TEST(Rooms, NoRoomBelowTheMethodsMakesAFlagsError) {
   const std::regex flagError(R"re("--[a-z]|--[a-z][a-z-]*:)re");
   const int files =
       ExpectNoMatch({"fixed", "bitserial", "hosts/io", "hosts/scene", "hosts/trace", "hosts/simd",
-                     "hosts/farm", "hosts/testbed"},
+                     "hosts/farm", "hosts/testbed", "hosts/wavefront"},
                     flagError, "a lower room names the value; hosts/cmd names the flag");
   EXPECT_GE(files, 60);
   // The check itself: it finds the errors these rooms had before.
