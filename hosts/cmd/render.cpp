@@ -40,6 +40,12 @@ std::string RenderSummary(const RenderOptions& options, const RenderOutput& out)
                   total(d.childrenToParent));
     s += line;
   }
+  if (out.testbed && out.testbed->ArrayActiveShare()) {
+    std::snprintf(line, sizeof line, "\n  testbed %s: %.4g modelled s, array active %.1f %%",
+                  out.testbed->testbed.c_str(), out.testbed->modelledSeconds,
+                  100 * *out.testbed->ArrayActiveShare());
+    s += line;
+  }
   if (!options.out.empty()) s += "\n  image  " + options.out;
   if (!options.report.empty()) s += "\n  report " + options.report;
   if (!options.dumpPrimary.empty()) s += "\n  primary hits " + options.dumpPrimary;

@@ -21,6 +21,7 @@ nlohmann::json PassJson(const simd::ArrayPassReport& pass) {
   j["memory"] = MemoryJson(pass);
   j["hostSeconds"] = pass.hostSeconds;
   j["realTimeFactor"] = pass.cycles.ModelledSeconds() / pass.hostSeconds;
+  j["virtualPeRatio"] = pass.cycles.Layers();  // virtual PEs per physical PE: the layers
   return j;
 }
 

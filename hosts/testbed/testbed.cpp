@@ -184,8 +184,22 @@ std::optional<ModelledTime> ModelTime(const std::string& testbedName, const Coun
   return t;
 }
 
+std::optional<double> ModelledTime::ArrayActiveShare() const {
+  if (!(modelledSeconds > 0)) return std::nullopt;
+  if (farm) {
+    if (!(farm->arrayPassSeconds > 0)) return std::nullopt;
+    return farm->arrayPassSeconds / modelledSeconds;
+  }
+  if (!clock.empty())
+    return simulatedArraySeconds ? std::optional(*simulatedArraySeconds / modelledSeconds)
+                                 : std::nullopt;
+  if (!array) return std::nullopt;
+  return array->split.arraySeconds / modelledSeconds;
+}
+
 nlohmann::json ModelledTime::Json() const {
   nlohmann::json t;
+  if (const auto share = ArrayActiveShare()) t["arrayActiveShare"] = *share;
   if (farm) {
     t["testbed"] = testbed;
     t["modelledSeconds"] = modelledSeconds;

@@ -132,6 +132,11 @@ struct ModelledTime {
   };
   std::optional<FarmSplit> farm;
   nlohmann::json Json() const;  // the report's "testbed" section (docs/testbed.md)
+  // The array's busy share of the modelled time, as the CM-2's CM:TIME printed "CM active X %
+  // of elapsed": its own cycles' seconds (not the host link's) over modelledSeconds; under
+  // simulation the array pass's charged seconds (hetero: the parent's array pass). Nothing
+  // when no array ran or the modelled time is 0.
+  std::optional<double> ArrayActiveShare() const;
 };
 
 // Everything ModelTime will refuse that the command line alone decides, checked before any

@@ -118,6 +118,18 @@ TEST(TestbedModel, SimdIsArrayPlusScsiPlusHostShading) {
   EXPECT_NEAR(
       t.at("array").at("scsiBytes").get<double>() / t.at("array").at("scsiSeconds").get<double>(),
       t.at("testbed").at("scsiBandwidth").at("value").get<double>(), 1e-6 * 5e6);
+  // "array active X % of elapsed": the array's own seconds over the modelled time.
+  EXPECT_DOUBLE_EQ(
+      t.at("arrayActiveShare").get<double>(),
+      t.at("array").at("seconds").get<double>() / t.at("modelledSeconds").get<double>());
+  EXPECT_GT(t.at("arrayActiveShare").get<double>(), 0);
+  EXPECT_LT(t.at("arrayActiveShare").get<double>(), 1);
+  EXPECT_EQ(RenderReportJson(out).at("simd").at("cycles").at("virtualPeRatio").get<int>(),
+            cycles.at("layers").get<int>());
+  // seq runs no array: no share.
+  EXPECT_FALSE(RenderReportJson(Render(WriteScene(dir), "seq", "ufmg1992"))
+                   .at("testbed")
+                   .contains("arrayActiveShare"));
 }
 
 // ---- The charges by closed form ---------------------------------------
@@ -417,6 +429,11 @@ TEST(TestbedSimulated, DistAndHeteroMatchSeqAndSimdAndRepeatToTheLastDigit) {
             seconds[run]);
       }
       EXPECT_GT(t.at("parent").at("hostWorkSeconds").get<double>(), 0);
+      // hetero's array is the parent's pass; dist has none.
+      EXPECT_EQ(t.contains("arrayActiveShare"), std::string(method) == "hetero") << t.dump(2);
+      if (t.contains("arrayActiveShare"))
+        EXPECT_DOUBLE_EQ(t.at("arrayActiveShare").get<double>(),
+                         t.at("parent").at("arrayPassSeconds").get<double>() / seconds[run]);
       std::map<std::string, double> bytes;
       for (const auto& link : t.at("links"))
         bytes[link.at("link")] = link.at("bytes").get<double>();
