@@ -83,6 +83,17 @@ SecondaryPlan PlanSecondary(const Scene& scene, int fracBits, double primaryTErr
   p.eta = Format::Unsigned(IntBitsFor(maxIor) + 1, F);
   p.unit = Format::Unsigned(1, F);
   p.index = Format::Unsigned(IntBitsFor(double(scene.objects.size()) + 1) + 1, 0);
+  // The host reads coordinates as 64-bit integers and the engine's widest value has 128 bits
+  // (the polygon edge functions' are the widest here).
+  const int widest = p.polygons.empty() && worldVertices.empty() ? p.t.Width() : 2 * I + 8 + F;
+  if (p.coord.Width() > 62 || widest > 120)
+    throw UserError("the scene's extent (" + std::to_string(extent) + ") needs " +
+                    std::to_string(I) + " integer bits, and with " + std::to_string(F) +
+                    " fraction bits the secondary rays' numbers would take " +
+                    std::to_string(std::max(p.coord.Width(), widest)) +
+                    " bits (at most 62 for a coordinate, 120 for an edge function): use " +
+                    "fewer fraction bits, at most " +
+                    std::to_string(std::min(61 - I, worldVertices.empty() ? 61 - I : 112 - 2 * I)));
   p.edgeVector = Format::Signed(I + 2, F);
   p.edgeCross = Format::Signed(2 * I + 5, F);
   p.edgeValue = Format::Signed(2 * I + 7, F);

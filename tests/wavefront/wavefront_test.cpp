@@ -279,6 +279,22 @@ TEST(Wavefront, APrimitiveItCannotTraceIsAClearError) {
   }
 }
 
+// Coordinates the host cannot read as 64-bit integers are refused with the widest fraction
+// bits that fit, and that width runs.
+TEST(Wavefront, NumbersTooWideForTheScenesExtentAreAClearError) {
+  Scene scene = SceneOf("f 1 1 1 1 0 1 0 1\ns 0 0 0 1\n");
+  scene.camera.from = {0, 0, 3e9};
+  try {
+    PlanSecondary(scene, 40, 0);
+    FAIL() << "32 integer bits and 40 fraction bits do not fit 62";
+  } catch (const UserError& e) {
+    const std::string what = e.what();
+    ASSERT_NE(what.find("use fewer fraction bits, at most "), std::string::npos) << what;
+    const int fits = std::stoi(what.substr(what.rfind(' ') + 1));
+    EXPECT_EQ(PlanSecondary(scene, fits, 0).coord.Width(), 62);
+  }
+}
+
 TEST(Wavefront, ItsFlagsAreRefusedByTheOtherMethods) {
   testing::TempDir dir;
   const std::string scene = dir / "s.nff";
