@@ -2,6 +2,8 @@
 // docs/wavefront.md "The bounce program" and "Error bounds").
 #include "hosts/wavefront/program.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
 
@@ -87,12 +89,14 @@ SecondaryPlan PlanSecondary(const Scene& scene, int fracBits, double primaryTErr
   // (the polygon edge functions' are the widest here).
   const int widest = p.polygons.empty() && worldVertices.empty() ? p.t.Width() : 2 * I + 8 + F;
   if (p.coord.Width() > 62 || widest > 120)
-    throw UserError("the scene's extent (" + std::to_string(extent) + ") needs " +
-                    std::to_string(I) + " integer bits, and with " + std::to_string(F) +
-                    " fraction bits the secondary rays' numbers would take " +
-                    std::to_string(std::max(p.coord.Width(), widest)) +
-                    " bits (at most 62 for a coordinate, 120 for an edge function): use " +
-                    "fewer fraction bits, at most " +
+    throw UserError("the scene's extent (" + fmt::format("{:.6g}", extent) + ") needs " +
+                    std::to_string(I) + " integer bits: with " + std::to_string(F) +
+                    " fraction bits a coordinate would take " + std::to_string(p.coord.Width()) +
+                    " bits (at most 62: the host reads it as a 64-bit integer) and the widest "
+                    "value " +
+                    std::to_string(widest) +
+                    " (at most 120): use fewer fraction "
+                    "bits, at most " +
                     std::to_string(std::min(61 - I, worldVertices.empty() ? 61 - I : 112 - 2 * I)));
   p.edgeVector = Format::Signed(I + 2, F);
   p.edgeCross = Format::Signed(2 * I + 5, F);
