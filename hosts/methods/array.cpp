@@ -14,12 +14,7 @@ namespace zephyr {
 void RenderArray(const Scene& scene, const RenderOptions& options, RenderOutput& out) {
   const Camera& c = scene.camera;
   const auto tracer = Tracer::Create(scene, options.trace);  // its option errors before the pass
-  simd::PrimaryPass pass;
-  {
-    PhaseTimer timer(out.phases, "primaryPass");
-    pass = simd::RunPrimaryPass(scene, options.simd);
-  }
-  std::fprintf(stdout, "cycle report (SIMD primary pass):\n%s", pass.array.Table().c_str());
+  simd::PrimaryPass pass = RunTimedPrimaryPass(scene, options, out);
   TraceStats stats;
   out.image = Image(c.width, c.height);
   wavefront::WavefrontResult wave;
@@ -41,13 +36,7 @@ void RenderArray(const Scene& scene, const RenderOptions& options, RenderOutput&
   std::fprintf(stdout, "  total: %.4g cycles = %.4g s at %.3g Hz (primary pass %.4g s)\n",
                wave.cycles.TotalCycles(), wave.cycles.ModelledSeconds(),
                wave.cycles.Profile().clockHz, pass.array.ModelledSeconds());
-  out.primary.clear();
-  if (!options.dumpPrimary.empty())
-    for (size_t i = 0; i < pass.matrix.hits.size(); ++i)
-      out.primary.push_back({pass.matrix.hits[i], pass.matrix.flags[i]});
-  out.hostWork = stats;
-  pass.matrix = {};
-  out.simd = std::move(pass);
+  KeepPrimaryPass(std::move(pass), stats, options, out);
   out.wavefront = std::move(wave);
 }
 

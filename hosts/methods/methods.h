@@ -36,6 +36,14 @@ struct RenderMethodEntry {
   bool usesWavefront = false;  // traces the secondary rays on the array (--compact applies)
 };
 
+// What simd and array share (simd.cpp): the SIMD primary pass timed as the "primaryPass" phase
+// with its cycle report printed; and, once the image is shaded, the pass and the host's work
+// moved into `out` (--dump-primary's hits first, the matrix then emptied).
+simd::PrimaryPass RunTimedPrimaryPass(const Scene& scene, const RenderOptions& options,
+                                      RenderOutput& out);
+void KeepPrimaryPass(simd::PrimaryPass pass, const TraceStats& hostWork,
+                     const RenderOptions& options, RenderOutput& out);
+
 void RenderSeq(const Scene& scene, const RenderOptions& options, RenderOutput& out);   // seq.cpp
 void RenderSimd(const Scene& scene, const RenderOptions& options, RenderOutput& out);  // simd.cpp
 void RenderArray(const Scene& scene, const RenderOptions& options,

@@ -78,9 +78,8 @@ nlohmann::json PrimaryPassJson(const simd::PrimaryPass& pass) {
 }
 
 nlohmann::json WavefrontJson(const wavefront::WavefrontResult& w) {
-  static constexpr const char* kKinds[kRayKinds] = {"primary", "shadow", "reflected", "refracted"};
   nlohmann::json rays;
-  for (int k = 0; k < kRayKinds; ++k) rays[kKinds[k]] = w.arrayRays[k];
+  for (int k = 0; k < kRayKinds; ++k) rays[kRayKindNames[k]] = w.arrayRays[k];
   // Every bounce's cycles by class and operation (each bounce's own: "bounces"[].cycles).
   const nlohmann::json cycles = w.cycles.Json();
   nlohmann::json bounces = nlohmann::json::array();

@@ -8,15 +8,32 @@
 
 namespace zephyr {
 
-void RenderSimd(const Scene& scene, const RenderOptions& options, RenderOutput& out) {
-  const Camera& c = scene.camera;
-  const auto tracer = Tracer::Create(scene, options.trace);  // its option errors before the pass
+simd::PrimaryPass RunTimedPrimaryPass(const Scene& scene, const RenderOptions& options,
+                                      RenderOutput& out) {
   simd::PrimaryPass pass;
   {
     PhaseTimer timer(out.phases, "primaryPass");
     pass = simd::RunPrimaryPass(scene, options.simd);
   }
   std::fprintf(stdout, "cycle report (SIMD primary pass):\n%s", pass.array.Table().c_str());
+  return pass;
+}
+
+void KeepPrimaryPass(simd::PrimaryPass pass, const TraceStats& hostWork,
+                     const RenderOptions& options, RenderOutput& out) {
+  out.primary.clear();
+  if (!options.dumpPrimary.empty())
+    for (size_t i = 0; i < pass.matrix.hits.size(); ++i)
+      out.primary.push_back({pass.matrix.hits[i], pass.matrix.flags[i]});
+  out.hostWork = hostWork;
+  pass.matrix = {};  // the image and the dump have it
+  out.simd = std::move(pass);
+}
+
+void RenderSimd(const Scene& scene, const RenderOptions& options, RenderOutput& out) {
+  const Camera& c = scene.camera;
+  const auto tracer = Tracer::Create(scene, options.trace);  // its option errors before the pass
+  simd::PrimaryPass pass = RunTimedPrimaryPass(scene, options, out);
   std::fprintf(
       stdout,
       "uncertain pixels: %lld overflow, %lld grazing, %lld near tie; %lld recomputed on the host\n",
@@ -35,13 +52,7 @@ void RenderSimd(const Scene& scene, const RenderOptions& options, RenderOutput& 
     PhaseTimer timer(out.phases, "hostShading");
     simd::ShadeRegion(*tracer, pass.matrix, 0, 0, c.width, c.height, out.image.pixels, stats);
   }
-  out.primary.clear();
-  if (!options.dumpPrimary.empty())
-    for (size_t i = 0; i < pass.matrix.hits.size(); ++i)
-      out.primary.push_back({pass.matrix.hits[i], pass.matrix.flags[i]});
-  out.hostWork = stats;
-  pass.matrix = {};  // the image and the dump have it
-  out.simd = std::move(pass);
+  KeepPrimaryPass(std::move(pass), stats, options, out);
 }
 
 }  // namespace zephyr

@@ -38,13 +38,9 @@ void TraceStats::Add(const TraceStats& o) {
   pixels += o.pixels;
 }
 
-namespace {
-constexpr const char* kRayNames[kRayKinds] = {"primary", "shadow", "reflected", "refracted"};
-}
-
 TraceStats TraceStats::FromJson(const nlohmann::json& j) {
   TraceStats s;
-  for (int i = 0; i < kRayKinds; ++i) s.rays[i] = j.at("rays").at(kRayNames[i]).get<uint64_t>();
+  for (int i = 0; i < kRayKinds; ++i) s.rays[i] = j.at("rays").at(kRayKindNames[i]).get<uint64_t>();
   for (int i = 0; i < kShapeKinds; ++i)
     s.tests[i] = j.at("tests").at(ShapeKindName(ShapeKind(i))).get<uint64_t>();
   s.hits = j.at("hits").get<uint64_t>();
@@ -58,7 +54,7 @@ nlohmann::json TraceStats::ToJson() const {
   nlohmann::json j;
   uint64_t total = 0;
   for (int i = 0; i < kRayKinds; ++i) {
-    j["rays"][kRayNames[i]] = rays[i];
+    j["rays"][kRayKindNames[i]] = rays[i];
     total += rays[i];
   }
   j["rays"]["total"] = total;

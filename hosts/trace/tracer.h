@@ -74,6 +74,9 @@ struct PrimaryHit {
 
 enum class RayKind { kPrimary = 0, kShadow = 1, kReflected = 2, kRefracted = 3 };
 inline constexpr int kRayKinds = 4;
+// Each kind's name in reports, in RayKind order.
+inline constexpr const char* kRayKindNames[kRayKinds] = {"primary", "shadow", "reflected",
+                                                         "refracted"};
 
 // Counters for one render (or one frame); add them up across frames and workers. They are
 // the counted host work a host profile turns into modelled seconds (hosts/testbed/, the

@@ -196,12 +196,11 @@ Multi Dot(const Multi (&a)[3], const Multi (&b)[3], Format out) {
 Multi Const(Machine& m, double x, int frac) { return Broadcast(m, Tight(x, frac)); }
 
 // d·(1/|d|), floor-rounded at each step (|d| near 1: the children of unit directions).
-void Normalise(Machine& m, Multi (&d)[3], const SecondaryPlan& p) {
+void Normalise(Multi (&d)[3], const SecondaryPlan& p) {
   const int F = p.fracBits;
   const Multi len = Sqrt(simd::SumOfSquares(d, Format::Unsigned(2, F)), Format::Unsigned(1, F));
   const Multi inv = Div(Uni{Fixed{Format::Unsigned(1, 0), 1}}, len, Format::Unsigned(2, F));
   for (int k = 0; k < 3; ++k) d[k] = Mul(d[k], inv, p.direction);
-  (void)m;
 }
 
 // One sphere along o + t·d: the two roots t0 <= t1 (meaningful where disc >= 0), the
@@ -249,12 +248,7 @@ PolygonCross PolygonAlong(Machine& m, const Multi (&o)[3], const Multi (&d)[3],
                           const PolygonTerms& g, const SecondaryPlan& p) {
   const int F = p.fracBits;
   const Format wide = Format::Signed(p.intBits + 3, F);
-  const Multi nd =
-      Add(Add(Mul(d[0], Uni{g.normal[0]}, wide), Mul(d[1], Uni{g.normal[1]}, wide), wide),
-          Mul(d[2], Uni{g.normal[2]}, wide), wide);
-  const Multi no =
-      Add(Add(Mul(o[0], Uni{g.normal[0]}, wide), Mul(o[1], Uni{g.normal[1]}, wide), wide),
-          Mul(o[2], Uni{g.normal[2]}, wide), wide);
+  const Multi nd = simd::Dot3(d, g.normal, wide), no = simd::Dot3(o, g.normal, wide);
   const Multi num = Sub(Uni{g.offset}, no, wide);
   PolygonCross c;
   c.parallel = simd::Near(m, nd, p.parallelBand, F);
@@ -309,6 +303,15 @@ Nearest FindNearest(Machine& m, const Multi (&o)[3], const Multi (&d)[3], const 
   n.object = Broadcast(m, Fixed{p.index, 0});
   Multi tie = simd::Zero(m), tGraze = Broadcast(m, tMax);
   const Multi eps = Const(m, p.epsilon, F), none = Broadcast(m, tMax);
+  // Object i's candidate t where `hit` into the best, a near tie with the best flagged.
+  auto fold = [&](const Multi& t, const Multi& hit, size_t i) {
+    tie = tie || (hit && (n.t < none) && simd::Near(m, t - n.t, 2 * p.tError, F));
+    const Multi closer = hit && (t < n.t);
+    Where(closer, [&] {
+      n.t = t;
+      n.object = Broadcast(m, Fixed{p.index, int64_t(i) + 1});
+    });
+  };
   for (size_t i = 0; i < p.objects.size(); ++i) {
     const Multi self = from == Multi::Constant(m, Fixed{p.index, int64_t(i) + 1});
     if (!p.objects[i].sphere) {
@@ -325,12 +328,7 @@ Nearest FindNearest(Machine& m, const Multi (&o)[3], const Multi (&d)[3], const 
                      simd::SubBound(m, c.t, g.tError + p.ulp, p.t), p.t);
       });
       Where(unsure, [&] { tGraze = Min(tGraze, low, p.t); });
-      tie = tie || (hit && (n.t < none) && simd::Near(m, c.t - n.t, 2 * p.tError, F));
-      const Multi closer = hit && (c.t < n.t);
-      Where(closer, [&] {
-        n.t = c.t;
-        n.object = Broadcast(m, Fixed{p.index, int64_t(i) + 1});
-      });
+      fold(c.t, hit, i);
       continue;
     }
     const SphereTerms& s = p.spheres[p.objects[i].index];
@@ -348,12 +346,7 @@ Nearest FindNearest(Machine& m, const Multi (&o)[3], const Multi (&d)[3], const 
     const Multi front = Const(m, p.epsilon - s.slack, F) < r.t1;
     const Multi unsure = (r.grazing || nearEps) && front && !leaving;
     Where(unsure, [&] { tGraze = Min(tGraze, simd::SubBound(m, r.t0, s.slack, p.t), p.t); });
-    tie = tie || (hit && (n.t < none) && simd::Near(m, t - n.t, 2 * p.tError, F));
-    const Multi closer = hit && (t < n.t);
-    Where(closer, [&] {
-      n.t = t;
-      n.object = Broadcast(m, Fixed{p.index, int64_t(i) + 1});
-    });
+    fold(t, hit, i);
   }
   // A flagged candidate matters if it may lie in front of the best's true t <= t + E.
   Multi limit;
@@ -442,7 +435,7 @@ void Run(Machine& m, const SecondaryPlan& p, bool intersect, const BounceInputs&
   m.ClearFlags();
   if (intersect) {
     bitserial::WhereScope scope(live);
-    Normalise(m, d, p);
+    Normalise(d, p);
     Nearest n = FindNearest(m, o, d, from, outward, p);
     object = std::move(n.object), t = std::move(n.t), uncertain = std::move(n.uncertain);
   } else {
@@ -469,7 +462,7 @@ void Run(Machine& m, const SecondaryPlan& p, bool intersect, const BounceInputs&
         normal[k] = Mul(Sub(pt[k], Uni{s.centre[k]}, p.offset), Uni{s.inverseRadius}, p.direction,
                         simd::kSaturate);
     }
-    Normalise(m, normal, p);
+    Normalise(normal, p);
     Multi dn = Dot(d, normal, p.direction);
     inside = simd::Zero(m) < dn;
     Where(inside, [&] {
@@ -508,7 +501,7 @@ void Run(Machine& m, const SecondaryPlan& p, bool intersect, const BounceInputs&
         refracted[c] =
             Add(Mul(eta, d[c], term), Mul(coef, normal[c], term), p.direction, simd::kSaturate);
       for (int c = 0; c < 3; ++c) Where(tir, [&] { refracted[c] = mirror[c]; });
-      Normalise(m, refracted, p);
+      Normalise(refracted, p);
     }
     // Each light: the unit direction l, N·L, R·(−D) = l·d − 2(N·L)(N·d), the shadow product.
     for (size_t j = 0; j < lights; ++j) {

@@ -13,6 +13,7 @@
 #include "bitserial/machine.h"
 #include "bitserial/multi.h"
 #include "fixed/check.h"
+#include "hosts/trace/exact.h"
 #include "hosts/wavefront/program.h"
 
 namespace zephyr::wavefront {
@@ -52,6 +53,10 @@ struct Share {
 
 int64_t RawOf(double x, int frac) { return int64_t(std::llround(std::ldexp(x, frac))); }
 double ValueOf(int64_t raw, int frac) { return std::ldexp(double(raw), -frac); }
+// PE i's vector of three raw components with `frac` fraction bits.
+Vec3 VectorOf(const std::vector<int64_t> (&v)[3], size_t i, int frac) {
+  return {ValueOf(v[0][i], frac), ValueOf(v[1][i], frac), ValueOf(v[2][i], frac)};
+}
 
 // The bits of one ray record (origin and direction): what a move between layers copies.
 Operand CoordOperand(const SecondaryPlan& p) { return {p.coord, Space::kExternal, false}; }
@@ -70,6 +75,18 @@ MicroOpCounts RecordCopy(const SecondaryPlan& p) {
 }
 
 }  // namespace
+
+int ExactFirstObject(const Scene& scene, const AuditRay& a) {
+  int best = -1;
+  exact::Real bestT = 0;
+  for (int i = 0; i < int(scene.objects.size()); ++i) {
+    // A sphere is convex; a plane is met once.
+    if (i == a.from && (a.outward || scene.objects[i].Kind() == ShapeKind::kPolygon)) continue;
+    const auto t = exact::ObjectHit(scene, i, a.origin, a.direction, a.epsilon);
+    if (t && (best < 0 || *t < bestT)) best = i, bestT = *t;
+  }
+  return best;
+}
 
 Packing PackLayers(const std::vector<uint8_t>& live, int pes) {
   ZEPHYR_CHECK(pes > 0 && live.size() % size_t(pes) == 0);
@@ -334,19 +351,14 @@ WavefrontResult RenderWavefront(const Tracer& tracer, const simd::PrimaryPass& p
           a.bounce = bounce, a.from = int(s.from) - 1, a.outward = s.outward;
           a.object = int(out.object[i]) - 1, a.uncertain = out.uncertain[i];
           a.epsilon = plan.epsilon;
-          auto vec = [&](const std::vector<int64_t>(&v)[3]) {
-            return Vec3{ValueOf(v[0][i], F), ValueOf(v[1][i], F), ValueOf(v[2][i], F)};
-          };
-          a.origin = vec(out.audit.o), a.direction = vec(out.audit.d);
+          a.origin = VectorOf(out.audit.o, i, F), a.direction = VectorOf(out.audit.d, i, F);
           options.audit(a);
         }
         if (intersect && out.uncertain[i]) {
           // The array could not certify this ray's first hit: its whole subtree on the host,
           // from the ray as the array holds it.
           ++report.uncertainRays;
-          const Vec3 o{ValueOf(out.o[0][i], F), ValueOf(out.o[1][i], F), ValueOf(out.o[2][i], F)};
-          const Vec3 d = Normalize(
-              Vec3{ValueOf(out.d[0][i], F), ValueOf(out.d[1][i], F), ValueOf(out.d[2][i], F)});
+          const Vec3 o = VectorOf(out.o, i, F), d = Normalize(VectorOf(out.d, i, F));
           shares.push_back(
               {s.pixel, s.path,
                tracer.TraceRay(o, d, plan.hostOffset, bounce, s.kind, hostWork) * s.weight});
@@ -360,7 +372,7 @@ WavefrontResult RenderWavefront(const Tracer& tracer, const simd::PrimaryPass& p
         ++report.hits;
         result.arrayRays[int(RayKind::kShadow)] += lights;
         std::vector<double> nl(lights), rv(lights), through(lights);
-        const Vec3 p{ValueOf(out.p[0][i], F), ValueOf(out.p[1][i], F), ValueOf(out.p[2][i], F)};
+        const Vec3 p = VectorOf(out.p, i, F);
         for (size_t j = 0; j < lights; ++j) {
           nl[j] = ValueOf(out.nl[j][i], F), rv[j] = ValueOf(out.rv[j][i], F);
           through[j] = ValueOf(out.through[j][i], F);

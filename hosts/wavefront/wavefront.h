@@ -52,6 +52,10 @@ struct AuditRay {
   double epsilon = 0;
 };
 
+// The exact (128-bit, hosts/trace/exact.h) first object along an audited ray with the rules it
+// states (-1: none): what the array's answer must be wherever it did not flag it uncertain.
+int ExactFirstObject(const Scene& scene, const AuditRay& ray);
+
 struct WavefrontOptions {
   Compaction compaction = Compaction::kMesh;
   // Fraction bits F of the secondary rays' coordinates, directions and t (-1: the primary

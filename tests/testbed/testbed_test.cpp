@@ -431,9 +431,10 @@ TEST(TestbedSimulated, DistAndHeteroMatchSeqAndSimdAndRepeatToTheLastDigit) {
       EXPECT_GT(t.at("parent").at("hostWorkSeconds").get<double>(), 0);
       // hetero's array is the parent's pass; dist has none.
       EXPECT_EQ(t.contains("arrayActiveShare"), std::string(method) == "hetero") << t.dump(2);
-      if (t.contains("arrayActiveShare"))
+      if (t.contains("arrayActiveShare")) {
         EXPECT_DOUBLE_EQ(t.at("arrayActiveShare").get<double>(),
                          t.at("parent").at("arrayPassSeconds").get<double>() / seconds[run]);
+      }
       std::map<std::string, double> bytes;
       for (const auto& link : t.at("links"))
         bytes[link.at("link")] = link.at("bytes").get<double>();

@@ -15,7 +15,6 @@
 #include "hosts/scene/gen.h"
 #include "hosts/scene/nff.h"
 #include "hosts/simd/pass.h"
-#include "hosts/trace/exact.h"
 #include "hosts/trace/image.h"
 #include "hosts/wavefront/program.h"
 #include "tests/farm/mpi_launch.h"
@@ -119,18 +118,11 @@ void ExpectEveryCertainHitExact(const Scene& scene, int64_t minRays = 1000,
       ++uncertain;
       return;
     }
-    int best = -1;
-    exact::Real bestT = 0;
-    for (int i = 0; i < int(scene.objects.size()); ++i) {
-      // A sphere is convex; a plane is met once.
-      if (i == a.from && (a.outward || scene.objects[i].Kind() == ShapeKind::kPolygon)) continue;
-      const auto t = exact::ObjectHit(scene, i, a.origin, a.direction, a.epsilon);
-      if (t && (best < 0 || *t < bestT)) best = i, bestT = *t;
-    }
+    const int best = ExactFirstObject(scene, a);
     if (best != a.object) {
       if (wrong < 5)
         ADD_FAILURE() << "bounce " << a.bounce << " from " << a.from << " array " << a.object
-                      << " exact " << best << " t " << double(bestT) << " eps " << a.epsilon;
+                      << " exact " << best << " eps " << a.epsilon;
       ++wrong;
     }
   };

@@ -20,7 +20,6 @@
 
 #include "hosts/scene/gen.h"
 #include "hosts/simd/pass.h"
-#include "hosts/trace/exact.h"
 #include "hosts/trace/image.h"
 
 namespace {
@@ -86,14 +85,7 @@ void ExactCheck(int spheres, int stride) {
   options.audit = [&](const wavefront::AuditRay& a) {
     if (a.uncertain || seen++ % stride != 0) return;
     ++checked;
-    int best = -1;
-    exact::Real bestT = 0;
-    for (int i = 0; i < int(scene.objects.size()); ++i) {
-      if (i == a.from && a.outward) continue;
-      const auto t = exact::ObjectHit(scene, i, a.origin, a.direction, a.epsilon);
-      if (t && (best < 0 || *t < bestT)) best = i, bestT = *t;
-    }
-    wrong += best != a.object;
+    wrong += wavefront::ExactFirstObject(scene, a) != a.object;
   };
   std::vector<Vec3> pixels;
   TraceStats host;
