@@ -198,6 +198,11 @@ $(BIN)/bench_%: $(BUILD)/obj/tools/bench/%.o $(LIB_OBJS) | $(BIN)
 
 -include $(shell find $(BUILD)/obj -name '*.d' 2>/dev/null)
 
+# The built-in machine profiles are data files assembled into bitserial/profile.o (.incbin, which
+# the compiler's dependency list does not see): every build of that object depends on them.
+PROFILE_FILES := $(wildcard bitserial/profiles/*.json)
+$(BUILD)/obj/bitserial/profile.o $(BUILD)/smpi/obj/bitserial/profile.o $(BUILD)/fuzz/obj/bitserial/profile.o: $(PROFILE_FILES)
+
 # ---------------------------------------------------------------------------
 # The simulated build (docs/testbed.md): the same sources compiled a second time with
 # SimGrid's smpicxx into build/bin/zephyr-smpi, which smpirun runs on a platform file of the

@@ -2,8 +2,14 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "fixed/check.h"
 
@@ -17,96 +23,118 @@ constexpr const char* kMicroOpNames[kMicroOpCount] = {
 constexpr const char* kClassNames[kCycleClassCount] = {
     "alu", "internalMemory", "externalMemory", "communication", "reduction", "host"};
 
-using Table = std::map<std::string, std::pair<double, std::string>>;
+// ---- The built-in profiles: bitserial/profiles/*.json, assembled into the binary ------------
+// Each file's bytes and a terminating NUL become a hidden symbol (the assembler's .incbin, with
+// the path relative to the repository root, where every build compiles). The Makefile makes
+// this object depend on the files; ccache does not cache a source with .incbin.
+#define ZEPHYR_EMBED_PROFILE(symbol, path)                                                 \
+  __asm__(".pushsection .rodata\n.global " #symbol "\n.hidden " #symbol "\n.type " #symbol \
+          ", @object\n" #symbol ":\n.incbin \"" path "\"\n.byte 0\n.size " #symbol         \
+          ", . - " #symbol "\n.popsection\n");                                             \
+  extern "C" const char symbol[];
+ZEPHYR_EMBED_PROFILE(zephyr_profile_blitzen, "bitserial/profiles/blitzen.json")
+ZEPHYR_EMBED_PROFILE(zephyr_profile_mpp, "bitserial/profiles/mpp.json")
+ZEPHYR_EMBED_PROFILE(zephyr_profile_wavetracer, "bitserial/profiles/wavetracer.json")
 
-// ---- WaveTracer Zephyr -----------------------------------------------------------------
-// Facts: paper §5.1 (8192 PEs, 64x128 or 16x32x16, ~2 Kbit internal + 32 KB external per
-// PE). Nothing about its timing survives in any source we found (docs/background.md, "The
-// machine"), so every cost below is an ASSUMPTION, each with the reason for its value.
-Table WaveTracerTable() {
-  return {
-      {"clockHz",
-       {10e6, "assumed: an era-typical 10 MHz, as the Goodyear MPP (docs/background.md)"}},
-      {"physicalPes", {8192, "paper §5.1: two boards of 4096 one-bit PEs"}},
-      {"internalBitsPerPe", {2048, "paper §5.1: about 2 Kbit of internal memory per PE"}},
-      {"externalBitsPerPe", {32 * 1024 * 8, "paper §5.1: 32 KB of external memory per PE"}},
-      {"readInternal", {1, "assumed: one on-chip memory access per cycle, as on the MPP"}},
-      {"writeInternal", {1, "assumed: as readInternal"}},
-      {"readExternal",
-       {2,
-        "assumed: off-chip memory behind the PE chips, taken as twice an "
-        "on-chip access"}},
-      {"writeExternal", {2, "assumed: as readExternal"}},
-      {"aluStep",
-       {1,
-        "assumed: a PE does either a memory access or a logic step in a cycle "
-        "(conservative; the MPP overlaps them)"}},
-      {"flagOp", {1, "assumed: one cycle to clear/set/latch a PE flag, as on the MPP"}},
-      {"accumulatorRead",
-       {1,
-        "assumed: no shift register is documented for the Zephyr, so "
-        "the partial product lives in internal memory"}},
-      {"accumulatorWrite", {1, "assumed: as accumulatorRead"}},
-      {"activitySet", {1, "assumed: one cycle to load the activity flag, as a flagOp"}},
-      {"meshHop", {1, "assumed: nearest-neighbour wires move one bit per cycle, as on the MPP"}},
-      {"reduceBit",
-       {13,
-        "assumed: a global OR/count tree over 8192 PEs, one cycle per "
-        "level, log2(8192) = 13 levels"}},
-      {"broadcastBit", {1, "assumed: the controller puts a host bit on the instruction bus"}},
-      {"floatSubnormals",
-       {1,
-        "assumed: IEEE 754 gradual underflow (the paper does not say "
-        "how MultiC's multi float underflowed)"}},
-      {"hostPlane",
-       {2048,
-        "assumed: SCSI at 5 MB/s moves one 1 KB bit-plane in 204.8 us = "
-        "2048 cycles at 10 MHz"}},
-  };
+const std::map<std::string, std::string>& BuiltIns() {
+  static const std::map<std::string, std::string> builtIns = {
+      {"blitzen", zephyr_profile_blitzen},
+      {"mpp", zephyr_profile_mpp},
+      {"wavetracer", zephyr_profile_wavetracer}};
+  return builtIns;
 }
 
-// ---- Goodyear MPP ------------------------------------------------------------------------
-// Batcher, "Design of a Massively Parallel Processor", IEEE Trans. Computers C-29(9), 1980:
-// 128x128 PEs, 100 ns cycle, 1024 bits of RAM per PE, one memory access per cycle with the
-// full adder and the shift register working in the same cycle. With these costs the
-// engine's add and multiply schedules give 3n+1 and n^2+3n cycles (8-bit: 25 and 88), the
-// published 6553 and 1861 MOPS.
-Table MppTable() {
-  return {
-      {"clockHz", {10e6, "Batcher 1980: 100 ns cycle"}},
-      {"physicalPes", {16384, "Batcher 1980: 128x128 array"}},
-      {"internalBitsPerPe", {1024, "Batcher 1980: 1024 bits of RAM per PE"}},
-      {"externalBitsPerPe", {0, "Batcher 1980: no per-PE memory beyond the 1024-bit RAM"}},
-      {"readInternal", {1, "Batcher 1980: one RAM access per 100 ns cycle"}},
-      {"writeInternal", {1, "Batcher 1980: one RAM access per 100 ns cycle"}},
-      {"readExternal", {1, "unused: the MPP has no external PE memory (capacity 0)"}},
-      {"writeExternal", {1, "unused: the MPP has no external PE memory (capacity 0)"}},
-      {"aluStep", {0, "Batcher 1980: the full adder works in the cycle of the memory access"}},
-      {"flagOp", {1, "Batcher 1980: clearing/loading the C or G register takes a cycle"}},
-      {"accumulatorRead",
-       {0,
-        "Batcher 1980: the partial product circulates in the PE's "
-        "shift register, in the same cycle"}},
-      {"accumulatorWrite", {0, "Batcher 1980: as accumulatorRead"}},
-      {"activitySet", {1, "Batcher 1980: loading the G (mask) register takes a cycle"}},
-      {"meshHop", {1, "Batcher 1980: a bit-plane moves one PE per cycle on the mesh"}},
-      {"reduceBit", {1, "assumed: the sum-OR tree is pipelined, one plane per cycle"}},
-      {"broadcastBit", {1, "assumed: one cycle on the control unit's broadcast path"}},
-      {"floatSubnormals",
-       {0,
-        "assumed: the MPP (1980) predates IEEE 754 (1985) and its "
-        "gradual underflow; machines of its time flushed to zero"}},
-      {"hostPlane",
-       {128,
-        "Batcher 1980: planes enter and leave through the 128-bit-wide S "
-        "register columns, 128 bits per cycle"}},
+// ---- Where each key and value of a JSON text is: line and column by path --------------------
+// nlohmann's values carry no position, so the (already parsed, hence valid) text is scanned
+// once: every object key and every value gets its 1-based line and column, by dotted path
+// ("entries.readInternal.value", "entries.meshShapes.value.1").
+struct Position {
+  int line = 1, column = 1;
+};
+struct Positions {
+  std::map<std::string, Position> key, value;
+};
+Positions KeyPositions(const std::string& text) {
+  Positions at;
+  struct Frame {
+    bool object;
+    std::string base;  // the container's own path
+    std::string key;   // objects: the current key
+    int index = 0;     // arrays: the current element
+    bool expectKey = true;
   };
+  std::vector<Frame> stack;
+  auto join = [](const std::string& parent, const std::string& key) {
+    return parent.empty() ? key : parent + "." + key;
+  };
+  // The path of the value being read in the innermost container ("" at the top).
+  auto current = [&] {
+    if (stack.empty()) return std::string();
+    const Frame& f = stack.back();
+    return join(f.base, f.object ? f.key : std::to_string(f.index));
+  };
+  Position pos;
+  auto advance = [&](char c) {
+    if (c == '\n') {
+      ++pos.line;
+      pos.column = 1;
+    } else {
+      ++pos.column;
+    }
+  };
+  for (size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    const Position start = pos;
+    if (c == '"') {
+      std::string s;
+      advance(c);
+      for (++i; i < text.size() && text[i] != '"'; ++i) {
+        if (text[i] == '\\') advance(text[i++]);
+        s += text[i];
+        advance(text[i]);
+      }
+      advance('"');
+      if (!stack.empty() && stack.back().object && stack.back().expectKey) {
+        stack.back().key = s;
+        stack.back().expectKey = false;
+        at.key.emplace(current(), start);
+      } else {
+        at.value.emplace(current(), start);
+      }
+      continue;
+    }
+    if (c == '{' || c == '[') {
+      at.value.emplace(current(), start);
+      stack.push_back(Frame{.object = c == '{', .base = current(), .key = {}});
+    } else if (c == '}' || c == ']') {
+      stack.pop_back();
+    } else if (c == ',' && !stack.empty()) {
+      if (stack.back().object)
+        stack.back().expectKey = true;
+      else
+        ++stack.back().index;
+    } else if (c != ':' && !std::isspace(static_cast<unsigned char>(c))) {
+      // A number, true, false or null: one token.
+      at.value.emplace(current(), start);
+      while (i + 1 < text.size() && !std::strchr(",]} \t\r\n", text[i + 1])) advance(text[i++]);
+    }
+    advance(text[i]);
+  }
+  return at;
 }
 
-const std::map<std::string, Table (*)()>& Registry() {
-  static const std::map<std::string, Table (*)()> registry = {{"mpp", &MppTable},
-                                                              {"wavetracer", &WaveTracerTable}};
-  return registry;
+// Line and column of a byte offset (nlohmann's parse errors give one).
+Position PositionOf(const std::string& text, size_t byte) {
+  Position p;
+  for (size_t i = 0; i < std::min(byte, text.size()); ++i) {
+    if (text[i] == '\n') {
+      ++p.line;
+      p.column = 1;
+    } else {
+      ++p.column;
+    }
+  }
+  return p;
 }
 
 double ParseNumber(const std::string& text, const std::string& what) {
@@ -154,65 +182,265 @@ std::string MeshShape::Name() const {
   return s;
 }
 
-MachineProfile ProfileFromTable(const std::string& name, const Table& entries) {
-  MachineProfile p;
-  p.name = name;
-  auto take = [&](const std::string& key, std::string* note) {
-    auto it = entries.find(key);
-    if (it == entries.end())
-      throw UserError(fmt::format("machine profile '{}' lacks the entry '{}'", name, key));
-    if (note) *note = it->second.second;
-    return it->second.first;
-  };
-  p.clockHz = take("clockHz", nullptr);
-  p.physicalPes = static_cast<int>(take("physicalPes", nullptr));
-  p.internalBitsPerPe = static_cast<int64_t>(take("internalBitsPerPe", nullptr));
-  p.externalBitsPerPe = static_cast<int64_t>(take("externalBitsPerPe", nullptr));
-  for (int i = 0; i < kMicroOpCount; ++i) p.cost[i] = take(kMicroOpNames[i], &p.note[i]);
-  p.floatSubnormals = take("floatSubnormals", &p.floatNote) != 0;
-  for (auto& [key, value] : entries) {
-    bool known = key == "clockHz" || key == "physicalPes" || key == "internalBitsPerPe" ||
-                 key == "externalBitsPerPe" || key == "floatSubnormals";
-    for (int i = 0; i < kMicroOpCount; ++i) known |= key == kMicroOpNames[i];
-    if (!known)
-      throw UserError(fmt::format("machine profile '{}' has an unknown entry '{}'", name, key));
-  }
-  // The kernels load whole, aligned vectors of the widest target (8 words of 64 PEs on
-  // AVX-512), so a layer is a whole number of them (docs/bitserial.md; another multiple of 64
-  // crashed the AVX2 and AVX-512 kernels on the first add).
-  if (p.physicalPes <= 0 || p.physicalPes % 512 != 0)
-    throw UserError(
-        fmt::format("machine profile '{}': physicalPes must be a positive "
-                    "multiple of 512, got {}",
-                    name, p.physicalPes));
-  if (p.clockHz <= 0)
-    throw UserError(fmt::format("machine profile '{}': clockHz must be > 0", name));
-  if (name == "mpp")
-    p.shapes = {MeshShape{{128, 128}}};
-  else if (p.physicalPes == 8192)
-    p.shapes = {MeshShape{{64, 128}}, MeshShape{{16, 32, 16}}};
-  else
-    p.shapes = {MeshShape{{64, p.physicalPes / 64}}};
-  p.source = name == "mpp" ? "Batcher, Design of a Massively Parallel Processor, IEEE Trans. "
-                             "Computers C-29(9), 1980"
-                           : "paper §5.1 for the geometry; costs assumed (docs/background.md)";
-  return p;
+namespace {
+// The entries of a profile file, in the file's order: name, unit, and for the numbers the
+// range a value must lie in (docs/bitserial.md, "Machine profiles").
+struct EntrySpec {
+  const char* name;
+  const char* unit;
+};
+constexpr EntrySpec kGeometry[] = {{"clockHz", "Hz"},
+                                   {"physicalPes", "PEs"},
+                                   {"internalBitsPerPe", "bits"},
+                                   {"externalBitsPerPe", "bits"},
+                                   {"meshShapes", "PEs per axis, x fastest"},
+                                   {"floatSubnormals", "flag"}};
+constexpr int kGeometryEntries = 6;
+
+// What is wrong with `v` as the value of the numeric entry `key` ("" when nothing is); the one
+// rule for a file's entries and for --set.
+std::string RangeError(const std::string& key, double v) {
+  if (!std::isfinite(v)) return "expected a finite number";
+  if (key == "clockHz") return v > 0 && v <= 1e12 ? "" : "expected a clock above 0 Hz, up to 1e12";
+  if (key == "physicalPes")
+    return v == std::floor(v) && v >= 512 && v <= 0x1p24 && std::fmod(v, 512) == 0
+               ? ""
+               // The kernels load whole, aligned vectors of the widest target (8 words of 64
+               // PEs on AVX-512), so a layer is a whole number of them (docs/bitserial.md).
+               : "expected a positive multiple of 512 PEs, up to 2^24";
+  if (key == "internalBitsPerPe" || key == "externalBitsPerPe")
+    // At most 2^40 per PE (far beyond any machine; the cast to int64_t stays defined).
+    return v == std::floor(v) && v >= 0 && v <= 0x1p40
+               ? ""
+               : "expected a whole number of bits from 0 to 2^40";
+  if (key == "floatSubnormals") return v == 0 || v == 1 ? "" : "expected 0 or 1";
+  return v >= 0 && v <= 1e9 ? "" : "expected a cost from 0 to 1e9 cycles";
 }
 
-MachineProfile Profile(const std::string& name) {
-  auto it = Registry().find(name);
-  if (it == Registry().end()) {
-    std::string known;
-    for (auto& [n, f] : Registry()) known += (known.empty() ? "" : ", ") + n;
-    throw UserError(fmt::format("unknown machine profile '{}' (known: {})", name, known));
+// "64x128" -> {64, 128}; empty on a malformed shape.
+std::vector<int> ParseShape(const std::string& text) {
+  std::vector<int> extent;
+  size_t at = 0;
+  while (at <= text.size()) {
+    size_t x = text.find('x', at);
+    if (x == std::string::npos) x = text.size();
+    const std::string part = text.substr(at, x - at);
+    if (part.empty() || part.size() > 8 ||
+        part.find_first_not_of("0123456789") != std::string::npos)
+      return {};
+    extent.push_back(std::stoi(part));
+    if (extent.back() <= 0) return {};
+    at = x + 1;
   }
-  return ProfileFromTable(name, it->second());
+  return extent.size() <= 4 ? extent : std::vector<int>{};
+}
+
+// A number as a profile file writes it: whole values without a fraction.
+std::string NumberText(double v) {
+  if (v == std::floor(v) && std::fabs(v) < 0x1p53)
+    return fmt::format("{}", static_cast<int64_t>(v));
+  return fmt::format("{}", v);
+}
+
+class ProfileReader {
+ public:
+  ProfileReader(const std::string& text, const std::string& file) : text_(text), file_(file) {}
+
+  MachineProfile Read() {
+    nlohmann::json j;
+    try {
+      j = nlohmann::json::parse(text_);
+    } catch (const nlohmann::json::parse_error& e) {
+      const Position p = PositionOf(text_, e.byte == 0 ? 0 : e.byte - 1);
+      std::string what = e.what();
+      if (auto colon = what.find("syntax error"); colon != std::string::npos)
+        what = what.substr(colon);
+      throw UserError(fmt::format("{}:{}:{}: not valid JSON: {}", file_, p.line, p.column, what));
+    }
+    at_ = KeyPositions(text_);
+    MachineProfile p;
+    p.file = file_;
+    Keys(j, "", {"name", "description", "source", "entries"});
+    p.name = String(j, "name");
+    if (p.name.size() > 40 ||
+        p.name.find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789._-") != std::string::npos)
+      Fail("name", "expected up to 40 characters of a-z, 0-9, '.', '_', '-'");
+    p.description = String(j, "description");
+    p.source = String(j, "source");
+    const nlohmann::json& entries = j["entries"];
+    std::vector<std::string> names;
+    for (const EntrySpec& e : kGeometry) names.push_back(e.name);
+    for (int i = 0; i < kMicroOpCount; ++i) names.push_back(kMicroOpNames[i]);
+    Keys(entries, "entries", names);
+    auto number = [&](int g, std::string* note) {
+      const std::string path = std::string("entries.") + kGeometry[g].name;
+      const nlohmann::json& e = Entry(entries, kGeometry[g], note);
+      if (!e["value"].is_number())
+        Fail(path + ".value", "expected a number, got " + Kind(e["value"]));
+      const double v = e["value"].get<double>();
+      if (std::string err = RangeError(kGeometry[g].name, v); !err.empty())
+        Fail(path + ".value", err + ", got " + NumberText(v));
+      return v;
+    };
+    p.clockHz = number(0, &p.geometryNote[0]);
+    p.physicalPes = static_cast<int>(number(1, &p.geometryNote[1]));
+    p.internalBitsPerPe = static_cast<int64_t>(number(2, &p.geometryNote[2]));
+    p.externalBitsPerPe = static_cast<int64_t>(number(3, &p.geometryNote[3]));
+    {
+      const nlohmann::json& e = Entry(entries, kGeometry[4], &p.geometryNote[4]);
+      const std::string path = "entries.meshShapes.value";
+      if (!e["value"].is_array() || e["value"].empty())
+        Fail(path, "expected a list of mesh shapes such as [\"64x128\"], got " +
+                       (e["value"].is_array() ? std::string("an empty list") : Kind(e["value"])));
+      for (size_t k = 0; k < e["value"].size(); ++k) {
+        const std::string at = path + "." + std::to_string(k);
+        if (!e["value"][k].is_string())
+          Fail(at, "expected a shape such as \"64x128\", got " + Kind(e["value"][k]));
+        const std::string shape = e["value"][k].get<std::string>();
+        MeshShape m{ParseShape(shape)};
+        if (m.extent.empty())
+          Fail(at, "expected a shape of 1 to 4 positive extents such as \"64x128\", got \"" +
+                       shape + "\"");
+        if (static_cast<int64_t>(m.Size()) != p.physicalPes)
+          Fail(at, fmt::format("the shape {} has {} PEs, but physicalPes is {}", shape, m.Size(),
+                               p.physicalPes));
+        p.shapes.push_back(m);
+      }
+    }
+    p.floatSubnormals = number(5, &p.floatNote) != 0;
+    for (int i = 0; i < kMicroOpCount; ++i) {
+      const EntrySpec spec{kMicroOpNames[i], "cycles"};
+      const nlohmann::json& e = Entry(entries, spec, &p.note[i]);
+      const std::string path = std::string("entries.") + spec.name + ".value";
+      if (!e["value"].is_number()) Fail(path, "expected a number, got " + Kind(e["value"]));
+      p.cost[i] = e["value"].get<double>();
+      if (std::string err = RangeError(spec.name, p.cost[i]); !err.empty())
+        Fail(path, err + ", got " + NumberText(p.cost[i]));
+    }
+    return p;
+  }
+
+ private:
+  // At the value of `path` (`atKey`: at its key); a missing key at its parent's value (the
+  // nearest path that is in the text).
+  [[noreturn]] void Fail(const std::string& path, const std::string& what,
+                         bool atKey = false) const {
+    if (atKey && at_.key.count(path)) Throw(at_.key.at(path), path, what);
+    std::string at = path;
+    while (!at.empty() && !at_.value.count(at))
+      at = at.rfind('.') == std::string::npos ? "" : at.substr(0, at.rfind('.'));
+    Throw(at_.value.count(at) ? at_.value.at(at) : Position{}, path, what);
+  }
+  [[noreturn]] void Throw(const Position& p, const std::string& path,
+                          const std::string& what) const {
+    throw UserError(fmt::format("{}:{}:{}: {}: {}", file_, p.line, p.column,
+                                path.empty() ? "(top level)" : path, what));
+  }
+  static std::string Kind(const nlohmann::json& v) {
+    return v.is_null() ? "null" : std::string(v.type_name());
+  }
+  // `j` (at `path`) must be an object with exactly `keys`.
+  void Keys(const nlohmann::json& j, const std::string& path,
+            const std::vector<std::string>& keys) const {
+    if (!j.is_object()) Fail(path, "expected an object, got " + Kind(j));
+    auto join = [&](const std::string& k) { return path.empty() ? k : path + "." + k; };
+    for (auto it = j.begin(); it != j.end(); ++it)
+      if (std::find(keys.begin(), keys.end(), it.key()) == keys.end()) {
+        std::string known;
+        for (const std::string& k : keys) known += (known.empty() ? "" : ", ") + k;
+        Fail(join(it.key()), "unknown key (expected: " + known + ")", true);
+      }
+    for (const std::string& k : keys)
+      if (!j.contains(k)) Fail(join(k), "missing key");
+  }
+  std::string String(const nlohmann::json& j, const std::string& key,
+                     const std::string& path = "") const {
+    const std::string at = path.empty() ? key : path + "." + key;
+    if (!j[key].is_string()) Fail(at, "expected a string, got " + Kind(j[key]));
+    std::string s = j[key].get<std::string>();
+    if (s.empty()) Fail(at, "expected a non-empty string");
+    return s;
+  }
+  // One entry: {"value", "unit" (exactly spec.unit), "source"}.
+  const nlohmann::json& Entry(const nlohmann::json& entries, const EntrySpec& spec,
+                              std::string* source) const {
+    const std::string path = std::string("entries.") + spec.name;
+    const nlohmann::json& e = entries[spec.name];
+    Keys(e, path, {"value", "unit", "source"});
+    if (String(e, "unit", path) != spec.unit)
+      Fail(path + ".unit",
+           fmt::format("expected \"{}\", got \"{}\"", spec.unit, e["unit"].get<std::string>()));
+    *source = String(e, "source", path);
+    return e;
+  }
+
+  const std::string& text_;
+  const std::string& file_;
+  Positions at_;
+};
+}  // namespace
+
+MachineProfile ProfileFromJson(const std::string& text, const std::string& file) {
+  return ProfileReader(text, file).Read();
+}
+
+const std::string& BuiltInProfileText(const std::string& name) {
+  auto it = BuiltIns().find(name);
+  if (it == BuiltIns().end()) {
+    std::string known;
+    for (auto& [n, t] : BuiltIns()) known += (known.empty() ? "" : ", ") + n;
+    throw UserError(fmt::format(
+        "unknown machine profile '{}' (built in: {}; or a profile file's path)", name, known));
+  }
+  return it->second;
+}
+
+MachineProfile Profile(const std::string& nameOrFile) {
+  if (BuiltIns().count(nameOrFile))
+    return ProfileFromJson(BuiltIns().at(nameOrFile),
+                           "built-in bitserial/profiles/" + nameOrFile + ".json");
+  std::ifstream in(nameOrFile, std::ios::binary);
+  if (!in) {
+    // Not a built-in name and no file: the name is the likelier mistake unless it looks like a
+    // path.
+    if (nameOrFile.find('/') == std::string::npos && nameOrFile.find(".json") == std::string::npos)
+      BuiltInProfileText(nameOrFile);  // throws "unknown machine profile", listing them
+    throw UserError(fmt::format("machine profile file '{}': {}", nameOrFile, std::strerror(errno)));
+  }
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw UserError(fmt::format("machine profile file '{}': read error", nameOrFile));
+  return ProfileFromJson(text.str(), nameOrFile);
 }
 
 std::vector<std::string> ProfileNames() {
   std::vector<std::string> names;
-  for (auto& [n, f] : Registry()) names.push_back(n);
+  for (auto& [n, t] : BuiltIns()) names.push_back(n);
   return names;
+}
+
+std::string MachineProfile::FileText() const {
+  auto q = [](const std::string& s) { return nlohmann::json(s).dump(); };
+  auto entry = [&](const std::string& key, const std::string& value, const char* unit,
+                   const std::string& src, bool last) {
+    return fmt::format("    {}: {{\"value\": {}, \"unit\": {}, \"source\": {}}}{}\n", q(key), value,
+                       q(unit), q(src), last ? "" : ",");
+  };
+  std::string shapes;
+  for (const MeshShape& m : this->shapes) shapes += (shapes.empty() ? "" : ", ") + q(m.Name());
+  std::string s = fmt::format(
+      "{{\n  \"name\": {},\n  \"description\": {},\n  \"source\": {},\n  \"entries\": {{\n",
+      q(name), q(description), q(source));
+  const double geometry[] = {clockHz, double(physicalPes), double(internalBitsPerPe),
+                             double(externalBitsPerPe)};
+  for (int g = 0; g < 4; ++g)
+    s += entry(kGeometry[g].name, NumberText(geometry[g]), kGeometry[g].unit, geometryNote[g],
+               false);
+  s += entry("meshShapes", "[" + shapes + "]", kGeometry[4].unit, geometryNote[4], false);
+  s += entry("floatSubnormals", floatSubnormals ? "1" : "0", kGeometry[5].unit, floatNote, false);
+  for (int i = 0; i < kMicroOpCount; ++i)
+    s += entry(kMicroOpNames[i], NumberText(cost[i]), "cycles", note[i], i + 1 == kMicroOpCount);
+  return s + "  }\n}\n";
 }
 
 void MachineProfile::Override(const std::string& assignment) {
@@ -221,29 +449,37 @@ void MachineProfile::Override(const std::string& assignment) {
     throw UserError(fmt::format("profile override '{}': expected name=value", assignment));
   std::string key = assignment.substr(0, eq);
   double v = ParseNumber(assignment.substr(eq + 1), "profile override '" + assignment + "'");
+  auto check = [&] {
+    if (std::string err = RangeError(key, v); !err.empty())
+      throw UserError(fmt::format("profile override '{}': {}", assignment, err));
+  };
+  if (key == "physicalPes" || key == "meshShapes")
+    throw UserError(fmt::format(
+        "profile override '{}': the geometry ({}) is set in a profile file, with its mesh shapes "
+        "(zephyr profile show NAME prints one to edit)",
+        assignment, key));
   if (key == "clockHz") {
-    if (!(v > 0))
-      throw UserError(
-          fmt::format("profile override '{}': expected a clock above 0 Hz", assignment));
+    check();
     clockHz = v;
+    geometryNote[0] = "overridden at run time";
     return;
   }
   if (key == "internalBitsPerPe" || key == "externalBitsPerPe") {
-    // A whole number of bits, at most 2^40 per PE (far beyond any machine; the cast to
-    // int64_t stays defined).
-    if (v != std::floor(v) || v > 0x1p40)
-      throw UserError(fmt::format(
-          "profile override '{}': expected a whole number of bits from 0 to 2^40", assignment));
-    (key == "internalBitsPerPe" ? internalBitsPerPe : externalBitsPerPe) = static_cast<int64_t>(v);
+    check();
+    const bool internal = key == "internalBitsPerPe";
+    (internal ? internalBitsPerPe : externalBitsPerPe) = static_cast<int64_t>(v);
+    geometryNote[internal ? 2 : 3] = "overridden at run time";
     return;
   }
   if (key == "floatSubnormals") {
+    check();
     floatSubnormals = v != 0;
     floatNote = "overridden at run time";
     return;
   }
   for (int i = 0; i < kMicroOpCount; ++i)
     if (key == kMicroOpNames[i]) {
+      check();
       cost[i] = v;
       note[i] = "overridden at run time";
       return;

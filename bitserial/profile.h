@@ -1,10 +1,13 @@
 // bitserial/profile.h — machine profiles: the geometry and the cycle cost of every micro-op.
 //
 // Machine timing is data, not code (as a memory simulator keeps its DRAM presets): a profile is a
-// named table of micro-op costs plus the machine's geometry and clock. The engine never
+// file of micro-op costs plus the machine's geometry and clock, every entry with its value, unit
+// and source ("assumed: ..." where no source gives one). The built-in profiles are the files
+// bitserial/profiles/NAME.json, assembled into the binary so it runs from any directory; a user's
+// file of the same form is read by path (docs/bitserial.md, "Machine profiles"). The engine never
 // special-cases a machine; the MPP's published figures (Batcher 1980) fall out of the same
-// schedules as the WaveTracer's, with different numbers in the table. Any entry can be overridden
-// at run time ("name=value"); a profile with a missing entry is rejected naming it.
+// schedules as the WaveTracer's, with different numbers in the file (docs/validation.md). Any
+// numeric entry can be overridden at run time ("name=value").
 #pragma once
 
 #include <array>
@@ -72,8 +75,11 @@ struct MicroOpCounts {
 };
 
 struct MachineProfile {
-  std::string name;
-  std::string source;   // where the numbers come from
+  std::string name;         // "wavetracer", "mpp", "blitzen", or a user file's own name
+  std::string description;  // one line: what machine this is
+  std::string source;       // where the numbers come from
+  std::string
+      file;  // the file it was read from ("built-in bitserial/profiles/NAME.json" or a path)
   double clockHz = 0;   // cycles per second
   int physicalPes = 0;  // PEs in the array
   int64_t internalBitsPerPe = 0;
@@ -84,24 +90,35 @@ struct MachineProfile {
   // (bitserial/float.h). Table entry "floatSubnormals" (1 or 0) with its note.
   bool floatSubnormals = true;
   std::string floatNote;
+  // The sources of the geometry entries (clockHz, physicalPes, internalBitsPerPe,
+  // externalBitsPerPe, meshShapes), in that order.
+  std::array<std::string, 5> geometryNote{};
   std::array<double, kMicroOpCount> cost{};       // cycles per micro-op
   std::array<std::string, kMicroOpCount> note{};  // "Batcher 1980 ..." or "assumed: ..."
 
   double Cost(MicroOp op) const { return cost[static_cast<int>(op)]; }
-  // "readExternal=3": overrides one entry; throws UserError on an unknown name or value.
+  // "readExternal=3": overrides one numeric entry (its source becomes "overridden at run
+  // time"); throws UserError on an unknown name or a value out of the entry's range.
   void Override(const std::string& assignment);
   // The profile's table as readable text (one row per micro-op with its note).
   std::string Table() const;
+  // The profile as a profile file (the layout of bitserial/profiles/*.json, one entry per
+  // line): what `zephyr profile show` prints, and what ProfileFromJson reads back.
+  std::string FileText() const;
 };
 
-// Builds a named profile from its table ("wavetracer", "mpp"); throws UserError for an
-// unknown name (listing the known ones) or a table that lacks an entry (naming it).
-MachineProfile Profile(const std::string& name);
-std::vector<std::string> ProfileNames();
+// The profile named by a built-in name ("wavetracer", "mpp", "blitzen") or, for anything else,
+// read from that path (docs/bitserial.md). Throws UserError for an unknown name that is no
+// readable file (listing the built-in ones), or for a malformed file (ProfileFromJson).
+MachineProfile Profile(const std::string& nameOrFile);
+std::vector<std::string> ProfileNames();  // the built-in profiles, sorted
+// The text of a built-in profile's file (bitserial/profiles/NAME.json as built in); throws
+// UserError for an unknown name.
+const std::string& BuiltInProfileText(const std::string& name);
 
-// The check behind Profile(): every micro-op must have an entry. Exposed for the tests.
-// `entries` maps entry names to (cost, note).
-MachineProfile ProfileFromTable(
-    const std::string& name, const std::map<std::string, std::pair<double, std::string>>& entries);
+// Reads a profile file's text. `file` names it in errors, which are UserErrors of the form
+// "FILE:LINE:COLUMN: PATH: what is wrong" for invalid JSON, an unknown or missing key, a value
+// of the wrong type, unit or range (PATH as "entries.readInternal.value").
+MachineProfile ProfileFromJson(const std::string& text, const std::string& file);
 
 }  // namespace zephyr::bitserial

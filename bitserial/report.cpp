@@ -137,6 +137,9 @@ nlohmann::json CycleReport::Json() const {
   using nlohmann::json;
   json j;
   j["profile"] = profile_.name;
+  // A user's profile file is named by its path (a built-in one by its name alone).
+  if (!profile_.file.empty() && profile_.file.rfind("built-in ", 0) != 0)
+    j["profileFile"] = profile_.file;
   j["clockHz"] = profile_.clockHz;
   j["layers"] = Layers();
   j["totalCycles"] = TotalCycles();

@@ -186,7 +186,8 @@ CommandRegistration reg("cycles", [](CLI::App& program) {
   auto opts = std::make_shared<CyclesOptions>();
   CLI::App* cmd = program.add_subcommand(
       "cycles", "Print the machine cycles of one bit-serial operation on one virtual-PE layer");
-  cmd->add_option("--profile", opts->profile, "Machine profile (wavetracer, mpp)");
+  cmd->add_option("--machine,--profile", opts->profile,
+                  "Machine profile: a built-in name (zephyr profile list) or a profile file");
   cmd->add_option(
       "--op", opts->op,
       "Operation: add sub neg abs mul mul-uni square div sqrt compare min max select shift; "

@@ -42,8 +42,10 @@ void SimdFlags::AddTo(CLI::App& command, const std::string& helpPrefix, bool wit
                      "the pixels, else recompute), recompute (in double on the host), refine (a "
                      "second, wider "
                      "array pass on them first), keep, fail"));
-  added_.push_back(command.add_option("--machine", options_.profile,
-                                      helpPrefix + "machine profile (wavetracer, mpp)"));
+  added_.push_back(command.add_option(
+      "--machine", options_.profile,
+      helpPrefix + "machine profile: a built-in name (wavetracer, mpp, blitzen; zephyr "
+                   "profile list) or a profile file (docs/bitserial.md)"));
   added_.push_back(command.add_option(
       "--set", options_.profileOverrides,
       helpPrefix + "override an entry of the machine profile, NAME=VALUE (e.g. "

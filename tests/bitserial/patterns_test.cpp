@@ -57,15 +57,12 @@ const Geometry kGeometries[] = {
 MachineProfile ProfileOf(const Geometry& g) {
   const MachineProfile base = Profile(g.profile);
   if (g.physicalPes == 0) return base;
-  std::map<std::string, std::pair<double, std::string>> table = {
-      {"clockHz", {base.clockHz, ""}},
-      {"physicalPes", {double(g.physicalPes), "a test geometry"}},
-      {"internalBitsPerPe", {double(base.internalBitsPerPe), ""}},
-      {"externalBitsPerPe", {double(base.externalBitsPerPe), ""}},
-      {"floatSubnormals", {base.floatSubnormals ? 1.0 : 0.0, ""}}};
-  for (int i = 0; i < kMicroOpCount; ++i)
-    table[MicroOpName(static_cast<MicroOp>(i))] = {base.cost[i], ""};
-  return ProfileFromTable("test", table);
+  // The base profile's costs on another geometry, read back as a file (so the reader checks it).
+  MachineProfile p = base;
+  p.name = "test";
+  p.physicalPes = g.physicalPes;
+  p.shapes = {MeshShape{{64, g.physicalPes / 64}}};
+  return ProfileFromJson(p.FileText(), "test geometry");
 }
 
 // A pattern: one raw value per PE (two's complement, any int64; reduced to the format).

@@ -21,10 +21,13 @@ int main(int argc, char** argv) {
   std::string in, out, profile = "wavetracer";
   app.add_option("in", in, "Input PNG")->required();
   app.add_option("out", out, "Output PNG")->required();
-  app.add_option("--profile", profile, "Machine profile (wavetracer, mpp)");
+  app.add_option("--machine,--profile", profile,
+                 "Machine profile: a built-in name (wavetracer, mpp, blitzen) or a profile file");
+  std::vector<std::string> overrides;
+  app.add_option("--set", overrides, "Override a profile entry, NAME=VALUE (docs/bitserial.md)");
   CLI11_PARSE(app, argc, argv);
   try {
-    const examples::BlurResult r = examples::BlurPng(in, out, profile);
+    const examples::BlurResult r = examples::BlurPng(in, out, profile, overrides);
     fmt::print(
         "{}x{} pixels on a {}x{} virtual grid, {} ({} virtual-PE layers): equal to the "
         "plain C++ version; {:.0f} cycles per channel on the array; wrote {}\n",

@@ -56,11 +56,16 @@ struct BlurResult {
 
 // Blurs every channel of the PNG `in` on a machine of `profile` and writes `out`. UserError
 // for an unreadable or unwritable file, or if the array and the plain version differ.
-inline BlurResult BlurPng(const std::string& in, const std::string& out,
-                          const std::string& profile) {
+// `overrides` are --set's "name=value" entries (bitserial::MachineProfile::Override).
+inline BlurResult BlurPng(const std::string& in, const std::string& out, const std::string& profile,
+                          const std::vector<std::string>& overrides = {}) {
   const Image image = ReadPng(in);
-  const bitserial::MachineProfile prof = bitserial::Profile(profile);
+  bitserial::MachineProfile prof = bitserial::Profile(profile);
+  for (const std::string& s : overrides) prof.Override(s);
   const std::vector<int>& mesh = prof.shapes.at(0).extent;
+  if (mesh.size() != 2)
+    throw UserError("the blur maps an image onto a 2-D mesh; profile '" + prof.name +
+                    "' has the mesh " + prof.shapes.at(0).Name());
   BlurResult r;
   r.width = image.width, r.height = image.height;
   r.gridW = (image.width + mesh[0] - 1) / mesh[0] * mesh[0];

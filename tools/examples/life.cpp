@@ -25,10 +25,15 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 4096));
   app.add_option("--generations", generations, "Generations to run")->check(CLI::Range(0, 100000));
   app.add_option("--seed", seed, "Seed of the random first generation (one cell in three alive)");
-  app.add_option("--profile", profile, "Machine profile (wavetracer, mpp)");
+  app.add_option("--machine,--profile", profile,
+                 "Machine profile: a built-in name (wavetracer, mpp, blitzen) or a profile file");
+  std::vector<std::string> overrides;
+  app.add_option("--set", overrides, "Override a profile entry, NAME=VALUE (docs/bitserial.md)");
   CLI11_PARSE(app, argc, argv);
   try {
-    bitserial::Machine m(bitserial::Profile(profile), int64_t{size} * size);
+    bitserial::MachineProfile machine = bitserial::Profile(profile);
+    for (const std::string& s : overrides) machine.Override(s);
+    bitserial::Machine m(machine, int64_t{size} * size);
     const bitserial::MeshShape grid{{size, size}};
     bitserial::VirtualBlock(m, grid);  // refuse a size the mapping cannot place, up front
     std::mt19937_64 rng(seed);
