@@ -61,7 +61,7 @@ ZEPHYR := $(BIN)/zephyr
 TESTS  := $(BIN)/zephyr_tests
 
 # ---------------------------------------------------------------------------
-.PHONY: all binaries test run bench charts fuzz fuzz-smoke mutants clean help setup
+.PHONY: all binaries test run bench charts validate fuzz fuzz-smoke mutants clean help setup
 
 help: ## List the targets
 	@grep -hE '^[a-z][a-zA-Z_-]*:.*## ' Makefile | sed 's/:.*## /\t/' | \
@@ -104,6 +104,12 @@ bench: setup ## Build and run the benchmarks (figures printed; medians of repeat
 charts: setup ## Run the experiment sweeps and draw the charts under docs/results/ (QUICK=1: small; TESTBED=ufmg1992: modelled)
 	$(Q)$(MAKE) --no-print-directory -j$(JOBS) $(ZEPHYR) $(if $(TESTBED),$(ZEPHYR_SMPI_BIN))
 	$(Q)$(if $(TESTBED),TESTBED='$(TESTBED)' QUICK='$(QUICK)' bash tools/testbed/charts.sh,QUICK='$(QUICK)' bash tools/charts.sh)
+
+# The fidelity ledger (docs/validation.md): published figures against the model, the paper's
+# findings on the testbed sweep (run first, reusing the points docs/results/ already has).
+validate: setup ## Write docs/validation.md and docs/results/validation.png (FRESH=1: re-render the sweep)
+	$(Q)$(MAKE) --no-print-directory -j$(JOBS) $(ZEPHYR) $(ZEPHYR_SMPI_BIN)
+	$(Q)FRESH='$(FRESH)' bash tools/validate.sh
 
 # The NFF reader under libFuzzer with AddressSanitizer and UBSan (Debian's clang-14).
 # `make fuzz` runs FUZZ_RUNS inputs; `make test` runs a few seconds of it (fuzz-smoke).

@@ -1,0 +1,88 @@
+// hosts/cmd/validate.cpp — `zephyr validate`: the fidelity ledger (hosts/methods/ledger.h;
+// docs/validation.md), written by `make validate`.
+//
+//   zephyr validate --runs docs/results/testbed-ufmg1992/runs.csv --out docs/validation.md
+//                   --csv docs/results/validation.csv
+//   zephyr validate --runs ... --check tools/validation_recorded.csv   # fails if an error grew
+#include <CLI/CLI.hpp>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <sstream>
+#include <string>
+
+#include "fixed/check.h"
+#include "hosts/cmd/command.h"
+#include "hosts/io/output_file.h"
+#include "hosts/methods/ledger.h"
+
+namespace zephyr::methods {
+namespace {
+
+struct ValidateOptions {
+  std::string runs, out, csv, check;
+};
+
+// The recorded errors (tools/validation_recorded.csv: machine,operation,error_pct): a row whose
+// error grew past its record, or a recorded row the ledger lacks, fails.
+int CheckRecorded(const std::vector<LedgerRow>& rows, const std::string& file) {
+  std::ifstream in(file);
+  if (!in) throw UserError(file + ": cannot read the recorded errors");
+  std::string line;
+  std::getline(in, line);
+  int failed = 0, number = 1;
+  while (std::getline(in, line)) {
+    ++number;
+    if (line.empty()) continue;
+    const size_t a = line.find(','), b = line.rfind(',');
+    if (a == std::string::npos || a == b)
+      throw UserError(file + ":" + std::to_string(number) +
+                      ": expected machine,operation,error_pct");
+    const std::string machine = line.substr(0, a), op = line.substr(a + 1, b - a - 1);
+    const double recorded = std::stod(line.substr(b + 1));
+    const LedgerRow* row = nullptr;
+    for (const LedgerRow& r : rows)
+      if (r.machine == machine && r.operation == op) row = &r;
+    if (!row) {
+      std::fprintf(stderr, "validate: %s:%d: recorded row '%s / %s' is missing\n", file.c_str(),
+                   number, machine.c_str(), op.c_str());
+      ++failed;
+    } else if (std::fabs(row->errorPct) > std::fabs(recorded) + 1e-4) {  // recorded to 4 places
+      std::fprintf(stderr, "validate: %s / %s: error %.4f %% grew past the recorded %.4f %%\n",
+                   machine.c_str(), op.c_str(), row->errorPct, recorded);
+      ++failed;
+    }
+  }
+  std::printf("validate: %d rows checked against %s, %d worse\n", number - 1, file.c_str(), failed);
+  return failed;
+}
+
+CommandRegistration validateCommand("validate", [](CLI::App& program) {
+  auto* cmd = program.add_subcommand(
+      "validate", "The fidelity ledger: published figures against the model (docs/validation.md)");
+  auto o = std::make_shared<ValidateOptions>();
+  cmd->add_option("--runs", o->runs,
+                  "The testbed sweep's runs.csv (make charts TESTBED=ufmg1992) for the paper rows");
+  cmd->add_option("--out", o->out, "Write the ledger as Markdown here");
+  cmd->add_option("--csv", o->csv, "Write the ledger as CSV here");
+  cmd->add_option("--check", o->check,
+                  "Fail if a row's error grew past this file's (tools/validation_recorded.csv)");
+  cmd->callback([o] {
+    if (!o->out.empty()) CheckOutputPath("--out", o->out);
+    if (!o->csv.empty()) CheckOutputPath("--csv", o->csv);
+    std::vector<LedgerRow> rows = MachineRows();
+    if (!o->runs.empty())
+      for (LedgerRow& r : PaperRows(ReadRuns(o->runs))) rows.push_back(r);
+    const std::string csv = LedgerCsv(rows);
+    if (!o->out.empty()) WriteOutputFile(o->out, "ledger", LedgerMarkdown(rows, o->runs));
+    if (!o->csv.empty()) WriteOutputFile(o->csv, "ledger CSV", csv);
+    if (o->out.empty() && o->csv.empty()) std::fputs(csv.c_str(), stdout);
+    if (!o->check.empty() && CheckRecorded(rows, o->check) != 0)
+      throw UserError("the ledger got worse than " + o->check + " (rows above)");
+  });
+});
+
+}  // namespace
+}  // namespace zephyr::methods
