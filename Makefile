@@ -249,13 +249,14 @@ $(ZEPHYR_SMPI_BIN): $(SMPI_OBJS) | $(BIN)
 -include $(shell find $(SMPI_BUILD)/obj -name '*.d' 2>/dev/null)
 
 # ---------------------------------------------------------------------------
-# The emulator as a library (docs/programming.md, "Building a program on the library").
-# `make lib` archives the objects of fixed/ and bitserial/ already built for the engine (no second compile); `make install PREFIX=DIR`
+# The emulator as a library (docs/programming.md, "Building a program on the library") and
+# the kernel suite (docs/kernels.md). `make lib` archives the objects of fixed/ and
+# bitserial/ already built for the engine (no second compile); `make install PREFIX=DIR`
 # copies that archive, the public headers, the built-in profile files and a pkg-config file
 # `zephyr-bitserial.pc` under DIR (DESTDIR=... for staging), and writes the list of what it
 # installed (share/zephyr/installed-files) that `make uninstall PREFIX=DIR` removes. Static
 # only: a shared library would need every engine file compiled a second time with -fPIC.
-.PHONY: lib install uninstall
+.PHONY: lib install uninstall kernels
 PREFIX   ?= /usr/local
 PREFIX_ABS = $(abspath $(PREFIX))
 LIB_NAME := zephyr-bitserial
@@ -326,6 +327,11 @@ $(KERNELS_BIN): $(BUILD)/obj/tools/kernels/kernels.o $(LIB_OBJS) | $(BIN)
 	$(Q)$(CXX) $(ALL_CXXFLAGS) $^ -o $@ $(LDLIBS_ALL)
 
 # The install test (tests/tools/install_test.cpp) installs the archive the test binary's
-# build made and compares the out-of-tree Life with build/bin/example_life: both are built
-# with the tests (order-only: they do not relink the tests).
-$(TESTS): | $(LIB_A) $(BIN)/example_life
+# build made and compares the out-of-tree Life with build/bin/example_life; the kernel test
+# runs build/bin/kernels. All three are built with the tests (order-only: they do not
+# relink the tests).
+$(TESTS): | $(LIB_A) $(BIN)/example_life $(KERNELS_BIN)
+
+kernels: setup ## Run the kernel suite on every profile (bit-exact on every target, timed); print it and write docs/kernels.md
+	$(Q)$(MAKE) --no-print-directory -j$(JOBS) $(KERNELS_BIN)
+	$(Q)$(KERNELS_BIN) --markdown docs/kernels.md $(KERNELS_FLAGS)
