@@ -56,8 +56,9 @@ TEST(ToolsInstall, LifeBuiltOutOfTreeWithPkgConfigPrintsWhatTheInTreeBuildPrints
   // -o lib: install the archive as built (its objects are the test binary's own), without
   // looking at them: this make may have other compiler flags than the build's, and would
   // rebuild the engine.
-  const Shell install = RunShell("make --no-print-directory -s -C " + Quote(root) + " install PREFIX=" +
-                            Quote(prefix) + " BUILD=" + Quote(build) + " -o lib");
+  const Shell install =
+      RunShell("make --no-print-directory -s -C " + Quote(root) +
+               " install PREFIX=" + Quote(prefix) + " BUILD=" + Quote(build) + " -o lib");
   ASSERT_EQ(install.status, 0) << install.output;
   EXPECT_NE(install.output.find("installed"), std::string::npos) << install.output;
   const fs::path pc = prefix / "lib" / "pkgconfig" / "zephyr-bitserial.pc";
@@ -84,15 +85,17 @@ TEST(ToolsInstall, LifeBuiltOutOfTreeWithPkgConfigPrintsWhatTheInTreeBuildPrints
         all << "#include <" << fs::relative(f.path(), prefix / "include" / "zephyr").string()
             << ">\n";
   }
-  const Shell headers = RunShell(env + "g++ -std=c++20 -fsyntax-only all_headers.cpp $(pkg-config "
-                                  "--cflags zephyr-bitserial)");
+  const Shell headers = RunShell(env +
+                                 "g++ -std=c++20 -fsyntax-only all_headers.cpp $(pkg-config "
+                                 "--cflags zephyr-bitserial)");
   EXPECT_EQ(headers.status, 0) << headers.output;
 
   // docs/programming.md's command, on the two files of the example and nothing else.
   fs::copy_file(root / "tools" / "examples" / "life.cpp", src / "life.cpp");
   fs::copy_file(root / "tools" / "examples" / "life.h", src / "life.h");
-  const Shell compile = RunShell(env + "g++ -std=c++20 life.cpp -o life $(pkg-config --cflags --libs "
-                                  "zephyr-bitserial)");
+  const Shell compile = RunShell(env +
+                                 "g++ -std=c++20 life.cpp -o life $(pkg-config --cflags --libs "
+                                 "zephyr-bitserial)");
   ASSERT_EQ(compile.status, 0) << compile.output;
   const std::string args = " --size 128 --generations 5 --seed 7";
   const Shell outside = RunShell(Quote(src / "life") + args);
@@ -103,7 +106,7 @@ TEST(ToolsInstall, LifeBuiltOutOfTreeWithPkgConfigPrintsWhatTheInTreeBuildPrints
   EXPECT_EQ(outside.output, inside.output);
 
   const Shell uninstall = RunShell("make --no-print-directory -s -C " + Quote(root) +
-                              " uninstall PREFIX=" + Quote(prefix) + " BUILD=" + Quote(build));
+                                   " uninstall PREFIX=" + Quote(prefix) + " BUILD=" + Quote(build));
   EXPECT_EQ(uninstall.status, 0) << uninstall.output;
   EXPECT_FALSE(fs::exists(prefix / "include" / "zephyr"));  // PREFIX/include itself stays
   EXPECT_FALSE(fs::exists(pc));
