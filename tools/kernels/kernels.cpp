@@ -16,6 +16,7 @@
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <cctype>
 #include <fstream>
 #include <map>
 #include <set>
@@ -184,7 +185,8 @@ int main(int argc, char** argv) {
       "to five), *plain C++ s* the plain version's (best of batches), timed in the same "
       "run on the same inputs. Sizes: one layer (the profile's PEs) and 2^20 elements, or "
       "the largest power-of-two number of layers whose program fits the profile's PE "
-      "memory (the MPP has 1024 bits per PE and no external memory). Every result equals "
+      "memory (the MPP has 1024 bits per PE and no external memory); the PIM suites' own "
+      "default input sizes are not reproduced. Every result equals "
       "the plain C++ version's bit for bit, with the same cycles, on every Highway target "
       "of this CPU: {}.\n\n"
       "Host: {} ({} hardware threads); load average at the start {}.\n",
@@ -230,7 +232,9 @@ int main(int argc, char** argv) {
     fmt::print("{}", TextTable(rows));
     for (const auto& n : notes) fmt::print("  {}\n", n);
     fmt::print("\n");
-    md += fmt::format("\n## {} (`{}`)\n\n{}.\n\n{}", k->Title(), k->Name(), k->What(),
+    std::string what = k->What();
+    what[0] = static_cast<char>(std::toupper(static_cast<unsigned char>(what[0])));
+    md += fmt::format("\n## {} (`{}`)\n\n{}.\n\n{}", k->Title(), k->Name(), what,
                       MarkdownTable(rows));
     for (const auto& n : notes) md += fmt::format("\n{}\n", n);
   }
