@@ -258,3 +258,91 @@ $(ZEPHYR_SMPI_BIN): $(SMPI_OBJS) | $(BIN)
 	$(Q)strip --strip-debug $@  # smpirun copies the program once per rank
 
 -include $(shell find $(SMPI_BUILD)/obj -name '*.d' 2>/dev/null)
+
+# ---------------------------------------------------------------------------
+# The emulator as a library (docs/programming.md, "Building a program on the library") and
+# the kernel suite (docs/kernels.md). `make lib` archives the objects of fixed/ and
+# bitserial/ already built for the engine (no second compile); `make install PREFIX=DIR`
+# copies that archive, the public headers, the built-in profile files and a pkg-config file
+# `zephyr-bitserial.pc` under DIR (DESTDIR=... for staging), and writes the list of what it
+# installed (share/zephyr/installed-files) that `make uninstall PREFIX=DIR` removes. Static
+# only: a shared library would need every engine file compiled a second time with -fPIC.
+.PHONY: lib install uninstall kernels
+PREFIX   ?= /usr/local
+PREFIX_ABS = $(abspath $(PREFIX))
+LIB_NAME := zephyr-bitserial
+LIB_A    := $(BUILD)/lib/lib$(LIB_NAME).a
+LIB_A_OBJS = $(filter $(BUILD)/obj/fixed/% $(BUILD)/obj/bitserial/%,$(LIB_OBJS))
+# The headers a program includes, with every header they include (the install test compiles
+# them alone from the prefix). Not installed: bitserial/internals.h (the flag planes and the
+# uncharged conversion the engine's files share) and bitserial/serial.h (the bit-serial unit
+# the float operations are written on) — no public header includes either.
+PUBLIC_HEADERS := fixed/format.h fixed/float.h fixed/check.h fixed/named.h fixed/reference.h \
+  bitserial/multi.h bitserial/float.h bitserial/machine.h bitserial/report.h \
+  bitserial/profile.h bitserial/memory.h bitserial/cost.h bitserial/kernels.h bitserial/blocks.h
+# The built-in profiles' data files, when the tree has them (a wildcard: none is fine).
+PROFILE_FILES = $(wildcard bitserial/profiles/*.json)
+# What a program needs besides the archive: Highway and fmt (machine.h includes Highway's
+# allocator; the engine prints with fmt), nlohmann-json (report.h) when it has a .pc file,
+# libgomp for the layer blocks (bitserial/blocks.cpp); Boost's headers need no flag.
+PC_REQUIRES = libhwy fmt $(if $(shell pkg-config --exists nlohmann_json 2>/dev/null && echo y),nlohmann_json)
+LIB_VERSION = 0.0.0-git$(shell git rev-parse --short HEAD 2>/dev/null || echo unknown)
+INSTALL_ROOT = $(DESTDIR)$(PREFIX_ABS)
+INSTALLED_LIST = $(INSTALL_ROOT)/share/zephyr/installed-files
+
+lib: ## Build the static library build/lib/libzephyr-bitserial.a (fixed/ and bitserial/)
+	$(Q)$(MAKE) --no-print-directory -j$(JOBS) $(LIB_A)
+
+$(LIB_A): $(LIB_A_OBJS)
+	$(call say,AR,$@)
+	@mkdir -p $(@D)
+	$(Q)rm -f $@ && ar rcs $@ $^
+
+install: lib ## Install the library, headers, profiles and zephyr-bitserial.pc under PREFIX (default /usr/local)
+	$(Q)set -e; root='$(INSTALL_ROOT)'; list=$$(mktemp); \
+	  for h in $(PUBLIC_HEADERS); do \
+	    install -D -m 644 $$h "$$root/include/zephyr/$$h"; echo "include/zephyr/$$h" >> $$list; done; \
+	  install -D -m 644 $(LIB_A) "$$root/lib/lib$(LIB_NAME).a"; echo "lib/lib$(LIB_NAME).a" >> $$list; \
+	  for p in $(PROFILE_FILES); do \
+	    install -D -m 644 $$p "$$root/share/zephyr/profiles/$$(basename $$p)"; \
+	    echo "share/zephyr/profiles/$$(basename $$p)" >> $$list; done; \
+	  mkdir -p "$$root/lib/pkgconfig"; \
+	  printf '%s\n' 'prefix=$(PREFIX_ABS)' 'includedir=$${prefix}/include/zephyr' \
+	    'libdir=$${prefix}/lib' 'profilesdir=$${prefix}/share/zephyr/profiles' '' \
+	    'Name: $(LIB_NAME)' \
+	    'Description: The emulated WaveTracer Zephyr bit-serial SIMD array and its MultiC-like API' \
+	    'Version: $(LIB_VERSION)' 'Requires: $(PC_REQUIRES)' \
+	    'Libs: -L$${libdir} -l$(LIB_NAME) -lgomp -lpthread' 'Cflags: -I$${includedir}' \
+	    > "$$root/lib/pkgconfig/$(LIB_NAME).pc"; \
+	  echo "lib/pkgconfig/$(LIB_NAME).pc" >> $$list; \
+	  mkdir -p "$$(dirname '$(INSTALLED_LIST)')"; mv $$list '$(INSTALLED_LIST)'; chmod 644 '$(INSTALLED_LIST)'; \
+	  echo "installed $$(wc -l < '$(INSTALLED_LIST)') files under $$root (list: $(INSTALLED_LIST))"
+
+uninstall: ## Remove what `make install PREFIX=...` installed (its share/zephyr/installed-files)
+	$(Q)set -e; root='$(INSTALL_ROOT)'; \
+	  if [ ! -f '$(INSTALLED_LIST)' ]; then echo "uninstall: nothing installed under $$root ($(INSTALLED_LIST) not found)" >&2; exit 1; fi; \
+	  while read -r f; do rm -f "$$root/$$f"; done < '$(INSTALLED_LIST)'; rm -f '$(INSTALLED_LIST)'; \
+	  for d in include/zephyr/fixed include/zephyr/bitserial include/zephyr share/zephyr/profiles share/zephyr lib/pkgconfig; do \
+	    rmdir "$$root/$$d" 2>/dev/null || true; done; \
+	  echo "removed the installed files under $$root"
+
+
+# The kernel suite: each kernel of tools/kernels/kernels.h on every built-in profile, checked
+# against plain C++ on every Highway target, timed against it; writes docs/kernels.md.
+KERNELS_BIN := $(BIN)/kernels
+KERNELS_FLAGS ?=
+binaries: $(KERNELS_BIN)
+.SECONDARY: $(BUILD)/obj/tools/kernels/kernels.o
+$(KERNELS_BIN): $(BUILD)/obj/tools/kernels/kernels.o $(LIB_OBJS) | $(BIN)
+	$(call say,LINK,$@)
+	$(Q)$(CXX) $(ALL_CXXFLAGS) $^ -o $@ $(LDLIBS_ALL)
+
+# The install test (tests/tools/install_test.cpp) installs the archive the test binary's
+# build made and compares the out-of-tree Life with build/bin/example_life; the kernel test
+# runs build/bin/kernels. All three are built with the tests (order-only: they do not
+# relink the tests).
+$(TESTS): | $(LIB_A) $(BIN)/example_life $(KERNELS_BIN)
+
+kernels: setup ## Run the kernel suite on every profile (bit-exact on every target, timed); print it and write docs/kernels.md
+	$(Q)$(MAKE) --no-print-directory -j$(JOBS) $(KERNELS_BIN)
+	$(Q)$(KERNELS_BIN) --markdown docs/kernels.md $(KERNELS_FLAGS)

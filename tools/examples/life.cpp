@@ -6,7 +6,10 @@
 // Runs the program of tools/examples/life.h on a machine with one virtual PE per cell,
 // checks every generation against the plain C++ version, and prints the population and
 // the cycle report. Exit 1 if the two ever differ, 2 on bad arguments.
-#include "tools/examples/life.h"
+//
+// It includes only the installed API and its own header (by its own directory, so the two
+// files build anywhere: docs/programming.md, "Building a program on the library").
+#include "life.h"
 
 #include <fmt/format.h>
 
