@@ -280,8 +280,7 @@ LIB_A_OBJS = $(filter $(BUILD)/obj/fixed/% $(BUILD)/obj/bitserial/%,$(LIB_OBJS))
 PUBLIC_HEADERS := fixed/format.h fixed/float.h fixed/check.h fixed/named.h fixed/reference.h \
   bitserial/multi.h bitserial/float.h bitserial/machine.h bitserial/report.h \
   bitserial/profile.h bitserial/memory.h bitserial/cost.h bitserial/kernels.h bitserial/blocks.h
-# The built-in profiles' data files, when the tree has them (a wildcard: none is fine).
-PROFILE_FILES = $(wildcard bitserial/profiles/*.json)
+# The built-in profiles' data files (PROFILE_FILES, above) are installed too.
 # What a program needs besides the archive: Highway and fmt (machine.h includes Highway's
 # allocator; the engine prints with fmt), nlohmann-json (report.h) when it has a .pc file,
 # libgomp for the layer blocks (bitserial/blocks.cpp); Boost's headers need no flag.
