@@ -23,6 +23,13 @@ Vec3 Affine::ApplyTransposed(const Vec3& v) const {
           m[0][2] * v.x + m[1][2] * v.y + m[2][2] * v.z};
 }
 
+double Affine::LinearNormInf() const {
+  double norm = 0;
+  for (int i = 0; i < 3; ++i)
+    norm = std::max(norm, std::abs(m[i][0]) + std::abs(m[i][1]) + std::abs(m[i][2]));
+  return norm;
+}
+
 double Affine::Determinant() const {
   return m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
          m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +

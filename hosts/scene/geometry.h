@@ -85,6 +85,8 @@ struct Affine {
   // n in object space maps to (A⁻¹)ᵀ n, i.e. inverse.ApplyTransposed(n)).
   Vec3 ApplyTransposed(const Vec3& v) const;
   double Determinant() const;  // of the linear part (may overflow or underflow)
+  // ‖A‖∞ of the linear part: the largest row sum of |entries| (|A v|∞ <= this · |v|∞).
+  double LinearNormInf() const;
   // A power of two 2^k with max |A_ij| <= 2^k < 2 max |A_ij| over the linear part A (1 when
   // A is zero): A / LinearScale() has entries in [-1, 1], exactly (only the exponent moves).
   double LinearScale() const;

@@ -82,4 +82,18 @@ LinearForm MakeLinear(const Vec3& c, const PassFormats& pf) {
   return l;
 }
 
+ConeDivision PlanDivision(double eN, double eD, double tFar, double target, double freeThreshold,
+                          int frac) {
+  const double u = std::ldexp(1.0, -frac);
+  ConeDivision v;
+  v.eN = eN, v.eD = eD;
+  v.dStar = std::max({4 * eD, eD + (eN + 2 * tFar * eD) / target, freeThreshold});
+  const double eta = eD / v.dStar, eps = eN / v.dStar;
+  v.tCut = tFar * (1 + eta) + eps + u;  // floor division: N/D in [t, t + u)
+  v.tRange = (v.tCut + eps) / (1 - eta);
+  v.tError = eps + v.tRange * eta + u;
+  v.out = Format::Signed(IntBitsFor(v.tCut) + 1, frac);
+  return v;
+}
+
 }  // namespace zephyr::simd

@@ -74,6 +74,24 @@ double FloatMaxFinite(const fixed::FloatFormat& f);
 // zero); +inf when m reaches f's largest finite value (the result may overflow).
 double FloatRoundErr(const fixed::FloatFormat& f, double m);
 
+// One division t = N/D (a cone's roots, here and in the wavefront, hosts/wavefront), decided
+// per PE against a threshold D* on |D| (docs/simd.md, "Error bounds", cone). With
+// |N − N_exact| <= eN and |D − D_exact| <= eD:
+//  - |D| >= D*: |t − t_exact| <= (eN + |t_exact|·eD)/|D| <= eps + |t_exact|·eta (eta =
+//    eD/D*, eps = eN/D*). A computed |t| >= tCut means |t_exact| >= tFar (no point of the
+//    cone is that far: the root is not a hit); below it |t_exact| <= tRange and the error is
+//    at most tError.
+//  - |D| < D*: the root is no hit when certainly outside [tNear, tFar]; else the PE is
+//    uncertain.
+// D* is the largest of 4·eD, the one that makes the error `target` at tFar, and
+// `freeThreshold` (a bound |D| is known to exceed anyway); frac: the quotient's fraction bits.
+struct ConeDivision {
+  double eN = 0, eD = 0, dStar = 0, tCut = 0, tRange = 0, tError = 0;
+  fixed::Format out;  // the quotient (holds 2·tCut; saturation means "beyond")
+};
+ConeDivision PlanDivision(double eN, double eD, double tFar, double target, double freeThreshold,
+                          int frac);
+
 // One linear form c·d of the direction with uni coefficients c (rounded to nearest): the
 // computed value is within `err` of the exact c·d̂ along the exact unit direction, and
 // |value| <= max; `format` holds it.

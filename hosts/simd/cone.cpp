@@ -18,33 +18,6 @@ using fixed::Format;
 
 namespace {
 
-// One division t = N/D of the cone program, decided per PE against a threshold D* on |D|
-// (docs/simd.md, "Error bounds", cone). With |N − N_exact| <= eN and |D − D_exact| <= eD:
-//  - |D| >= D*: |t − t_exact| <= (eN + |t_exact|·eD)/|D| <= eps + |t_exact|·eta (eta =
-//    eD/D*, eps = eN/D*). A computed |t| >= tCut means |t_exact| >= tFar (no point of the
-//    cone is that far: the root is not a hit); below it |t_exact| <= tRange and the error is
-//    at most tError.
-//  - |D| < D*: the root is no hit when certainly outside [tNear, tFar] (Outside); else the
-//    PE is uncertain.
-struct ConeDivision {
-  double eN = 0, eD = 0, dStar = 0, tCut = 0, tRange = 0, tError = 0;
-  Format out;  // the quotient (holds 2·tCut; saturation means "beyond")
-};
-
-ConeDivision PlanDivision(double eN, double eD, double tFar, double target, double freeThreshold,
-                          int frac) {
-  const double u = std::ldexp(1.0, -frac);
-  ConeDivision v;
-  v.eN = eN, v.eD = eD;
-  v.dStar = std::max({4 * eD, eD + (eN + 2 * tFar * eD) / target, freeThreshold});
-  const double eta = eD / v.dStar, eps = eN / v.dStar;
-  v.tCut = tFar * (1 + eta) + eps + u;  // floor division: N/D in [t, t + u)
-  v.tRange = (v.tCut + eps) / (1 - eta);
-  v.tError = eps + v.tRange * eta + u;
-  v.out = Format::Signed(IntBitsFor(v.tCut) + 1, frac);
-  return v;
-}
-
 // Per-PE error ladders (docs/simd.md, "Error bounds", cones). The object-wide bounds hold at
 // the edge of what is certified: the root's error eDisc/√G at the grazing band's edge and a
 // quotient's (eN + |t|·eD)/|D| at the divisor's threshold D*. Most PEs are far from both: rung

@@ -131,14 +131,6 @@ struct Prepared {
   }
 };
 
-// ‖A‖∞ of an affine map's linear part: the largest row sum of |entries|.
-double LinearNormInf(const Affine& a) {
-  double norm = 0;
-  for (int i = 0; i < 3; ++i)
-    norm = std::max(norm, std::abs(a.m[i][0]) + std::abs(a.m[i][1]) + std::abs(a.m[i][2]));
-  return norm;
-}
-
 template <typename T>
 Prepared<T> Prepare(const Primitive& p) {
   using V = Vec3T<T>;
@@ -173,7 +165,7 @@ Prepared<T> Prepare(const Primitive& p) {
     const Affine inv = p.transform->Inverse();
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j) r.inverse[i][j] = T(inv.m[i][j]);
-    const double norm = LinearNormInf(*p.transform);
+    const double norm = p.transform->LinearNormInf();
     Vec3 anchor;
     if (auto* s = std::get_if<Sphere>(&p.shape)) {
       anchor = s->centre;

@@ -21,6 +21,275 @@ using fixed::Format;
 using simd::IntBitsFor;
 using simd::Tight;
 
+namespace {
+
+// 1/|m| of a patch's interpolated normal below 2^8 (its vertex normals scaled to length <= 1;
+// a shorter m, normals nearly opposite, overflows the division: the ray is flagged).
+constexpr int kPatchNormalBits = 8;
+
+// The extra fraction bits of an ellipsoid's object space (PlanEllipsoid) and of a cone's local
+// frame (PlanCone: its discriminant has no Hearn–Baker form, its terms are as large as the
+// scene's squares, and its error must stay far below its grazing band).
+constexpr int kEllipsoidExtraBits = 10, kConeExtraBits = 20;
+
+// An ellipsoid's object space and bounds (docs/wavefront.md, "Ellipsoids"): the primary
+// pass's ellipsoid analysis (hosts/simd/ellipsoid.cpp) with the origin a multi too. Along the
+// array's own ray (o, d exact; |o_j| <= extent, |d|² within δ of 1): o − anchor carries the
+// anchor's rounding (u/2), each of M's entries is rounded to nearest (u/2) and each product
+// floor-rounded (u); the reference maps the ray through the scene's double T⁻¹, covered by a
+// relative 1e-12. Then f·d', f×d', |d'|² and r²|d'|² by MulErr / SquareErr, the band from
+// GrazingBand with the primary pass's radius/8 floor, and t = num/|d'|² with |d'|² >= ddMin
+// (σ_min(M) >= 1/‖T‖_F).
+SphereTerms PlanEllipsoid(const Primitive& o, const Sphere& s, const std::vector<Light>& lights,
+                          double extent, double diameter, const SecondaryPlan& p, int F) {
+  // The object space at Fl = F + kEllipsoidExtraBits fraction bits, M's entries at Fl + 4:
+  // o' is as large as the scene (|o − anchor| up to its diameter) and enters the cross
+  // product, whose error sets the grazing band and the root's error; at F they would give
+  // t errors of 0.1 at 64×64 with the eye 8 away (F = 18).
+  const int Fl = F + kEllipsoidExtraBits, Fm = Fl + 4;
+  const double u = std::ldexp(1.0, -F), ul = std::ldexp(1.0, -Fl), um = std::ldexp(1.0, -Fm);
+  const double delta = p.directionError;
+  const Affine inv = o.transform->Inverse();
+  const Vec3 anchor = o.transform->ApplyPoint(s.centre);
+  SphereTerms t;
+  EllipsoidTerms e;
+  double fn = 0;  // ‖T‖_F²
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) fn += o.transform->m[i][j] * o.transform->m[i][j];
+  const double dl = 1 + delta;  // |d_j| <= |d| <= √(1 + δ)
+  double eO[3], mO[3], eD[3], mD[3];
+  for (int k = 0; k < 3; ++k) {
+    e.anchor[k] = Tight(anchor[k], Fl);
+    eO[k] = mO[k] = eD[k] = mD[k] = 0;
+    for (int j = 0; j < 3; ++j) {
+      e.inverse[k][j] = Tight(inv.m[k][j], Fm);
+      const double a = std::abs(inv.m[k][j]), x = extent + std::abs(anchor[j]) + ul / 2;
+      eO[k] += simd::MulErr(x, ul / 2, a, um / 2, ul);
+      eD[k] += simd::MulErr(dl, 0, a, um / 2, ul);
+      mO[k] += a * x, mD[k] += a * dl;
+    }
+    eO[k] += 1e-12 * (mO[k] + 1), eD[k] += 1e-12 * (mD[k] + 1);
+    mO[k] += eO[k], mD[k] += eD[k];
+  }
+  e.offset = Format::Signed(p.intBits + 1, Fl);
+  double eTcaN = 0, eCross = 0, eDd = 0, oo = 0, ddMax = 0;
+  for (int k = 0; k < 3; ++k) {
+    const int i = (k + 1) % 3, j = (k + 2) % 3;
+    eTcaN += simd::MulErr(mO[k], eO[k], mD[k], eD[k], ul);
+    eCross = std::max(eCross, simd::MulErr(mO[i], eO[i], mD[j], eD[j], ul) +
+                                  simd::MulErr(mO[j], eO[j], mD[i], eD[i], ul));
+    eDd += simd::SquareErr(mD[k], eD[k], ul);
+    oo += mO[k] * mO[k], ddMax += mD[k] * mD[k];
+  }
+  ddMax += eDd;
+  const double ddMin = (1 - delta) / fn - eDd;
+  if (!(ddMin > 0))
+    throw UserError(
+        o.where.ToString() + ": this ellipsoid is too thin for the array's rays at " +
+        std::to_string(F) +
+        " fraction bits (|T⁻¹d|² may round to 0): give the secondary rays more fraction "
+        "bits (docs/wavefront.md, \"Ellipsoids\")");
+  const double r = s.radius, r2 = r * r;
+  const int R = IntBitsFor(r * std::sqrt(ddMax));
+  for (int k = 0; k < 3; ++k) {
+    e.local[k] = Format::Signed(IntBitsFor(mO[k]) + 1, Fl);
+    e.dLocal[k] = Format::Signed(IntBitsFor(mD[k]) + 1, Fl);
+  }
+  e.products = Format::Signed(IntBitsFor(std::sqrt(oo * ddMax)) + 1, Fl);
+  e.dd = Format::Unsigned(IntBitsFor(ddMax + 1), Fl);
+  e.numerator = Format::Signed(e.products.intBits + 1, Fl);
+  e.fracBits = Fl;
+  t.clamped = Format::Signed(R, Fl), t.square = Format::Unsigned(2 * R + 2, Fl);
+  t.disc = Format::Signed(2 * R + 2, Fl), t.root = Format::Unsigned(R + 1, Fl);
+  t.r2 = Tight(r2, Fl);
+  const double eR2dd = r2 * eDd + ddMax * ul / 2 + ul;
+  const auto [band, eDisc] =
+      simd::GrazingBand(r2 * ddMax, r2 * ddMin / 64, eCross, eR2dd, std::ldexp(1.0, R), ul);
+  t.grazeBand = band;
+  const double eNum = eTcaN + eDisc / std::sqrt(band) + ul;
+  const double tFar = diameter / (1 - delta);
+  t.tError = eNum / ddMin + tFar * eDd / ddMin + u;
+  t.slack = t.tError + 2 * std::sqrt(band + eDisc) / ddMin + u;
+  for (const Light& l : lights)
+    t.lightOutside.push_back(Length(inv.ApplyVector(l.position - anchor)) > r);
+  // The normal Mᵀ·o' scaled by 1/(r·‖M‖_F): |·| <= 1 (|o'| = r on the surface) and
+  // >= 1/(‖M‖_F·‖T‖_F), the reach of Normalise's inverse (SecondaryPlan::normalInverseBits).
+  double mf = 0;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) mf += inv.m[i][j] * inv.m[i][j];
+  mf = std::sqrt(mf);
+  for (int j = 0; j < 3; ++j)
+    for (int k = 0; k < 3; ++k) t.normalScale[j][k] = Tight(inv.m[j][k] / (r * mf), F);
+  t.normalInverseBits = IntBitsFor(1.01 * mf * std::sqrt(fn)) + 1;
+  t.ellipsoid = e;
+  return t;
+}
+
+// A cone's local frame, formats and bounds (ConeTerms; docs/wavefront.md "Cones"), along the
+// array's own ray as PlanEllipsoid: the frame's entries rounded to nearest at Fl + 4, the
+// anchor at Fl, each product floor-rounded at Fl; every quantity's error from MulErr /
+// SquareErr over its operands' bounds; the discriminant's grazing band at least twice its
+// error and (r_max/64)²/64; the two divisions by PlanDivision with the parallel threshold
+// |A| >= 1/64 and |Q| >= √G − ulp (where disc >= G).
+ConeTerms PlanCone(const Primitive& o, const Cone& cone, double extent, double diameter,
+                   const SecondaryPlan& p, int F) {
+  const int Fl = F + kConeExtraBits, Fm = Fl + 4;
+  const double ul = std::ldexp(1.0, -Fl), um = std::ldexp(1.0, -Fm);
+  const double delta = p.directionError;
+  ZEPHYR_CHECK(cone.baseRadius >= 0 && cone.apexRadius >= 0);  // the NFF reader's rule
+  double inv[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  Vec3 anchor = cone.base;
+  double forward = std::sqrt(3.0);  // ‖T‖_F
+  if (o.transform) {
+    const Affine a = o.transform->Inverse();
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) inv[i][j] = a.m[i][j];
+    anchor = o.transform->ApplyPoint(cone.base);
+    double fn = 0;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) fn += o.transform->m[i][j] * o.transform->m[i][j];
+    forward = std::sqrt(fn);
+  }
+  const Vec3 axisVector = cone.apex - cone.base;  // object space
+  const double h = Length(axisVector);
+  const Vec3 axis = axisVector / h;
+  const Vec3 e1 = Normalize(Cross(axis, std::abs(axis.x) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0}));
+  const Vec3 e2 = Cross(axis, e1);
+  const Vec3 rows[3] = {e1, e2, axis};
+  double frame[3][3], frob = 0;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      frame[i][j] = rows[i].x * inv[0][j] + rows[i].y * inv[1][j] + rows[i].z * inv[2][j];
+      frob += frame[i][j] * frame[i][j];
+    }
+  frob = std::sqrt(frob);
+  ConeTerms t;
+  t.fracBits = Fl;
+  const double dl = 1 + delta;
+  double eO[3], mO[3], eD[3], mD[3];
+  for (int k = 0; k < 3; ++k) {
+    t.anchor[k] = Tight(anchor[k], Fl);
+    eO[k] = mO[k] = eD[k] = mD[k] = 0;
+    for (int j = 0; j < 3; ++j) {
+      t.frame[k][j] = Tight(frame[k][j], Fm);
+      const double a = std::abs(frame[k][j]), x = extent + std::abs(anchor[j]) + ul / 2;
+      eO[k] += simd::MulErr(x, ul / 2, a, um / 2, ul);
+      eD[k] += simd::MulErr(dl, 0, a, um / 2, ul);
+      mO[k] += a * x, mD[k] += a * dl;
+    }
+    eO[k] += 1e-12 * (mO[k] + 1), eD[k] += 1e-12 * (mD[k] + 1);
+    mO[k] += eO[k], mD[k] += eD[k];
+  }
+  const double r0 = cone.baseRadius, r1 = cone.apexRadius, sigma = (r1 - r0) / h;
+  const double as = std::abs(sigma), rMax = std::max(r0, r1);
+  t.r0 = Tight(r0, Fl), t.sigma = Tight(sigma, Fm), t.height = Tight(h, Fl);
+  auto fmt = [&](double bound) { return Format::Signed(IntBitsFor(bound) + 1, Fl); };
+  for (int k = 0; k < 3; ++k) t.local[k] = fmt(mO[k]), t.dLocal[k] = fmt(mD[k]);
+  t.offset = Format::Signed(p.intBits + 1, Fl);
+  // ρ = r0 + σ·o_z; σd_z.
+  const double eRho = simd::MulErr(mO[2], eO[2], as, um / 2, ul) + ul / 2;
+  const double mRho = r0 + as * mO[2] + eRho;
+  const double eSdz = simd::MulErr(mD[2], eD[2], as, um / 2, ul), mSdz = as * mD[2] + eSdz;
+  const double eA = simd::SquareErr(mD[0], eD[0], ul) + simd::SquareErr(mD[1], eD[1], ul) +
+                    simd::SquareErr(mSdz, eSdz, ul);
+  const double mA = mD[0] * mD[0] + mD[1] * mD[1] + mSdz * mSdz + eA;
+  const double eBeta = simd::MulErr(mO[0], eO[0], mD[0], eD[0], ul) +
+                       simd::MulErr(mO[1], eO[1], mD[1], eD[1], ul) +
+                       simd::MulErr(mRho, eRho, mSdz, eSdz, ul);
+  const double mBeta = mO[0] * mD[0] + mO[1] * mD[1] + mRho * mSdz + eBeta;
+  const double eC = simd::SquareErr(mO[0], eO[0], ul) + simd::SquareErr(mO[1], eO[1], ul) +
+                    simd::SquareErr(mRho, eRho, ul);
+  const double mC = mO[0] * mO[0] + mO[1] * mO[1] + mRho * mRho + eC;
+  double eG = 0, mG = 0;
+  for (int k = 0; k < 2; ++k) {
+    eG = std::max(eG, simd::MulErr(mRho, eRho, mD[k], eD[k], ul) +
+                          simd::MulErr(mSdz, eSdz, mO[k], eO[k], ul));
+    mG = std::max(mG, mRho * mD[k] + mSdz * mO[k]);
+  }
+  mG += eG;
+  const double eCross =
+      simd::MulErr(mD[0], eD[0], mO[1], eO[1], ul) + simd::MulErr(mD[1], eD[1], mO[0], eO[0], ul);
+  const double mCross = mD[0] * mO[1] + mD[1] * mO[0] + eCross;
+  const double eDisc = 2 * simd::SquareErr(mG, eG, ul) + simd::SquareErr(mCross, eCross, ul);
+  const double mDisc = 2 * mG * mG + mCross * mCross + eDisc;
+  const double parallel = 1.0 / 64;
+  t.grazeBand = std::max(2 * eDisc, std::pow(rMax / 8, 2) * parallel);
+  const double eRoot = eDisc / std::sqrt(t.grazeBand) + ul, eQ = eBeta + eRoot;
+  const double mQ = mBeta + std::sqrt(mDisc) + eQ;
+  const double tFar = diameter / (1 - delta), target = 1e-2;
+  t.tFar = tFar;
+  t.divA = simd::PlanDivision(eQ, eA, tFar, target, parallel, F);
+  t.divC = simd::PlanDivision(eC, eQ, tFar, target, std::sqrt(t.grazeBand) - ul, F);
+  // Grazing (|disc| < G): the true √disc is in [0, √(G + e_disc)], so Q is within
+  // e_β + √(G + e_disc); bounds loose enough for the rare grazing ray only to say whether a root
+  // is certainly behind, beyond or out of height.
+  const double eQGrazing = eBeta + std::sqrt(t.grazeBand + eDisc) + ul;
+  t.divAGrazing = simd::PlanDivision(eQGrazing, eA, tFar, 0.1, parallel, F);
+  t.divCGrazing = simd::PlanDivision(eC, eQGrazing, tFar, 0.1, 0, F);
+  t.tError = std::max(t.divA.tError, t.divC.tError);
+  double tRange = 0;
+  const simd::ConeDivision* divs[2][2] = {{&t.divA, &t.divC}, {&t.divAGrazing, &t.divCGrazing}};
+  for (int g = 0; g < 2; ++g)
+    for (int r = 0; r < 2; ++r) {
+      const simd::ConeDivision& v = *divs[g][r];
+      t.heightError[g][r] = eO[2] + simd::MulErr(v.tRange, v.tError, mD[2], eD[2], ul) + ul;
+      tRange = std::max(tRange, v.tRange);
+    }
+  t.rho = fmt(mRho), t.sigmaDz = fmt(mSdz), t.a = fmt(mA), t.beta = fmt(mBeta), t.c = fmt(mC);
+  t.g = fmt(mG), t.cross = fmt(mCross);
+  t.square = Format::Unsigned(IntBitsFor(mDisc) + 1, Fl), t.disc = fmt(mDisc);
+  t.root = Format::Unsigned(IntBitsFor(std::sqrt(mDisc)) + 1, Fl);
+  t.q = Format::Unsigned(IntBitsFor(mQ) + 1, Fl);
+  t.s = fmt(mO[2] + tRange * mD[2]);
+  if (t.disc.Width() > 120)
+    throw UserError(
+        o.where.ToString() + ": this cone's discriminant would take " +
+        std::to_string(t.disc.Width()) +
+        " bits on the array (at most 120): give the secondary rays fewer fraction bits");
+  // The normal frameᵀ·(x_L, y_L, −σρ) at the hit, scaled to length <= 1; its reciprocal up to
+  // ‖frame‖_F·‖frame⁻¹‖_F·r_max/max(r_min, r_max/256) (a normal near an apex is shorter).
+  const double scale = 1 / (rMax * std::sqrt(1 + sigma * sigma) * frob);
+  for (int j = 0; j < 3; ++j)
+    for (int k = 0; k < 3; ++k) t.normalScale[j][k] = Tight(frame[j][k] * scale, F);
+  const double rMin = std::max(std::min(r0, r1), rMax / 256);
+  t.normalInverseBits = IntBitsFor(1.01 * frob * forward * rMax / rMin) + 1;
+  return t;
+}
+
+// A polygon patch's fan triangles and vertex normals (PolygonTerms::fan): the tracer's
+// Barycentric weights of P in (a, b, c), v = ((d11·v0 − d01·v1)/den)·(P − a) and
+// w = ((d00·v1 − d01·v0)/den)·(P − a) with v0 = b − a, v1 = c − a, d_ij their dot products and
+// den = d00·d11 − d01²; a triangle whose den is 0 (its weights not finite in the tracer) never
+// holds P. The normals are scaled by one factor so the largest has length 1: the interpolated
+// normal is normalised after, so the factor does not change it.
+void PlanPatch(const std::vector<Vec3>& v, const std::vector<Vec3>& normals, double diameter, int F,
+               PolygonTerms& t) {
+  if (normals.empty()) return;
+  double most = 0, reach = 1;
+  for (const Vec3& n : normals) most = std::max(most, Length(n));
+  for (const Vec3& n : normals) {
+    const Vec3 x = most > 0 ? n / most : n;
+    t.vertexNormals.push_back({Tight(x.x, F), Tight(x.y, F), Tight(x.z, F)});
+  }
+  for (size_t i = 1; i + 1 < v.size(); ++i) {
+    const Vec3 v0 = v[i] - v[0], v1 = v[i + 1] - v[0];
+    const double d00 = Dot(v0, v0), d01 = Dot(v0, v1), d11 = Dot(v1, v1);
+    const double den = d00 * d11 - d01 * d01;
+    const Vec3 alpha = (v0 * d11 - v1 * d01) / den, beta = (v1 * d00 - v0 * d01) / den;
+    if (!(std::isfinite(MaxAbs(alpha)) && std::isfinite(MaxAbs(beta))) || den == 0) continue;
+    PolygonTerms::FanTriangle f;
+    for (int k = 0; k < 3; ++k) f.alpha[k] = Tight(alpha[k], F), f.beta[k] = Tight(beta[k], F);
+    f.i = int(i);
+    t.fan.push_back(f);
+    const double a1 = std::abs(alpha.x) + std::abs(alpha.y) + std::abs(alpha.z);
+    const double b1 = std::abs(beta.x) + std::abs(beta.y) + std::abs(beta.z);
+    reach = std::max(reach, 1 + (a1 + b1) * diameter);
+  }
+  t.weight = Format::Signed(IntBitsFor(reach) + 1, F);
+}
+
+}  // namespace
+
 SecondaryPlan PlanSecondary(const Scene& scene, int fracBits, double primaryTError) {
   if (fracBits < 8 || fracBits > 40)
     throw UserError("the secondary rays' fraction bits must be 8..40, got " +
@@ -28,29 +297,40 @@ SecondaryPlan PlanSecondary(const Scene& scene, int fracBits, double primaryTErr
   SecondaryPlan p;
   double extent = MaxAbs(scene.camera.from), light = 0, maxIor = 1, minRadius = 1e300;
   // Each polygon's world vertices and front normal, as the tracer takes them.
-  std::vector<std::vector<Vec3>> worldVertices;
+  std::vector<std::vector<Vec3>> worldVertices, worldVertexNormals;
   std::vector<Vec3> worldNormals;
   for (const Primitive& o : scene.objects) {
     const auto* s = std::get_if<Sphere>(&o.shape);
     const auto* q = std::get_if<Polygon>(&o.shape);
-    const bool sphere = s && !o.transform, flat = q && q->normals.empty();
-    if (!sphere && !flat)
-      throw UserError(o.where.ToString() +
-                      ": --method array traces untransformed spheres and flat polygons only " +
-                      "(docs/wavefront.md); this object is " +
-                      (s   ? std::string("a transformed sphere")
-                       : q ? std::string("a polygon patch (vertex normals)")
-                           : "a " + std::string(ShapeKindName(o.Kind()))));
+    if (const auto* c = std::get_if<Cone>(&o.shape)) {
+      const double r = std::max(std::abs(c->baseRadius), std::abs(c->apexRadius));
+      extent = std::max(
+          extent, o.transform ? MaxAbs(o.transform->ApplyPoint(c->base)) +
+                                    o.transform->LinearNormInf() * (MaxAbs(c->apex - c->base) + r)
+                              : std::max(MaxAbs(c->base), MaxAbs(c->apex)) + r);
+      p.objects.push_back({false, int(p.cones.size()), true});
+      p.cones.emplace_back();  // filled below
+      const Material& m = scene.materials[o.material];
+      maxIor = std::max({maxIor, m.ior, 1 / m.ior});
+      p.anyMirror |= m.ks > 0;
+      p.anyTransparent |= m.t > 0;
+      continue;
+    }
+    const bool sphere = s != nullptr;
     p.objects.push_back({sphere, int(sphere ? p.spheres.size() + 0 : worldVertices.size())});
     if (sphere) {
-      extent = std::max(extent, MaxAbs(s->centre) + s->radius);
+      extent = std::max(extent, o.transform ? MaxAbs(o.transform->ApplyPoint(s->centre)) +
+                                                  s->radius * o.transform->LinearNormInf()
+                                            : MaxAbs(s->centre) + s->radius);
       minRadius = std::min(minRadius, s->radius);
       p.spheres.emplace_back();  // filled below
     } else {
-      std::vector<Vec3> v = q->vertices;
+      std::vector<Vec3> v = q->vertices, normals = q->normals;
       int front = 1;
       if (o.transform) {
+        const Affine inv = o.transform->Inverse();
         for (Vec3& x : v) x = o.transform->ApplyPoint(x);
+        for (Vec3& x : normals) x = inv.ApplyTransposed(x);  // as the tracer's Prepare
         front = o.transform->RelativeDeterminant() < 0 ? -1 : 1;
       }
       Vec3 n;  // Newell's normal, as hosts/trace/tracer.cpp Prepare
@@ -62,6 +342,7 @@ SecondaryPlan PlanSecondary(const Scene& scene, int fracBits, double primaryTErr
       n = Normalize(ScaledDown(n));
       for (const Vec3& x : v) extent = std::max(extent, MaxAbs(x));
       worldVertices.push_back(v);
+      worldVertexNormals.push_back(normals);
       worldNormals.push_back(n * double(front));
     }
     const Material& m = scene.materials[o.material];
@@ -124,12 +405,21 @@ SecondaryPlan PlanSecondary(const Scene& scene, int fracBits, double primaryTErr
         t.vertices.push_back({Tight(x.x, F), Tight(x.y, F), Tight(x.z, F)});
       t.groups = PolygonEdgeGroups(worldVertices[j], n);
       t.edgeBand = edgeBand, t.tError = tError;
+      PlanPatch(worldVertices[j], worldVertexNormals[j], D, F, t);
       p.polygons.push_back(t);
     }
   }
   for (size_t j = 0; j < scene.objects.size(); ++j) {
     const Primitive& o = scene.objects[j];
     const Material& m = scene.materials[o.material];
+    if (p.objects[j].cone) {
+      ConeTerms t = PlanCone(o, std::get<Cone>(o.shape), extent, diameter, p, F);
+      t.transparency = m.t, t.ior = m.ior;
+      p.tError = std::max(p.tError, t.tError);
+      p.normalInverseBits = std::max(p.normalInverseBits, t.normalInverseBits);
+      p.cones[p.objects[j].index] = t;
+      continue;
+    }
     if (!p.objects[j].sphere) {
       PolygonTerms& t = p.polygons[p.objects[j].index];
       t.transparency = m.t, t.ior = m.ior;
@@ -137,6 +427,13 @@ SecondaryPlan PlanSecondary(const Scene& scene, int fracBits, double primaryTErr
       continue;
     }
     const Sphere& s = std::get<Sphere>(o.shape);
+    if (o.transform) {
+      SphereTerms t = PlanEllipsoid(o, s, scene.lights, extent, diameter, p, F);
+      t.transparency = m.t, t.ior = m.ior;
+      p.tError = std::max(p.tError, t.tError);
+      p.spheres[p.objects[j].index] = t;
+      continue;
+    }
     SphereTerms t;
     for (int k = 0; k < 3; ++k) t.centre[k] = Tight(s.centre[k], F);
     t.r2 = Tight(s.radius * s.radius, F);
@@ -166,6 +463,10 @@ SecondaryPlan PlanSecondary(const Scene& scene, int fracBits, double primaryTErr
     p.spheres[p.objects[j].index] = t;
   }
   p.primaryTError = primaryTError;
+  for (const SphereTerms& t : p.spheres)
+    p.normalInverseBits = std::max(p.normalInverseBits, t.normalInverseBits);
+  for (const PolygonTerms& t : p.polygons)
+    if (!t.fan.empty()) p.normalInverseBits = std::max(p.normalInverseBits, kPatchNormalBits);
   // A hit point's distance from its surface: t's error along |d| <= 1 + δ, t·| |d| − 1 |, and
   // the point's own rounding; a ray leaving it ignores roots up to four times that.
   const double pointError =
@@ -195,12 +496,25 @@ Multi Dot(const Multi (&a)[3], const Multi (&b)[3], Format out) {
 
 Multi Const(Machine& m, double x, int frac) { return Broadcast(m, Tight(x, frac)); }
 
-// d·(1/|d|), floor-rounded at each step (|d| near 1: the children of unit directions).
-void Normalise(Multi (&d)[3], const SecondaryPlan& p) {
+// d·(1/|d|), floor-rounded at each step: |d| < 2 and 1/|d| below 2^inverseBits (1: the
+// children of unit directions, |d| near 1; a normal whose length may be small takes more).
+void Normalise(Multi (&d)[3], const SecondaryPlan& p, int inverseBits = 1) {
   const int F = p.fracBits;
   const Multi len = Sqrt(simd::SumOfSquares(d, Format::Unsigned(2, F)), Format::Unsigned(1, F));
-  const Multi inv = Div(Uni{Fixed{Format::Unsigned(1, 0), 1}}, len, Format::Unsigned(2, F));
+  const Multi inv =
+      Div(Uni{Fixed{Format::Unsigned(1, 0), 1}}, len, Format::Unsigned(inverseBits + 1, F));
   for (int k = 0; k < 3; ++k) d[k] = Mul(d[k], inv, p.direction);
+}
+
+// An ellipsoid's object-space ray o' = M(o − anchor), d' = M·d (EllipsoidTerms).
+void ToObjectSpace(const Multi (&o)[3], const Multi (&d)[3], const EllipsoidTerms& e,
+                   Multi (&ol)[3], Multi (&dl)[3]) {
+  Multi rel[3];
+  for (int k = 0; k < 3; ++k) rel[k] = Sub(o[k], Uni{e.anchor[k]}, e.offset);
+  for (int k = 0; k < 3; ++k) {
+    ol[k] = simd::Dot3(rel, e.inverse[k], e.local[k]);
+    dl[k] = simd::Dot3(d, e.inverse[k], e.dLocal[k]);
+  }
 }
 
 // One sphere along o + t·d: the two roots t0 <= t1 (meaningful where disc >= 0), the
@@ -209,23 +523,53 @@ struct Roots {
   Multi t0, t1, disc, grazing;
 };
 
+// |a × b|² with each component (in `cross`) clamped to the sphere's range first: only
+// |a × b| <= r (times |d'| for an ellipsoid) can hit; larger saturate (a miss), expected.
+Multi ClampedCrossSquared(Machine& m, const Multi (&a)[3], const Multi (&b)[3], Format cross,
+                          const SphereTerms& s) {
+  const Multi c[3] = {Sub(Mul(a[1], b[2], cross), Mul(a[2], b[1], cross), cross),
+                      Sub(Mul(a[2], b[0], cross), Mul(a[0], b[2], cross), cross),
+                      Sub(Mul(a[0], b[1], cross), Mul(a[1], b[0], cross), cross)};
+  Multi sum;
+  simd::WithExpectedSaturation(m, [&] {
+    Multi sq[3];
+    for (int k = 0; k < 3; ++k)
+      sq[k] = Square(Convert(c[k], s.clamped, simd::kSaturate), s.square, simd::kSaturate);
+    sum = Add(Add(sq[0], sq[1], s.square, simd::kSaturate), sq[2], s.square, simd::kSaturate);
+  });
+  return sum;
+}
+
+// An ellipsoid in its object space (the primary pass's ellipsoid program with o' a multi):
+// f = −o', disc = r²|d'|² − |o'×d'|², roots (f·d' ∓ √disc)/|d'|².
+Roots EllipsoidRoots(Machine& m, const Multi (&o)[3], const Multi (&d)[3], const SphereTerms& s,
+                     const SecondaryPlan& p) {
+  const EllipsoidTerms& e = *s.ellipsoid;
+  Multi ol[3], dl[3];
+  ToObjectSpace(o, d, e, ol, dl);
+  const Multi tcaN = Neg(Dot(ol, dl, e.products), e.products);
+  const Multi sum = ClampedCrossSquared(m, ol, dl, e.products, s);
+  const Multi dd = simd::SumOfSquares(dl, e.dd);
+  Roots r;
+  r.disc = Sub(Mul(dd, Uni{s.r2}, s.square), sum, s.disc);
+  Multi root;
+  simd::WithExpectedSaturation(m, [&] { root = Sqrt(r.disc, s.root); });  // a miss's: unused
+  const Multi num0 = Sub(tcaN, root, e.numerator), num1 = Add(tcaN, root, e.numerator);
+  simd::WithExpectedSaturation(m, [&] {
+    r.t0 = Div(num0, dd, p.t, simd::kSaturate);
+    r.t1 = Div(num1, dd, p.t, simd::kSaturate);
+  });
+  r.grazing = simd::Near(m, r.disc, s.grazeBand, e.fracBits);
+  return r;
+}
+
 Roots SphereRoots(Machine& m, const Multi (&o)[3], const Multi (&d)[3], const SphereTerms& s,
                   const SecondaryPlan& p) {
+  if (s.ellipsoid) return EllipsoidRoots(m, o, d, s, p);
   Multi f[3];
   for (int k = 0; k < 3; ++k) f[k] = Sub(Uni{s.centre[k]}, o[k], p.offset);
   const Multi tca = Dot(d, f, p.t);
-  Multi sum;
-  {
-    const Multi c[3] = {Sub(Mul(f[1], d[2], p.t), Mul(f[2], d[1], p.t), p.t),
-                        Sub(Mul(f[2], d[0], p.t), Mul(f[0], d[2], p.t), p.t),
-                        Sub(Mul(f[0], d[1], p.t), Mul(f[1], d[0], p.t), p.t)};
-    simd::WithExpectedSaturation(m, [&] {
-      Multi sq[3];
-      for (int k = 0; k < 3; ++k)
-        sq[k] = Square(Convert(c[k], s.clamped, simd::kSaturate), s.square, simd::kSaturate);
-      sum = Add(Add(sq[0], sq[1], s.square, simd::kSaturate), sq[2], s.square, simd::kSaturate);
-    });
-  }
+  const Multi sum = ClampedCrossSquared(m, f, d, p.t, s);
   Roots r;
   r.disc = Sub(Uni{s.r2}, sum, s.disc);
   Multi root;
@@ -234,6 +578,120 @@ Roots SphereRoots(Machine& m, const Multi (&o)[3], const Multi (&d)[3], const Sp
   r.t1 = Add(tca, root, p.t);
   r.grazing = simd::Near(m, r.disc, s.grazeBand, p.fracBits);
   return r;
+}
+
+// A cone along o + t·d (ConeTerms): per root r (0: −sgn(β)·Q/A, 1: −sgn(β)·C/Q) its t, whether
+// it is certainly a hit root (real, not grazing, its division certified and within range,
+// its height certainly in [0, h]) and whether it may be one (not certainly a miss, beyond
+// the scene, behind ε or out of height); `low`, a lower bound on the true t of a root that
+// may be one (the format's least value where none is known); `larger` where root r is the
+// larger of the two. A grazing root's bounds are the grazing divisions' (ConeTerms).
+struct ConeCross {
+  Multi t[2], ok[2], maybe[2], low[2], larger[2];
+};
+
+ConeCross ConeAlong(Machine& m, const Multi (&o)[3], const Multi (&d)[3], const ConeTerms& c,
+                    const SecondaryPlan& p) {
+  const int Fl = c.fracBits;
+  Multi rel[3], ol[3], dl[3];
+  for (int k = 0; k < 3; ++k) rel[k] = Sub(o[k], Uni{c.anchor[k]}, c.offset);
+  for (int k = 0; k < 3; ++k) {
+    ol[k] = simd::Dot3(rel, c.frame[k], c.local[k]);
+    dl[k] = simd::Dot3(d, c.frame[k], c.dLocal[k]);
+  }
+  const Multi rho = Add(Mul(ol[2], Uni{c.sigma}, c.rho), Uni{c.r0}, c.rho);
+  const Multi sdz = Mul(dl[2], Uni{c.sigma}, c.sigmaDz);
+  const Multi a = Sub(Add(Square(dl[0], c.a), Square(dl[1], c.a), c.a), Square(sdz, c.a), c.a);
+  const Multi beta = Sub(Add(Mul(ol[0], dl[0], c.beta), Mul(ol[1], dl[1], c.beta), c.beta),
+                         Mul(rho, sdz, c.beta), c.beta);
+  const Multi cc = Sub(Add(Square(ol[0], c.c), Square(ol[1], c.c), c.c), Square(rho, c.c), c.c);
+  const Multi gx = Sub(Mul(rho, dl[0], c.g), Mul(sdz, ol[0], c.g), c.g);
+  const Multi gy = Sub(Mul(rho, dl[1], c.g), Mul(sdz, ol[1], c.g), c.g);
+  const Multi cross = Sub(Mul(dl[0], ol[1], c.cross), Mul(dl[1], ol[0], c.cross), c.cross);
+  const Multi disc = Sub(Add(Square(gx, c.square), Square(gy, c.square), c.square),
+                         Square(cross, c.square), c.disc);
+  const Multi grazing = simd::Near(m, disc, c.grazeBand, Fl);
+  const Multi real = simd::Zero(m) <= disc;
+  const Multi possible = real || grazing;
+  Multi root;
+  simd::WithExpectedSaturation(m, [&] { root = Sqrt(disc, c.root); });  // a miss's: unused
+  const Multi q = Add(Abs(beta, c.q), root, c.q);
+  const Multi negative = beta < simd::Zero(m);  // −sgn(β) = +1
+  const Format signedQ = Format::Signed(c.q.intBits, Fl);
+  const Multi num[2] = {Select(negative, q, Neg(q, signedQ), signedQ),
+                        Select(negative, cc, Neg(cc, c.c), c.c)};
+  const Multi* den[2] = {&a, &q};
+  const simd::ConeDivision* div[2][2] = {{&c.divA, &c.divAGrazing}, {&c.divC, &c.divCGrazing}};
+  ConeCross x;
+  const Fixed tMax{p.t, p.t.MaxRaw()};
+  const double h = fixed::ToDouble(c.height);
+  for (int r = 0; r < 2; ++r) {
+    // The quotient where the non-grazing division is certified (the grazing one's threshold
+    // is higher: its numerator's error is larger).
+    const Multi sure = !simd::Near(m, *den[r], div[r][0]->dStar, Fl);
+    x.t[r] = Broadcast(m, tMax);
+    Where(sure, [&] {
+      simd::WithExpectedSaturation(m, [&] { x.t[r] = Div(num[r], *den[r], p.t, simd::kSaturate); });
+    });
+    Multi height;
+    simd::WithExpectedSaturation(m, [&] {
+      height = Add(ol[2], Mul(x.t[r], dl[2], c.s, simd::kSaturate), c.s, simd::kSaturate);
+    });
+    Multi inRange[2], inside[2], maybe[2], low[2];
+    for (int g = 0; g < 2; ++g) {  // g = 1: the grazing bounds
+      const simd::ConeDivision& v = *div[r][g];
+      const double eT = v.tError, eH = c.heightError[g][r];
+      const Multi certified = g ? !simd::Near(m, *den[r], v.dStar, Fl) : sure;
+      // Beyond the scene: a certified quotient at or past tCut, or an uncertified one whose
+      // |N|/(D* + eD) already exceeds tFar (|D| < D*: |t_exact| >= (|N| − eN)/(D* + eD)).
+      const Multi beyond =
+          (certified && !simd::Near(m, x.t[r], v.tCut, p.fracBits)) ||
+          (!certified && !simd::Near(m, num[r], c.tFar * (v.dStar + v.eD) + v.eN, Fl));
+      inRange[g] = certified && !beyond;
+      inside[g] = (Const(m, eH, Fl) < height) && (height < Const(m, h - eH, Fl));
+      const Multi outside = (height < Const(m, -eH, Fl)) || (Const(m, h + eH, Fl) < height);
+      const Multi behind = x.t[r] < Const(m, p.epsilon - eT - p.ulp, p.fracBits);
+      maybe[g] = !beyond && !(inRange[g] && (outside || behind));
+      simd::WithExpectedSaturation(m, [&] {
+        low[g] = Select(inRange[g], simd::SubBound(m, x.t[r], eT + p.ulp, p.t),
+                        Broadcast(m, Fixed{p.t, p.t.MinRaw()}), p.t);
+      });
+    }
+    x.ok[r] = real && !grazing && inRange[0] && inside[0];
+    x.maybe[r] = possible && ((grazing && maybe[1]) || (!grazing && maybe[0]));
+    x.low[r] = Select(grazing, low[1], low[0], p.t);
+  }
+  x.larger[0] = x.t[1] <= x.t[0];
+  x.larger[1] = !x.larger[0];
+  return x;
+}
+
+// A patch's normal at P (PolygonTerms::fan): the first fan triangle whose barycentric weights
+// are all >= −1e-4 (the tracer's NormalAt) interpolates the vertex normals; none keeps the
+// flat normal.
+void PatchNormal(Machine& m, const Multi (&pt)[3], const PolygonTerms& g, const SecondaryPlan& p,
+                 Multi (&normal)[3]) {
+  const int F = p.fracBits;
+  Multi rel[3];
+  for (int k = 0; k < 3; ++k) rel[k] = Sub(pt[k], Uni{g.vertices[0][k]}, p.edgeVector);
+  const Multi low = Const(m, -1e-4, F), one = Const(m, 1, F);
+  Multi found = simd::Zero(m);
+  for (const PolygonTerms::FanTriangle& f : g.fan) {
+    const Multi v = simd::Dot3(rel, f.alpha, g.weight), w = simd::Dot3(rel, f.beta, g.weight);
+    const Multi uw = Sub(Sub(one, v, g.weight), w, g.weight);
+    const Multi here = !found && (low <= uw) && (low <= v) && (low <= w);
+    Where(here, [&] {
+      const auto& a = g.vertexNormals[0];
+      const auto& b = g.vertexNormals[f.i];
+      const auto& c = g.vertexNormals[f.i + 1];
+      for (int k = 0; k < 3; ++k)
+        normal[k] =
+            Add(Add(Mul(uw, Uni{a[k]}, p.direction, simd::kSaturate),
+                    Mul(v, Uni{b[k]}, p.direction, simd::kSaturate), p.direction, simd::kSaturate),
+                Mul(w, Uni{c[k]}, p.direction, simd::kSaturate), p.direction, simd::kSaturate);
+    });
+    found = found || here;
+  }
 }
 
 // One polygon along o + t·d: t (where |n·d| is not within the parallel band), whether the ray
@@ -314,6 +772,21 @@ Nearest FindNearest(Machine& m, const Multi (&o)[3], const Multi (&d)[3], const 
   };
   for (size_t i = 0; i < p.objects.size(); ++i) {
     const Multi self = from == Multi::Constant(m, Fixed{p.index, int64_t(i) + 1});
+    if (p.objects[i].cone) {
+      // Convex (a frustum): a ray leaving it outward never meets it again; one entering it
+      // meets it at its larger root, if that lies in [0, h] (else it leaves by an open end).
+      const ConeTerms& c = p.cones[p.objects[i].index];
+      const ConeCross x = ConeAlong(m, o, d, c, p);
+      const Multi leaving = self && outward, entering = self && !outward;
+      for (int r = 0; r < 2; ++r) {
+        const Multi consider = !leaving && (!entering || x.larger[r]);
+        const Multi nearEps = x.ok[r] && !self && simd::Near(m, x.t[r] - eps, c.tError + p.ulp, F);
+        const Multi unsure = !leaving && ((x.maybe[r] && !x.ok[r]) || (consider && nearEps));
+        Where(unsure, [&] { tGraze = Min(tGraze, x.low[r], p.t); });
+        fold(x.t[r], consider && x.ok[r] && (eps < x.t[r]), i);
+      }
+      continue;
+    }
     if (!p.objects[i].sphere) {
       // A plane is met once: the polygon a ray leaves is never its next hit.
       const PolygonTerms& g = p.polygons[p.objects[i].index];
@@ -372,6 +845,30 @@ void ShadowProduct(Machine& m, const Multi (&pt)[3], const Multi (&l)[3], const 
   const Multi zero = Broadcast(m, Fixed{p.unit, 0});
   for (size_t i = 0; i < p.objects.size(); ++i) {
     const Multi self = object == Multi::Constant(m, Fixed{p.index, int64_t(i) + 1});
+    if (p.objects[i].cone) {
+      // From the outside of its own cone a shadow ray never meets it again; from the inside it
+      // crosses it at its larger root if that lies in [0, h] (else it leaves by an open end).
+      const ConeTerms& c = p.cones[p.objects[i].index];
+      const ConeCross x = ConeAlong(m, pt, l, c, p);
+      const Multi skip = self && !inside, fromInside = self && inside;
+      const double band = c.tError + p.ulp;
+      for (int r = 0; r < 2; ++r) {
+        const Multi consider = !skip && (!fromInside || x.larger[r]);
+        const Multi cross = consider && x.ok[r] && (eps < x.t[r]) && (x.t[r] < dist);
+        if (c.transparency <= 0) {
+          Where(cross, [&] { through = zero; });
+        } else {
+          const Uni kt{Tight(c.transparency, F)};
+          Where(cross, [&] { through = Mul(through, kt, p.unit); });
+        }
+        const Multi near = (!self && simd::Near(m, x.t[r] - eps, band, F)) ||
+                           simd::Near(m, x.t[r] - dist, band, F);
+        const Multi past = dist < x.low[r];  // certainly beyond the light
+        uncertain = uncertain ||
+                    (!skip && ((x.maybe[r] && !x.ok[r] && !past) || (consider && x.ok[r] && near)));
+      }
+      continue;
+    }
     if (!p.objects[i].sphere) {
       const PolygonTerms& g = p.polygons[p.objects[i].index];
       const PolygonCross c = PolygonAlong(m, pt, l, g, p);
@@ -452,17 +949,42 @@ void Run(Machine& m, const SecondaryPlan& p, bool intersect, const BounceInputs&
     for (int k = 0; k < 3; ++k) normal[k] = Multi(m, p.direction, "normal");
     for (size_t i = 0; i < p.objects.size(); ++i) {
       bitserial::WhereScope one(object == Multi::Constant(m, Fixed{p.index, int64_t(i) + 1}));
-      if (!p.objects[i].sphere) {  // the polygon's front normal
+      if (p.objects[i].cone) {  // frameᵀ·(x_L, y_L, −σρ): the radial direction tilted by σ
+        const ConeTerms& c = p.cones[p.objects[i].index];
+        Multi rel[3], ol[3];
+        for (int k = 0; k < 3; ++k) rel[k] = Sub(pt[k], Uni{c.anchor[k]}, c.offset);
+        for (int k = 0; k < 3; ++k) ol[k] = simd::Dot3(rel, c.frame[k], c.local[k]);
+        const Multi rho = Add(Mul(ol[2], Uni{c.sigma}, c.rho), Uni{c.r0}, c.rho);
+        ol[2] = Neg(Mul(rho, Uni{c.sigma}, c.rho), c.rho);
+        for (int k = 0; k < 3; ++k) {
+          const Fixed column[3] = {c.normalScale[0][k], c.normalScale[1][k], c.normalScale[2][k]};
+          normal[k] = simd::Dot3(ol, column, p.direction);
+        }
+        continue;
+      }
+      if (!p.objects[i].sphere) {  // the polygon's front normal, or a patch's interpolated one
         const PolygonTerms& g = p.polygons[p.objects[i].index];
         for (int k = 0; k < 3; ++k) normal[k] = Broadcast(m, g.normal[k]);
+        if (!g.fan.empty()) PatchNormal(m, pt, g, p, normal);
         continue;
       }
       const SphereTerms& s = p.spheres[p.objects[i].index];
+      if (s.ellipsoid) {  // Mᵀ·M(P − anchor): the object-space normal mapped to world space
+        const EllipsoidTerms& e = *s.ellipsoid;
+        Multi rel[3], ol[3];
+        for (int k = 0; k < 3; ++k) rel[k] = Sub(pt[k], Uni{e.anchor[k]}, e.offset);
+        for (int k = 0; k < 3; ++k) ol[k] = simd::Dot3(rel, e.inverse[k], e.local[k]);
+        for (int k = 0; k < 3; ++k) {
+          const Fixed column[3] = {s.normalScale[0][k], s.normalScale[1][k], s.normalScale[2][k]};
+          normal[k] = simd::Dot3(ol, column, p.direction);
+        }
+        continue;
+      }
       for (int k = 0; k < 3; ++k)
         normal[k] = Mul(Sub(pt[k], Uni{s.centre[k]}, p.offset), Uni{s.inverseRadius}, p.direction,
                         simd::kSaturate);
     }
-    Normalise(normal, p);
+    Normalise(normal, p, p.normalInverseBits);
     Multi dn = Dot(d, normal, p.direction);
     inside = simd::Zero(m) < dn;
     Where(inside, [&] {
@@ -478,9 +1000,12 @@ void Run(Machine& m, const SecondaryPlan& p, bool intersect, const BounceInputs&
       Multi eta = Const(m, 1, F);
       for (size_t i = 0; i < p.objects.size(); ++i) {
         const ObjectTerms& ob = p.objects[i];
-        const double t =
-            ob.sphere ? p.spheres[ob.index].transparency : p.polygons[ob.index].transparency;
-        const double ior = ob.sphere ? p.spheres[ob.index].ior : p.polygons[ob.index].ior;
+        const double t = ob.cone     ? p.cones[ob.index].transparency
+                         : ob.sphere ? p.spheres[ob.index].transparency
+                                     : p.polygons[ob.index].transparency;
+        const double ior = ob.cone     ? p.cones[ob.index].ior
+                           : ob.sphere ? p.spheres[ob.index].ior
+                                       : p.polygons[ob.index].ior;
         if (t <= 0) continue;
         const Multi one = object == Multi::Constant(m, Fixed{p.index, int64_t(i) + 1});
         Where(one && inside, [&] { eta = Const(m, ior, F); });

@@ -12,18 +12,41 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "bitserial/machine.h"
 #include "fixed/format.h"
 #include "hosts/scene/scene.h"
+#include "hosts/simd/bounds.h"
 #include "hosts/trace/intersect.h"
 
 namespace zephyr::wavefront {
 
-// One sphere's constants and bounds on the array (scene units).
+// An ellipsoid's object space (a transformed sphere, docs/wavefront.md "Ellipsoids"): the ray
+// o' = M(o − anchor), d' = M·d with M = T⁻¹'s linear part (uni constants rounded to nearest),
+// at Fl > F fraction bits, so t is the world t; the sphere is centred at the object-space origin.
+// Normals map by Mᵀ.
+struct EllipsoidTerms {
+  fixed::Fixed anchor[3];      // the world centre
+  fixed::Fixed inverse[3][3];  // M
+  fixed::Format local[3];      // o'_k (|o'_k| <= Σ_j |M_kj|·|o_j − anchor_j|)
+  fixed::Format dLocal[3];     // d'_k (|d'_k| <= Σ_j |M_kj|·(1 + δ))
+  fixed::Format products;      // f·d', f×d' (f = −o')
+  fixed::Format dd;            // |d'|²
+  fixed::Format numerator;     // f·d' ∓ √disc
+  fixed::Format offset;        // o − anchor
+  int fracBits = 0;            // Fl: the object space's fraction bits (more than F)
+};
+
+// One sphere's constants and bounds on the array (scene units). A transformed sphere (an
+// ellipsoid) carries its object space; its discriminant is r²|d'|² − |o'×d'|² and its roots
+// (f·d' ∓ √disc)/|d'|², as the primary pass's ellipsoid (docs/simd.md).
 struct SphereTerms {
   fixed::Fixed centre[3], r2, inverseRadius;
+  std::optional<EllipsoidTerms> ellipsoid;
+  fixed::Fixed normalScale[3][3];  // an ellipsoid's normal Mᵀ·o' scaled to length <= 1: [j][k]
+  int normalInverseBits = 1;       // 1/|that| < 2^this
   fixed::Format clamped, square, disc, root;  // the cross clamp and what follows it
   double grazeBand = 0;                       // G: |disc| < G is grazing
   double tError = 0;                          // |t − t_exact| of a certain root
@@ -42,8 +65,43 @@ struct PolygonTerms {
   fixed::Fixed offset;     // normal·v0
   std::vector<std::array<fixed::Fixed, 3>> vertices;
   std::vector<PolygonEdgeGroup> groups;
-  double edgeBand = 0;  // |e| below it: which side the ray passes is uncertain
-  double tError = 0;    // |t − t_exact| of a certain hit with |n·d| >= the plan's parallelBand
+  // A polygon patch (NFF `pp`): per fan triangle (0, i, i+1) the barycentric weights of a
+  // point P as linear forms v = α·(P − v0), w = β·(P − v0) (the tracer's Barycentric with its
+  // constant denominators folded in), and the world vertex normals; empty for a flat polygon.
+  struct FanTriangle {
+    fixed::Fixed alpha[3], beta[3];
+    int i = 0;  // the triangle (0, i, i+1)
+  };
+  std::vector<FanTriangle> fan;
+  std::vector<std::array<fixed::Fixed, 3>> vertexNormals;
+  fixed::Format weight;  // u, v, w (|·| <= the largest of 1 + Σ|α|·D, Σ|β|·D)
+  double edgeBand = 0;   // |e| below it: which side the ray passes is uncertain
+  double tError = 0;     // |t − t_exact| of a certain hit with |n·d| >= the plan's parallelBand
+  double transparency = 0, ior = 1;
+};
+
+// An open truncated cone or cylinder (NFF `c`, plain or transformed; docs/wavefront.md
+// "Cones") in a local frame where its axis is z and its base the origin: x_L = frame·(x − anchor)
+// with frame = R·T⁻¹'s linear part (R a rotation taking the axis to z) and anchor the world
+// base, so t is the world t. With ρ = r0 + σ·o_z (σ = (r1 − r0)/h):
+//   A = d_x² + d_y² − (σd_z)²,  β = o_x d_x + o_y d_y − ρ·σd_z,  C = o_x² + o_y² − ρ²,
+//   disc = β² − AC = (ρd_x − σd_z o_x)² + (ρd_y − σd_z o_y)² − (d_x o_y − d_y o_x)²,
+// Q = |β| + √disc, the roots −sgn(β)·Q/A and −sgn(β)·C/Q, each a hit where its height
+// s = o_z + t·d_z lies in [0, h]. Everything at Fl = F + kConeExtraBits fraction bits.
+struct ConeTerms {
+  fixed::Fixed anchor[3], frame[3][3];  // frame at Fl + 4 fraction bits
+  fixed::Fixed r0, sigma, height;
+  fixed::Fixed normalScale[3][3];  // frameᵀ / (r_max·√(1 + σ²)·‖frame‖_F): [j][k]
+  int normalInverseBits = 1;       // 1/|frameᵀ·n_L| scaled < 2^this
+  int fracBits = 0;                // Fl
+  fixed::Format offset, local[3], dLocal[3];
+  fixed::Format rho, sigmaDz, a, beta, c, g, cross, square, disc, root, q, s;
+  simd::ConeDivision divA, divC;                // t = Q/A (D* the parallel threshold), t = C/Q
+  simd::ConeDivision divAGrazing, divCGrazing;  // the same where |disc| < G
+  double grazeBand = 0;                         // G: |disc| < G is grazing
+  double heightError[2][2] = {};  // |s − s_exact| of a certified root: [grazing][root]
+  double tError = 0;              // |t − t_exact| of a certified root
+  double tFar = 0;                // no hit of the scene is farther along a ray
   double transparency = 0, ior = 1;
 };
 
@@ -51,6 +109,7 @@ struct PolygonTerms {
 struct ObjectTerms {
   bool sphere = true;
   int index = 0;
+  bool cone = false;  // then `index` is in SecondaryPlan::cones (and `sphere` is false)
 };
 
 // The formats and bounds every bounce shares (planned once per scene).
@@ -73,7 +132,9 @@ struct SecondaryPlan {
   bool anyMirror = false, anyTransparent = false;
   std::vector<SphereTerms> spheres;
   std::vector<PolygonTerms> polygons;
-  std::vector<ObjectTerms> objects;     // every object of the scene, in order
+  std::vector<ConeTerms> cones;
+  std::vector<ObjectTerms> objects;  // every object of the scene, in order
+  int normalInverseBits = 1;  // a normal's 1/|n| before normalising < 2^this (ellipsoids, patches)
   double parallelBand = 1.0 / 32;       // |n·d| below it: a polygon's t is not certified
   fixed::Format edgeVector;             // s<I+2>.F: a vertex − o
   fixed::Format edgeCross;              // s<2I+5>.F: (p − o) × (q − o)
@@ -82,9 +143,9 @@ struct SecondaryPlan {
   double primaryTError = 0;             // the primary pass's bound on t (bounce 1's hits)
 };
 
-// UserError naming the object's file:line when the scene holds anything but untransformed
-// spheres and flat polygons (no vertex normals). fracBits: F (8..40); primaryTError: the
-// primary plan's bound on t.
+// UserError naming the object's file:line for an ellipsoid too thin for F or a cone whose
+// discriminant would not fit the engine; fracBits: F (8..40); primaryTError: the primary plan's
+// bound on t.
 SecondaryPlan PlanSecondary(const Scene& scene, int fracBits, double primaryTError);
 
 // One pass's rays, per virtual PE of the pass (raw two's-complement values of the plan's

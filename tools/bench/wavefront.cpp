@@ -1,5 +1,6 @@
 // bench_wavefront — every ray on the array (`zephyr render --method array`, docs/wavefront.md)
-// on random spheres (`zephyr gen spheres --seed 1`, 384x384, depth 5): per compaction policy the
+// on random spheres (`zephyr gen spheres --seed 1`, 384x384, depth 5) and the showcase
+// (`zephyr gen showcase`: an ellipsoid, two cones, a cube): per compaction policy the
 // primary pass and the wavefront, each with its modelled seconds, host wall seconds and
 // real-time factor (modelled / host wall), and their ratio (target: the whole render's factor
 // at least half the primary pass's, issue 25); the image's PSNR against the sequential
@@ -7,8 +8,9 @@
 // exact check of the certain secondary rays (every one at 64 spheres, every 4th at 256; wrong
 // certain hits: target 0). Medians of 3.
 //
-//   bench_wavefront           64 and 256 spheres (mesh and local; none at 64)
-//   bench_wavefront --quick   64 spheres, mesh only
+//   bench_wavefront              64 and 256 spheres (mesh and local; none at 64), the showcase
+//   bench_wavefront --quick      64 spheres, mesh only
+//   bench_wavefront --showcase   the showcase only (one run)
 #include "hosts/wavefront/wavefront.h"
 
 #include <algorithm>
@@ -35,9 +37,11 @@ double Seconds(std::chrono::steady_clock::time_point since) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
 }
 
-void Run(int spheres, wavefront::Compaction compaction, int runs) {
-  const Scene scene =
-      GenerateRandomSpheres({.count = spheres, .seed = 1, .width = 384, .height = 384});
+Scene Spheres(int count) {
+  return GenerateRandomSpheres({.count = count, .seed = 1, .width = 384, .height = 384});
+}
+
+void Run(const Scene& scene, const char* name, wavefront::Compaction compaction, int runs) {
   const auto tracer = Tracer::Create(scene, {});
   Image seq(384, 384), array(384, 384);
   TraceStats seqStats;
@@ -60,10 +64,10 @@ void Run(int spheres, wavefront::Compaction compaction, int runs) {
   const double pw = Median(primaryWall), ww = Median(waveWall);
   const double primaryRtf = pm / pw, wholeRtf = (pm + wm) / (pw + ww);
   std::printf(
-      "%3d spheres, --compact %-5s  primary pass %.3g s modelled in %.3g s (rtf %.1f); "
+      "%-11s --compact %-5s  primary pass %.3g s modelled in %.3g s (rtf %.1f); "
       "wavefront %.3g s in %.3g s; whole render rtf %.1f = %.2f x the pass's (target >= 0.5); "
       "PSNR vs seq %.2f dB\n",
-      spheres, wavefront::kCompactionNames.NameOf(compaction), pm, pw, primaryRtf, wm, ww, wholeRtf,
+      name, wavefront::kCompactionNames.NameOf(compaction), pm, pw, primaryRtf, wm, ww, wholeRtf,
       wholeRtf / primaryRtf, Psnr(array, seq));
   for (const wavefront::BounceReport& b : wave.bounces)
     std::printf(
@@ -75,9 +79,7 @@ void Run(int spheres, wavefront::Compaction compaction, int runs) {
 }
 
 // Every `stride`-th certain secondary ray against the exact first hit along it (AuditRay's rules).
-void ExactCheck(int spheres, int stride) {
-  const Scene scene =
-      GenerateRandomSpheres({.count = spheres, .seed = 1, .width = 384, .height = 384});
+void ExactCheck(const Scene& scene, const char* name, int stride) {
   const auto tracer = Tracer::Create(scene, {});
   const simd::PrimaryPass pass = simd::RunPrimaryPass(scene, {});
   int64_t seen = 0, checked = 0, wrong = 0;
@@ -91,27 +93,37 @@ void ExactCheck(int spheres, int stride) {
   TraceStats host;
   wavefront::RenderWavefront(*tracer, pass, options, pixels, host);
   std::printf(
-      "%3d spheres: %lld of %lld certain secondary rays checked exactly, %lld wrong "
+      "%-11s %lld of %lld certain secondary rays checked exactly, %lld wrong "
       "(target 0)\n",
-      spheres, (long long)checked, (long long)seen, (long long)wrong);
+      name, (long long)checked, (long long)seen, (long long)wrong);
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
   const bool quick = argc > 1 && std::strcmp(argv[1], "--quick") == 0;
+  const bool showcase = argc > 1 && std::strcmp(argv[1], "--showcase") == 0;
   using wavefront::Compaction;
+  const Scene s64 = Spheres(64), s256 = Spheres(256);
+  // The showcase: an ellipsoid, a sheared cylinder, a transformed cone and a cube on a floor.
+  const Scene show = GenerateTransformedShowcase(384, 384);
   if (quick) {
-    Run(64, Compaction::kMesh, 1);
-    ExactCheck(64, 1);
+    Run(s64, "64 spheres", Compaction::kMesh, 1);
+    ExactCheck(s64, "64 spheres", 1);
     return 0;
   }
-  for (int spheres : {64, 256}) {
-    Run(spheres, Compaction::kMesh, 3);
-    Run(spheres, Compaction::kLocal, 3);
+  if (!showcase) {
+    Run(s64, "64 spheres", Compaction::kMesh, 3);
+    Run(s64, "64 spheres", Compaction::kLocal, 3);
+    Run(s256, "256 spheres", Compaction::kMesh, 3);
+    Run(s256, "256 spheres", Compaction::kLocal, 3);
+    Run(s64, "64 spheres", Compaction::kNone, 1);
   }
-  Run(64, Compaction::kNone, 1);
-  ExactCheck(64, 1);
-  ExactCheck(256, 4);
+  Run(show, "showcase", Compaction::kMesh, showcase ? 1 : 3);
+  if (!showcase) {
+    ExactCheck(s64, "64 spheres", 1);
+    ExactCheck(s256, "256 spheres", 4);
+  }
+  ExactCheck(show, "showcase", 1);
   return 0;
 }
