@@ -395,7 +395,10 @@ SecondaryPlan PlanSecondary(const Scene& scene, int fracBits, double primaryTErr
     const double D = diameter;
     const double eNum = 3 * std::ldexp(1.0, I) * u / 2 + 3 * u + u / 2, eNd = 1.75 * u / 2 + 3 * u;
     const double edgeBand = 1.25 * (1.75 * (2 * D * u + 2 * u + u * u) + 3 * u);
-    const double tError = (eNum + D * eNd) / (p.parallelBand - eNd) + D * p.directionError + 2 * u;
+    double rungs[3];
+    for (int k = 0; k < 3; ++k)
+      rungs[k] = (eNum + D * eNd) / (kPolygonRungs[k] - eNd) + D * p.directionError + 2 * u;
+    const double tError = rungs[0];
     for (size_t j = 0; j < worldVertices.size(); ++j) {
       PolygonTerms t;
       const Vec3& n = worldNormals[j];
@@ -405,6 +408,7 @@ SecondaryPlan PlanSecondary(const Scene& scene, int fracBits, double primaryTErr
         t.vertices.push_back({Tight(x.x, F), Tight(x.y, F), Tight(x.z, F)});
       t.groups = PolygonEdgeGroups(worldVertices[j], n);
       t.edgeBand = edgeBand, t.tError = tError;
+      for (int k = 0; k < 3; ++k) t.tErrorRung[k] = rungs[k];
       PlanPatch(worldVertices[j], worldVertexNormals[j], D, F, t);
       p.polygons.push_back(t);
     }
@@ -475,7 +479,14 @@ SecondaryPlan PlanSecondary(const Scene& scene, int fracBits, double primaryTErr
   // root), so the array's own cut-off only keeps roots at the origin from counting: 2(E + u).
   // The host, which traces an uncertain ray without that rule, skips four times the point's
   // error instead.
-  p.epsilon = 2 * (p.tError + u);
+  // ε from the errors of certain hits at their best: a polygon's at its tightest rung (a root
+  // nearer ε than its own error is flagged, never taken or dropped on a guess).
+  double eEps = 0;
+  for (const SphereTerms& t : p.spheres) eEps = std::max(eEps, t.tError);
+  for (const ConeTerms& t : p.cones) eEps = std::max(eEps, t.tError);
+  for (const PolygonTerms& t : p.polygons) eEps = std::max(eEps, t.tErrorRung[2]);
+  p.epsilon = 2 * (eEps + u);
+  p.error = Format::Unsigned(IntBitsFor(2 * (p.tError + u)) + 1, F);
   p.hostOffset = 4 * (p.tError + pointError);
   for (const Light& l : scene.lights)
     for (int k = 0; k < 3; ++k) p.lights[k].push_back(Tight(l.position[k], F));
@@ -700,6 +711,7 @@ void PatchNormal(Machine& m, const Multi (&pt)[3], const PolygonTerms& g, const 
 // t not computed, not certified).
 struct PolygonCross {
   Multi t, inside, possible, parallel;
+  Multi err;  // |t − t_exact| + ulp where certified: the tightest rung |n·d| reaches
 };
 
 PolygonCross PolygonAlong(Machine& m, const Multi (&o)[3], const Multi (&d)[3],
@@ -710,6 +722,11 @@ PolygonCross PolygonAlong(Machine& m, const Multi (&o)[3], const Multi (&d)[3],
   const Multi num = Sub(Uni{g.offset}, no, wide);
   PolygonCross c;
   c.parallel = simd::Near(m, nd, p.parallelBand, F);
+  c.err = Convert(Const(m, g.tErrorRung[0] + p.ulp, F), p.error);
+  for (int k = 1; k < 3; ++k) {
+    const Multi tighter = !simd::Near(m, nd, kPolygonRungs[k], F);
+    Where(tighter, [&] { c.err = Const(m, g.tErrorRung[k] + p.ulp, F); });
+  }
   c.t = Broadcast(m, Fixed{p.t, p.t.MaxRaw()});
   Where(!c.parallel, [&] {
     simd::WithExpectedSaturation(m, [&] { c.t = Div(num, nd, p.t, simd::kSaturate); });
@@ -761,15 +778,22 @@ Nearest FindNearest(Machine& m, const Multi (&o)[3], const Multi (&d)[3], const 
   n.object = Broadcast(m, Fixed{p.index, 0});
   Multi tie = simd::Zero(m), tGraze = Broadcast(m, tMax);
   const Multi eps = Const(m, p.epsilon, F), none = Broadcast(m, tMax);
-  // Object i's candidate t where `hit` into the best, a near tie with the best flagged.
-  auto fold = [&](const Multi& t, const Multi& hit, size_t i) {
-    tie = tie || (hit && (n.t < none) && simd::Near(m, t - n.t, 2 * p.tError, F));
+  // Each ray's best hit's t error + ulp (a polygon's per ray: its rung).
+  Multi bestErr = Broadcast(m, Fixed{p.error, 0});
+  // Object i's candidate t where `hit` into the best, with its error `err`: a tie with the
+  // best (their t within the sum of their errors) flagged.
+  auto fold = [&](const Multi& t, const Multi& hit, size_t i, const Multi& err) {
+    Multi band;
+    simd::WithExpectedSaturation(m, [&] { band = Add(err, bestErr, p.error, simd::kSaturate); });
+    tie = tie || (hit && (n.t < none) && simd::Near(m, t - n.t, band, F));
     const Multi closer = hit && (t < n.t);
     Where(closer, [&] {
       n.t = t;
       n.object = Broadcast(m, Fixed{p.index, int64_t(i) + 1});
+      bestErr = err;
     });
   };
+  auto errOf = [&](double e) { return Const(m, e + p.ulp, F); };
   for (size_t i = 0; i < p.objects.size(); ++i) {
     const Multi self = from == Multi::Constant(m, Fixed{p.index, int64_t(i) + 1});
     if (p.objects[i].cone) {
@@ -783,7 +807,7 @@ Nearest FindNearest(Machine& m, const Multi (&o)[3], const Multi (&d)[3], const 
         const Multi nearEps = x.ok[r] && !self && simd::Near(m, x.t[r] - eps, c.tError + p.ulp, F);
         const Multi unsure = !leaving && ((x.maybe[r] && !x.ok[r]) || (consider && nearEps));
         Where(unsure, [&] { tGraze = Min(tGraze, x.low[r], p.t); });
-        fold(x.t[r], consider && x.ok[r] && (eps < x.t[r]), i);
+        fold(x.t[r], consider && x.ok[r] && (eps < x.t[r]), i, errOf(c.tError));
       }
       continue;
     }
@@ -793,15 +817,15 @@ Nearest FindNearest(Machine& m, const Multi (&o)[3], const Multi (&d)[3], const 
       const PolygonCross c = PolygonAlong(m, o, d, g, p);
       const Multi hit = c.inside && (eps < c.t) && !self;
       const Multi front = c.parallel || (Const(m, p.epsilon - g.tError - p.ulp, F) < c.t);
-      const Multi unsure = c.possible && !self && front &&
-                           (!c.inside || simd::Near(m, c.t - eps, g.tError + p.ulp, F));
+      const Multi unsure =
+          c.possible && !self && front && (!c.inside || simd::Near(m, c.t - eps, c.err, F));
       Multi low;
       simd::WithExpectedSaturation(m, [&] {
         low = Select(c.parallel, Broadcast(m, Fixed{p.t, p.t.MinRaw()}),
-                     simd::SubBound(m, c.t, g.tError + p.ulp, p.t), p.t);
+                     Sub(c.t, c.err, p.t, simd::kSaturate), p.t);
       });
       Where(unsure, [&] { tGraze = Min(tGraze, low, p.t); });
-      fold(c.t, hit, i);
+      fold(c.t, hit, i, c.err);
       continue;
     }
     const SphereTerms& s = p.spheres[p.objects[i].index];
@@ -819,12 +843,11 @@ Nearest FindNearest(Machine& m, const Multi (&o)[3], const Multi (&d)[3], const 
     const Multi front = Const(m, p.epsilon - s.slack, F) < r.t1;
     const Multi unsure = (r.grazing || nearEps) && front && !leaving;
     Where(unsure, [&] { tGraze = Min(tGraze, simd::SubBound(m, r.t0, s.slack, p.t), p.t); });
-    fold(t, hit, i);
+    fold(t, hit, i, errOf(s.tError));
   }
   // A flagged candidate matters if it may lie in front of the best's true t <= t + E.
   Multi limit;
-  simd::WithExpectedSaturation(
-      m, [&] { limit = Add(n.t, Const(m, p.tError, F), p.t, simd::kSaturate); });
+  simd::WithExpectedSaturation(m, [&] { limit = Add(n.t, bestErr, p.t, simd::kSaturate); });
   n.uncertain = tie || ((tGraze <= limit) && (tGraze < none));
   return n;
 }
@@ -882,7 +905,7 @@ void ShadowProduct(Machine& m, const Multi (&pt)[3], const Multi (&l)[3], const 
       const double band = g.tError + p.ulp;
       const Multi inRange = c.parallel || ((Const(m, p.epsilon - band, F) < c.t) &&
                                            (simd::SubBound(m, c.t, band, p.t) < dist));
-      const Multi near = simd::Near(m, c.t - eps, band, F) || simd::Near(m, c.t - dist, band, F);
+      const Multi near = simd::Near(m, c.t - eps, c.err, F) || simd::Near(m, c.t - dist, c.err, F);
       uncertain = uncertain || (c.possible && !self && inRange && (!c.inside || near));
       continue;
     }

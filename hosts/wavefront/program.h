@@ -56,6 +56,10 @@ struct SphereTerms {
   std::vector<bool> lightOutside;  // per light: the light is outside the sphere
 };
 
+// The |n·d| thresholds of a polygon's t-error rungs (PolygonTerms::tErrorRung; the first is
+// SecondaryPlan::parallelBand).
+inline constexpr double kPolygonRungs[3] = {1.0 / 32, 1.0 / 8, 1.0 / 2};
+
 // One flat polygon's constants and bounds (world space: a transformed polygon's vertices are
 // mapped on the host, as the tracer does). Its inside is the tracer's: edge functions
 // e = d·((p − o) × (q − o)) per edge in canonical order, by groups with the even-odd rule
@@ -77,6 +81,9 @@ struct PolygonTerms {
   fixed::Format weight;  // u, v, w (|·| <= the largest of 1 + Σ|α|·D, Σ|β|·D)
   double edgeBand = 0;   // |e| below it: which side the ray passes is uncertain
   double tError = 0;     // |t − t_exact| of a certain hit with |n·d| >= the plan's parallelBand
+  // The same where |n·d| >= kPolygonRungs[k] (k = 0: tError): each ray takes the tightest
+  // rung its |n·d| reaches (masked broadcasts), for its ties and its ε margin.
+  double tErrorRung[3] = {};
   double transparency = 0, ior = 1;
 };
 
@@ -136,6 +143,7 @@ struct SecondaryPlan {
   std::vector<ObjectTerms> objects;  // every object of the scene, in order
   int normalInverseBits = 1;  // a normal's 1/|n| before normalising < 2^this (ellipsoids, patches)
   double parallelBand = 1.0 / 32;       // |n·d| below it: a polygon's t is not certified
+  fixed::Format error;                  // u<k>.F: a ray's t error + ulp, and the sum of two
   fixed::Format edgeVector;             // s<I+2>.F: a vertex − o
   fixed::Format edgeCross;              // s<2I+5>.F: (p − o) × (q − o)
   fixed::Format edgeValue;              // s<2I+7>.F: d · that
