@@ -550,9 +550,10 @@ std::string PrimaryPlan::Text() const {
                              1 / grazingFraction)
                : std::string("within each object's band of its edges (per object below)"));
   s += fmt::format(
-      "memory per virtual PE: {} bits at the peak (matrix {} bits, external) of {} internal + {} "
+      "memory per virtual PE: {} bits at the peak (matrix {} bits, {}) of {} internal + {} "
       "external\n",
-      memoryBitsPerPe, matrixBitsPerPe, internalCapacity, externalCapacity);
+      memoryBitsPerPe, matrixBitsPerPe, externalCapacity > 0 ? "external" : "internal",
+      internalCapacity, externalCapacity);
   if (alwaysUncertainObjects > 0)
     s += fmt::format(
         "{} object(s) have bounds that do not close at these widths: every pixel that may "

@@ -19,18 +19,24 @@ using fixed::Format;
 
 namespace {
 
-// The per-pixel matrix on the array, in external memory in this order (docs/simd.md, "The
-// matrix layout").
+// Where the matrix lives: external memory, leaving the internal for the arithmetic, on a
+// machine that has one; internal on one that has none (the MPP's 1 Kbit per PE, a DRAM
+// subarray's rows).
+Space MatrixSpace(Machine& m) {
+  return m.Memory().Capacity(Space::kExternal) > 0 ? Space::kExternal : Space::kInternal;
+}
+
+// The per-pixel matrix on the array, in this order (docs/simd.md, "The matrix layout").
 struct ArrayMatrix {
   ArrayMatrix(Machine& m, const PrimaryPlan& plan)
-      : object(m, plan.object, "matrix.object", Space::kExternal),
-        t(m, plan.t, "matrix.t", Space::kExternal),
-        d{{Multi(m, plan.direction, "matrix.dx", Space::kExternal),
-           Multi(m, plan.direction, "matrix.dy", Space::kExternal),
-           Multi(m, plan.direction, "matrix.dz", Space::kExternal)},
+      : object(m, plan.object, "matrix.object", MatrixSpace(m)),
+        t(m, plan.t, "matrix.t", MatrixSpace(m)),
+        d{{Multi(m, plan.direction, "matrix.dx", MatrixSpace(m)),
+           Multi(m, plan.direction, "matrix.dy", MatrixSpace(m)),
+           Multi(m, plan.direction, "matrix.dz", MatrixSpace(m))},
           {}},
-        grazing(m, bitserial::BoolFormat(), "matrix.grazing", Space::kExternal),
-        nearTie(m, bitserial::BoolFormat(), "matrix.nearTie", Space::kExternal) {
+        grazing(m, bitserial::BoolFormat(), "matrix.grazing", MatrixSpace(m)),
+        nearTie(m, bitserial::BoolFormat(), "matrix.nearTie", MatrixSpace(m)) {
     // --number float: the directions in the pass's float format too (internal memory: the
     // programs read them; the matrix keeps the fixed ones for the host).
     if (plan.number == NumberSystem::kFloat)

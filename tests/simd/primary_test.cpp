@@ -44,6 +44,24 @@ TEST(SimdPrimary, FirstObjectAgreesOnEveryPixelRandomSpheres) {
   EXPECT_GT(pass.array.cycles.TotalCycles(), 0);
 }
 
+// A machine without external memory (the MPP's and BLITZEN's 1 Kbit per PE, a DRAM PIM's
+// subarray rows) holds the matrix in internal memory: the pass runs there, with the same
+// first objects (it was refused as not fitting, with 428 of 1024 bits needed).
+TEST(SimdPrimary, AMachineWithoutExternalMemoryHoldsTheMatrixInternally) {
+  const Scene scene = GenerateRandomSpheres({.count = 16, .seed = 1, .width = 64, .height = 64});
+  const std::vector<PrimaryHit> exact = ExactHits(scene);
+  for (const char* profile : {"mpp", "blitzen"}) {
+    SCOPED_TRACE(profile);
+    SimdOptions options;
+    options.profile = profile;
+    ASSERT_EQ(MachineProfileOf(options).externalBitsPerPe, 0);
+    const PrimaryPass pass = RunPrimaryPass(scene, options);
+    EXPECT_EQ(ObjectMismatches(pass.matrix, exact), 0);
+    EXPECT_EQ(pass.array.passes.at(0).externalPeakBits, 0);
+    EXPECT_GT(pass.array.passes.at(0).internalPeakBits, 0);
+  }
+}
+
 TEST(SimdPrimary, FirstObjectAgreesOnEveryPixelSphereflake) {
   const Scene scene = GenerateSphereflake(2, 64, 64);  // 91 spheres and a floor polygon
   const PrimaryPass pass = RunPrimaryPass(scene, {});
@@ -121,18 +139,20 @@ TEST(SimdPrimary, SceneThatCannotFitIsAClearError) {
     ++o.formats.fracBits;                                // and is the widest that does
     EXPECT_THROW(PlanPrimaryPass(scene, o), UserError);
   }
-  // The MPP's PEs have no external memory for the matrix: no width fits, and the planner says
-  // so (it once passed such a plan, and the pass failed as it allocated the matrix).
+  // An MPP cut to 128 bits per PE and no external memory: no width fits (the matrix goes to
+  // internal memory there, AMachineWithoutExternalMemoryHoldsTheMatrixInternally), and the
+  // planner says so rather than passing a plan whose pass fails as it allocates.
   SimdOptions mpp;
   mpp.profile = "mpp";
+  mpp.profileOverrides = {"internalBitsPerPe=128"};
   try {
     PlanPrimaryPass(scene, mpp);
-    FAIL() << "the MPP has no external memory for the matrix";
+    FAIL() << "128 bits per PE hold no width of the pass";
   } catch (const UserError& e) {
     EXPECT_NE(std::string(e.what()).find("no width down to 4 fraction bits fits"),
               std::string::npos)
         << e.what();
-    EXPECT_NE(std::string(e.what()).find("external memory has 0 of 0 bits free"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("128 internal + 0 external"), std::string::npos)
         << e.what();
   }
 }
