@@ -97,6 +97,7 @@ class HeteroWork : public FrameWork {
                       std::to_string(refineDirFracBits_));
     scene_ = std::move(setup.scene);
     tracer_ = Tracer::Create(scene_, setup.trace);
+    stats_.AddFrame(tracer_->BuildWork());  // each child builds (and is charged) its own BVH
   }
   int ImageWidth() const override { return scene_.camera.width; }
   int ImageHeight() const override { return scene_.camera.height; }

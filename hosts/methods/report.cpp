@@ -122,7 +122,8 @@ nlohmann::json RenderReportJson(const RenderOutput& out) {
                 {"height", out.scene.height}};
   r["options"] = {{"depth", out.trace.depth},
                   {"precision", kPrecisionNames.NameOf(out.trace.precision)},
-                  {"sphereTest", kSphereTestNames.NameOf(out.trace.sphereTest)}};
+                  {"sphereTest", kSphereTestNames.NameOf(out.trace.sphereTest)},
+                  {"accel", kAccelNames.NameOf(out.trace.accel)}};
   r["phases"] = out.phases;
   if (out.hostWork) r.update(out.hostWork->ToJson());  // the counters at the top level
   if (out.simd) r["simd"] = PrimaryPassJson(*out.simd);

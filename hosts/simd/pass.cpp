@@ -105,7 +105,7 @@ void DecodeMatrix(PrimaryPass& pass, const MatrixRaw& raw) {
 
 // Uncertain pixels by the policy: fail with the counts, keep, or recompute in double.
 void HandleUncertain(PrimaryPass& pass, const Scene& scene, const PrimaryRays& rays,
-                     UncertainPolicy policy, int threads) {
+                     UncertainPolicy policy, Accel accel, int threads) {
   PrimaryMatrix& out = pass.matrix;
   const auto isUncertain = [](uint32_t f) { return (f & kUncertainFlags) != 0; };
   const int64_t uncertain = std::count_if(out.flags.begin(), out.flags.end(), isUncertain);
@@ -118,6 +118,7 @@ void HandleUncertain(PrimaryPass& pass, const Scene& scene, const PrimaryRays& r
     return;
   TraceOptions trace;
   trace.depth = 1;
+  trace.accel = accel;
   const auto tracer = Tracer::Create(scene, trace);
   std::vector<int64_t> flagged;
   flagged.reserve(uncertain);
@@ -222,7 +223,7 @@ PrimaryPass RunPrimaryPass(const Scene& scene, const SimdOptions& options) {
   if (options.uncertain == UncertainPolicy::kRefine ||
       (options.uncertain == UncertainPolicy::kAuto && flagged > budget))
     Refine(pass, scene, options, rays);
-  HandleUncertain(pass, scene, rays, options.uncertain,
+  HandleUncertain(pass, scene, rays, options.uncertain, options.hostAccel,
                   options.threads > 0 ? options.threads : bitserial::HardwareThreads());
   pass.recomputeSeconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - hostStart).count();
