@@ -105,10 +105,12 @@ struct Builder {
     int axis = -1, splitBin = 0;
     double bestCost = std::numeric_limits<double>::infinity();
     if (count > 1 && depth < kBvhMaxDepth) {
-      bvh.binnedPrimitives += uint64_t(count);
+      bool binned = false;
       for (int a = 0; a < 3; ++a) {
         const double lo = centroidBox.lo[a], extent = centroidBox.hi[a] - lo;
         if (!(extent > 0)) continue;
+        if (!binned) bvh.binnedPrimitives += uint64_t(count);  // once, however many axes
+        binned = true;
         Bounds binBox[kBvhBins];
         int binCount[kBvhBins] = {};
         for (int32_t k = begin; k < end; ++k) {

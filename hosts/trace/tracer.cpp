@@ -6,6 +6,9 @@
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <type_traits>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 #include <utility>
 
 #include "fixed/check.h"
@@ -408,7 +411,18 @@ class TracerT final : public Tracer {
     int32_t object = 0;
     bool sphere = false;  // an untransformed sphere: IntersectSphere on centre, radius2
     ShapeKind kind = ShapeKind::kSphere;
+    T transparency = 0;  // its material's T, as Transmission multiplies by it
   };
+
+  // What the walk keeps of a node: a leaf's objects leaves_[first, first + count), or an
+  // inner node's index in pairs_ (count 0).
+  struct NodeRef {
+    int32_t first = 0, count = 0;
+  };
+  NodeRef Reference(int32_t node) const {
+    return nodes_[node].count > 0 ? NodeRef{nodes_[node].first, nodes_[node].count}
+                                  : NodeRef{node, 0};
+  }
 
   static T RoundDown(double v) {
     T f = T(v);
@@ -455,6 +469,20 @@ class TracerT final : public Tracer {
       m.count = n.count;
       nodes_.push_back(m);
     }
+    // Each inner node's two child boxes side by side, for EntersPair, with what each child
+    // is: the walk reads nothing else of a node.
+    pairs_.resize(nodes_.size());
+    for (size_t i = 0; i < nodes_.size(); ++i) {
+      if (nodes_[i].count > 0) continue;
+      for (int c = 0; c < 2; ++c) {
+        const int32_t child = nodes_[i].first + c;
+        for (int a = 0; a < 3; ++a) {
+          pairs_[i].lo[a][c] = nodes_[child].lo[a];
+          pairs_[i].hi[a][c] = nodes_[child].hi[a];
+        }
+        pairs_[i].child[c] = Reference(child);
+      }
+    }
     for (const int32_t i : bvh.order) {
       const Prepared<T>& obj = objects_[i];
       LeafObject leaf;
@@ -463,6 +491,7 @@ class TracerT final : public Tracer {
       leaf.sphere = obj.kind == ShapeKind::kSphere && !obj.transformed;
       leaf.centre = obj.centre;
       leaf.radius2 = obj.radius2;
+      leaf.transparency = T(scene.materials[obj.material].t);
       leaves_.push_back(leaf);
     }
     buildWork_.bvhBinned = bvh.binnedPrimitives;
@@ -492,6 +521,59 @@ class TracerT final : public Tracer {
     return lo <= hi && hi >= tMin && lo <= tMax;
   }
 
+  // The two children's boxes of an inner node, by axis then child (one SIMD lane a child).
+  struct alignas(16) ChildBoxes {
+    T lo[3][2], hi[3][2];
+    NodeRef child[2];
+  };
+
+  // Enters for both children of an inner node at once: bit c of the result set when child c
+  // is entered, its tNear in near[c]. With SSE2 (double) two lanes; otherwise the same
+  // operations lane by lane (min(a, b) = a < b ? a : b and max(a, b) = a > b ? a : b, as
+  // minpd and maxpd), so the same boxes are entered on every machine. NaN: as in Enters.
+  static int EntersPair(const ChildBoxes& b, const SlabRay& r, T tMin, T tMax, T near[2]) {
+#if defined(__SSE2__)
+    if constexpr (std::is_same_v<T, double>) {
+      // The three axes written out (the compiler keeps the loop at -O2).
+      const __m128d o0 = _mm_set1_pd(r.o[0]), o1 = _mm_set1_pd(r.o[1]), o2 = _mm_set1_pd(r.o[2]);
+      const __m128d i0 = _mm_set1_pd(r.inv[0]), i1 = _mm_set1_pd(r.inv[1]),
+                    i2 = _mm_set1_pd(r.inv[2]);
+      const __m128d a0 = _mm_mul_pd(_mm_sub_pd(_mm_load_pd(b.lo[0]), o0), i0);
+      const __m128d b0 = _mm_mul_pd(_mm_sub_pd(_mm_load_pd(b.hi[0]), o0), i0);
+      const __m128d a1 = _mm_mul_pd(_mm_sub_pd(_mm_load_pd(b.lo[1]), o1), i1);
+      const __m128d b1 = _mm_mul_pd(_mm_sub_pd(_mm_load_pd(b.hi[1]), o1), i1);
+      const __m128d a2 = _mm_mul_pd(_mm_sub_pd(_mm_load_pd(b.lo[2]), o2), i2);
+      const __m128d b2 = _mm_mul_pd(_mm_sub_pd(_mm_load_pd(b.hi[2]), o2), i2);
+      __m128d lo = _mm_set1_pd(-std::numeric_limits<double>::infinity());
+      __m128d hi = _mm_set1_pd(std::numeric_limits<double>::infinity());
+      lo = _mm_max_pd(_mm_min_pd(a0, b0), lo);
+      hi = _mm_min_pd(_mm_max_pd(a0, b0), hi);
+      lo = _mm_max_pd(_mm_min_pd(a1, b1), lo);
+      hi = _mm_min_pd(_mm_max_pd(a1, b1), hi);
+      lo = _mm_max_pd(_mm_min_pd(a2, b2), lo);
+      hi = _mm_min_pd(_mm_max_pd(a2, b2), hi);
+      _mm_storeu_pd(near, lo);
+      const __m128d ok =
+          _mm_and_pd(_mm_and_pd(_mm_cmple_pd(lo, hi), _mm_cmpge_pd(hi, _mm_set1_pd(tMin))),
+                     _mm_cmple_pd(lo, _mm_set1_pd(tMax)));
+      return _mm_movemask_pd(ok);
+    }
+#endif
+    int mask = 0;
+    for (int c = 0; c < 2; ++c) {
+      T lo = -std::numeric_limits<T>::infinity(), hi = std::numeric_limits<T>::infinity();
+      for (int a = 0; a < 3; ++a) {
+        const T t0 = (b.lo[a][c] - r.o[a]) * r.inv[a], t1 = (b.hi[a][c] - r.o[a]) * r.inv[a];
+        const T tn = t0 < t1 ? t0 : t1, tf = t0 > t1 ? t0 : t1;
+        lo = tn > lo ? tn : lo;
+        hi = tf < hi ? tf : hi;
+      }
+      near[c] = lo;
+      if (lo <= hi && hi >= tMin && lo <= tMax) mask |= 1 << c;
+    }
+    return mask;
+  }
+
   // One leaf object's roots along the ray, as the exhaustive loops compute them; counted.
   int TestLeaf(const LeafObject& leaf, const V& o, const V& d, T tMin, T* roots,
                TraceStats& stats) const {
@@ -502,7 +584,7 @@ class TracerT final : public Tracer {
   }
 
   struct StackEntry {
-    int32_t node;
+    NodeRef node;
     T tNear;
   };
 
@@ -518,13 +600,14 @@ class TracerT final : public Tracer {
     T near;
     ++stats.boxTests;
     if (!Enters(nodes_[0], ray, tMin, tBest, &near)) return best;
-    stack[top++] = {0, near};
+    stack[top++] = {Reference(0), near};
     T roots[2];
+    uint64_t boxTests = 0, visits = 0;  // kept in registers, added to stats at the end
     while (top > 0) {
       const StackEntry e = stack[--top];
       if (e.tNear > tBest) continue;
-      ++stats.nodeVisits;
-      const BvhNodeT<T>& n = nodes_[e.node];
+      ++visits;
+      const NodeRef n = e.node;
       if (n.count > 0) {
         for (int32_t k = n.first; k < n.first + n.count; ++k) {
           const LeafObject& leaf = leaves_[k];
@@ -536,22 +619,21 @@ class TracerT final : public Tracer {
         }
         continue;
       }
-      T nearLeft, nearRight;
-      stats.boxTests += 2;
-      const bool left = Enters(nodes_[n.first], ray, tMin, tBest, &nearLeft);
-      const bool right = Enters(nodes_[n.first + 1], ray, tMin, tBest, &nearRight);
-      if (left && right) {
-        const bool leftFirst = nearLeft <= nearRight;
-        stack[top++] =
-            leftFirst ? StackEntry{n.first + 1, nearRight} : StackEntry{n.first, nearLeft};
-        stack[top++] =
-            leftFirst ? StackEntry{n.first, nearLeft} : StackEntry{n.first + 1, nearRight};
-      } else if (left) {
-        stack[top++] = {n.first, nearLeft};
-      } else if (right) {
-        stack[top++] = {n.first + 1, nearRight};
+      T nearChild[2];
+      boxTests += 2;
+      const ChildBoxes& pair = pairs_[n.first];
+      const int entered = EntersPair(pair, ray, tMin, tBest, nearChild);
+      if (entered == 3) {
+        const int first = nearChild[0] <= nearChild[1] ? 0 : 1;  // the nearer popped first
+        stack[top++] = {pair.child[1 - first], nearChild[1 - first]};
+        stack[top++] = {pair.child[first], nearChild[first]};
+      } else if (entered != 0) {
+        const int c = entered >> 1;
+        stack[top++] = {pair.child[c], nearChild[c]};
       }
     }
+    stats.boxTests += boxTests;
+    stats.nodeVisits += visits;
     return best;
   }
 
@@ -560,18 +642,23 @@ class TracerT final : public Tracer {
   // TransmissionExhaustive multiplies them (floating-point products depend on the order). An
   // opaque surface crossed makes the product 0 at once (the exhaustive product is 0 too).
   T TransmissionBvh(const V& p, const V& toLight, T dist, T tMin, TraceStats& stats) const {
-    thread_local std::vector<std::pair<int32_t, int32_t>> crossed;
+    struct Crossing {
+      int32_t object, count;
+      T transparency;
+    };
+    thread_local std::vector<Crossing> crossed;
     crossed.clear();
     const SlabRay ray(p, toLight);
     StackEntry stack[kBvhMaxDepth + 2];
     int top = 0;
     T near;
     ++stats.boxTests;
-    if (Enters(nodes_[0], ray, tMin, dist, &near)) stack[top++] = {0, near};
+    if (Enters(nodes_[0], ray, tMin, dist, &near)) stack[top++] = {Reference(0), near};
     T roots[2];
+    uint64_t boxTests = 0, visits = 0;
     while (top > 0) {
-      const BvhNodeT<T>& n = nodes_[stack[--top].node];
-      ++stats.nodeVisits;
+      const NodeRef n = stack[--top].node;
+      ++visits;
       if (n.count > 0) {
         for (int32_t k = n.first; k < n.first + n.count; ++k) {
           const LeafObject& leaf = leaves_[k];
@@ -582,20 +669,30 @@ class TracerT final : public Tracer {
             ++count;
           }
           if (count == 0) continue;
-          if (scene_.materials[objects_[leaf.object].material].t == 0) return T(0);
-          crossed.push_back({leaf.object, count});
+          if (leaf.transparency == T(0)) {
+            stats.boxTests += boxTests;
+            stats.nodeVisits += visits;
+            return T(0);
+          }
+          crossed.push_back({leaf.object, count, leaf.transparency});
         }
         continue;
       }
-      stats.boxTests += 2;
-      for (int32_t c = n.first; c < n.first + 2; ++c)
-        if (Enters(nodes_[c], ray, tMin, dist, &near)) stack[top++] = {c, near};
+      boxTests += 2;
+      T nearChild[2];
+      const ChildBoxes& pair = pairs_[n.first];
+      const int entered = EntersPair(pair, ray, tMin, dist, nearChild);
+      for (int c = 0; c < 2; ++c)
+        if (entered & (1 << c)) stack[top++] = {pair.child[c], nearChild[c]};
     }
-    std::sort(crossed.begin(), crossed.end());
+    stats.boxTests += boxTests;
+    stats.nodeVisits += visits;
+    std::sort(crossed.begin(), crossed.end(),
+              [](const Crossing& a, const Crossing& b) { return a.object < b.object; });
     T through = T(1);
-    for (const auto& [object, count] : crossed)
-      for (int i = 0; i < count; ++i) {
-        through *= T(scene_.materials[objects_[object].material].t);
+    for (const Crossing& c : crossed)
+      for (int i = 0; i < c.count; ++i) {
+        through *= c.transparency;
         if (through == T(0)) return through;
       }
     return through;
@@ -737,6 +834,7 @@ class TracerT final : public Tracer {
   // --accel bvh: the hierarchy (empty: none), its objects in leaf order, and the largest
   // |coordinate| of an origin it answers for (BuildHierarchy).
   std::vector<BvhNodeT<T>> nodes_;
+  std::vector<ChildBoxes> pairs_;  // per inner node (by index), its children's boxes
   std::vector<LeafObject> leaves_;
   T originLimit_ = 0;
 };

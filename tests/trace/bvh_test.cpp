@@ -185,18 +185,20 @@ TEST(Bvh, CoincidentAndTouchingSpheresTieToTheLowerIndex) {
   }
 }
 
-// A tie between two leaves: object 0 a square in the plane z = −4 (100 wide), object 1 a
-// unit sphere centred at (0, 0, −5), touching the square at (0, 0, −4). The ray from the
-// origin along −z meets both at t = 4 exactly (the plane: (−4 − 0)/−1; the sphere: b = 5,
-// disc = 1, c/q = 24/6). The build splits them (SAH: 1 + (10000 + 12)/10400 < 2 for a leaf of
-// two), the sphere (the lower centroid on z, the only axis they differ on) in the left
-// leaf; both boxes are entered at 4 − pad, so the walk tests the sphere first and must then
-// hand the tie to the square, the lower index, as the exhaustive loop does.
+// A tie between two leaves: object 0 a square in the plane z = −4 (100 wide), objects 1–3
+// unit spheres, 1 centred at (0, 0, −5) touching the square at (0, 0, −4), 2 and 3 at
+// (0, ±3, −5.5). The ray from the origin along −z meets the square and sphere 1 at t = 4
+// exactly (the plane: (−4 − 0)/−1; the sphere: b = 5, disc = 1, c/q = 24/6). The build (by
+// hand, SAH with a visit costing 2 tests): on z the best split is spheres | square, 10123
+// against a leaf of 4: 2 + 10123/10500 < 4; the three spheres stay one leaf (the best split
+// of them, 2 + 84/41, exceeds 3): 3 nodes. The spheres, the lower centroids on z, are the
+// left child; both boxes are entered at 4 − pad, so the walk tests the spheres first and
+// must then hand the tie to the square, the lower index, as the exhaustive loop does.
 TEST(Bvh, ATieAcrossLeavesGoesToTheLowerIndex) {
   const Scene s = ParseNffOrThrow(
       "b 0 0 0\nv\nfrom 0 0 0\nat 0 0 -1\nup 0 1 0\nangle 40\nhither 0\nresolution 5 5\n"
       "l 0 0 10\nf 1 1 1 1 0 0 0 1\np 4\n-50 -50 -4\n50 -50 -4\n50 50 -4\n-50 50 -4\n"
-      "s 0 0 -5 1\n",
+      "s 0 0 -5 1\ns 0 3 -5.5 1\ns 0 -3 -5.5 1\n",
       "tie.nff");
   const auto none = Make(s, Accel::kNone), bvh = Make(s, Accel::kBvh);
   EXPECT_EQ(bvh->BuildWork().bvhNodes, 3u) << "the root split into two leaves";
@@ -207,6 +209,8 @@ TEST(Bvh, ATieAcrossLeavesGoesToTheLowerIndex) {
     EXPECT_EQ(h.t, 4.0);
     if (t == bvh.get()) {
       EXPECT_EQ(stats.nodeVisits, 3u);  // the root and both leaves: the tie crossed leaves
+      EXPECT_EQ(stats.tests[int(ShapeKind::kSphere)], 3u);
+      EXPECT_EQ(stats.tests[int(ShapeKind::kPolygon)], 1u);
     }
   }
   EXPECT_GT(ExpectSameImage(*none, *bvh), 0);
@@ -284,36 +288,37 @@ TEST(Bvh, EverySampleSceneGivesTheExhaustiveImage) {
   EXPECT_GT(run, 0);
 }
 
-// Two unit spheres 20 apart on x (objects 0 at x = −10, 1 at x = +10), opaque. The build,
-// by hand: the root's box is 22 × 2 × 2 (half-area 22·2 + 2·2 + 2·22 = 92), each child's
-// 2 × 2 × 2 (12); splitting costs 1 + (12·1 + 12·1)/92 ≈ 1.26 < 2 for a leaf of two, so
-// the root splits into two leaves of one sphere: 3 nodes made, 2 primitives binned (the
-// root's; a leaf of one is not binned). The walks, by hand:
+// Four unit spheres, opaque: objects 0 and 1 both at x = −10, 2 and 3 both at x = +10. The
+// build, by hand: the root's box is 22 × 2 × 2 (half-area 22·2 + 2·2 + 2·22 = 92), each
+// pair's 2 × 2 × 2 (12); the split between the pairs costs 2 + (12·2 + 12·2)/92 ≈ 2.5 < 4
+// for a leaf of four, so the root splits; each pair's centroids coincide, so it is a leaf:
+// 3 nodes made, 4 primitives binned (the root's; the leaves bin nothing). The walks:
 //   * a ray down −z through (−10, 0): the root's box (1 box test) is entered, the root
 //     visited (1 visit) and its two child boxes tested (2): the left entered, the right
-//     (x ∈ [9, 11]) missed; the left leaf visited (2nd visit) and its sphere tested (1).
-//     3 box tests, 2 visits, 1 sphere test; the hit is object 0.
+//     (x ∈ [9, 11]) missed; the left leaf visited (2nd visit), its two spheres tested (2),
+//     equal t, object 0 kept. 3 box tests, 2 visits, 2 sphere tests.
 //   * a ray down −z through (0, 0): the root entered, visited, both children missed:
 //     3 box tests, 1 visit, 0 tests.
 //   * a ray down −z through (0, 5): the root's box (y ∈ [−1, 1]) missed: 1 box test, 0
 //     visits.
-//   * the shadow ray from (10, 0, 5) to the light at (10, 0, −5) through sphere 1: as the
-//     first, mirrored: 3 box tests, 2 visits, 1 test, product 0.
+//   * the shadow ray from (10, 0, 5) to the light at (10, 0, −5): as the first, mirrored,
+//     but sphere 2, tested first and opaque, ends the walk: 3 box tests, 2 visits, 1 test,
+//     product 0.
 TEST(Bvh, NodeVisitsOfAHandBuiltSceneEqualTheHandCount) {
   const Scene s = ParseNffOrThrow(
       "b 0 0 0\nv\nfrom 0 0 10\nat 0 0 0\nup 0 1 0\nangle 40\nhither 0\nresolution 4 4\n"
-      "l 10 0 -5\nf 1 1 1 1 0 0 0 1\ns -10 0 0 1\ns 10 0 0 1\n",
+      "l 10 0 -5\nf 1 1 1 1 0 0 0 1\ns -10 0 0 1\ns -10 0 0 1\ns 10 0 0 1\ns 10 0 0 1\n",
       "two.nff");
   const auto bvh = Make(s, Accel::kBvh);
   EXPECT_EQ(bvh->BuildWork().bvhNodes, 3u);
-  EXPECT_EQ(bvh->BuildWork().bvhBinned, 2u);
+  EXPECT_EQ(bvh->BuildWork().bvhBinned, 4u);
   EXPECT_EQ(Make(s, Accel::kNone)->BuildWork().bvhNodes, 0u);
   struct Case {
     Vec3 origin;
     int object;
     uint64_t boxTests, visits, sphereTests;
   };
-  for (const Case& c : {Case{{-10, 0, 10}, 0, 3, 2, 1}, Case{{0, 0, 10}, -1, 3, 1, 0},
+  for (const Case& c : {Case{{-10, 0, 10}, 0, 3, 2, 2}, Case{{0, 0, 10}, -1, 3, 1, 0},
                         Case{{0, 5, 10}, -1, 1, 0, 0}}) {
     TraceStats stats;
     EXPECT_EQ(bvh->FirstHit({c.origin, {0, 0, -1}}, stats).object, c.object);
