@@ -394,8 +394,8 @@ TEST(Bvh, WorldBoundOfAnEllipsoidIsItsExactBox) {
 
 // The render command's PNGs: --accel bvh against --accel none, byte for byte, for seq, simd
 // (host shading of the matrix; the recompute of uncertain pixels), dist and hetero (under
-// mpirun: the children build their own hierarchy from the set-up message), on generated
-// scenes.
+// mpirun: the children build their own hierarchy from the set-up message) and array (the
+// host's rays of the all-rays-on-the-array method), on generated scenes.
 TEST(Bvh, PngsOfEveryHostMethodAreByteEqualToTheExhaustive) {
   testing::TempDir dir;
   const std::string spheres = dir / "spheres.nff", flake = dir / "flake.nff";
@@ -405,7 +405,7 @@ TEST(Bvh, PngsOfEveryHostMethodAreByteEqualToTheExhaustive) {
       0);
   ASSERT_EQ(testing::RunZephyrProcess("gen flake --depth 1 --size 32x32 --out " + flake).status, 0);
   for (const std::string& scene : {spheres, flake})
-    for (const std::string method : {"seq", "simd", "dist", "hetero"}) {
+    for (const std::string method : {"seq", "simd", "dist", "hetero", "array"}) {
       std::string png[2];
       for (int i = 0; i < 2; ++i) {
         const std::string accel = i == 0 ? "none" : "bvh";
