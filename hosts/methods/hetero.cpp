@@ -177,7 +177,7 @@ void RenderHetero(const Scene& scene, const RenderOptions& options, RenderOutput
   if (testbed::Simulated())
     job.parentPassSeconds = testbed::ChargeArrayCycles(
         pass.array.cycles, pass.refine ? &pass.refine->array.cycles : nullptr,
-        uint64_t(pass.recomputedPixels), scene, "heterogeneous");
+        testbed::RecomputeWork(pass.recomputeWork), "heterogeneous");
   job.setup =
       farmed::SetupText("hetero", scene, options.trace,
                         {{"dirFracBits", pass.plan.dirFracBits},

@@ -156,6 +156,7 @@ RenderOutput RunRender(const RenderOptions& given) {
     }
     if (out.simd->refine) work.refineCycles = &out.simd->refine->array.cycles;
     work.recomputedPixels = uint64_t(out.simd->recomputedPixels);
+    work.recomputeWork = &out.simd->recomputeWork;
   }
   testbed::FarmTimes farmTimes;
   if (out.farm) {

@@ -57,7 +57,8 @@ nlohmann::json PrimaryPassJson(const simd::PrimaryPass& pass) {
                        {{"overflow", pass.uncertain.overflow},
                         {"grazing", pass.uncertain.grazing},
                         {"nearTie", pass.uncertain.nearTie},
-                        {"recomputed", pass.recomputedPixels}}}};
+                        {"recomputed", pass.recomputedPixels}}},
+                      {"recomputeWork", pass.recomputeWork.ToJson()}};
   if (pass.refine) {
     const simd::RefineResult& r = *pass.refine;
     j["refine"] = {{"pixels", r.pixels},

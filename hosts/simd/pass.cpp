@@ -124,16 +124,24 @@ void HandleUncertain(PrimaryPass& pass, const Scene& scene, const PrimaryRays& r
   flagged.reserve(uncertain);
   for (int64_t pe = 0; pe < int64_t(out.flags.size()); ++pe)
     if (isUncertain(out.flags[pe])) flagged.push_back(pe);
-  // Each pixel on its own (the tracer is read-only): the same hits whatever the thread count.
+  // Each pixel on its own (the tracer is read-only): the same hits whatever the thread count,
+  // and the same counts (sums of whole numbers).
   const int64_t n = int64_t(flagged.size());
-#pragma omp parallel for schedule(dynamic, 64) num_threads(threads)
-  for (int64_t i = 0; i < n; ++i) {
-    const int64_t pe = flagged[i];
+  TraceStats work = tracer->BuildWork();
+#pragma omp parallel num_threads(threads)
+  {
     TraceStats stats;
-    out.hits[pe] = tracer->FirstHit(rays.At(int(pe % out.width), int(pe / out.width)), stats);
-    out.flags[pe] |= kRecomputed;
+#pragma omp for schedule(dynamic, 64)
+    for (int64_t i = 0; i < n; ++i) {
+      const int64_t pe = flagged[i];
+      out.hits[pe] = tracer->FirstHit(rays.At(int(pe % out.width), int(pe / out.width)), stats);
+      out.flags[pe] |= kRecomputed;
+    }
+#pragma omp critical
+    work.Add(stats);
   }
   pass.recomputedPixels += n;
+  pass.recomputeWork.Add(work);
 }
 
 // The program over the plan's PEs (pixel pixels[k] in PE k; every pixel when empty), in the

@@ -198,6 +198,12 @@ nlohmann::json HostTime::Json() const {
           {"events", events}};
 }
 
+TraceStats RecomputeWork(const TraceStats& counted) {
+  TraceStats s = counted;
+  s.hits = 0;
+  return s;
+}
+
 TraceStats RecomputeWork(uint64_t pixels, const Scene& scene) {
   TraceStats s;
   for (const Primitive& p : scene.objects) s.tests[int(p.Kind())] += pixels;

@@ -96,5 +96,9 @@ HostTime ModelHostTime(const TraceStats& stats, const HostProfile& profile);
 // The host work of recomputing `pixels` primary rays in double against every object of the
 // scene (the SIMD pass's uncertain pixels): one primary ray and one test per object each.
 TraceStats RecomputeWork(uint64_t pixels, const Scene& scene);
+// The same from what the recompute counted (simd::PrimaryPass::recomputeWork): its rays,
+// tests, node visits, box tests and build; its hits are not priced (the closed form above
+// never priced them: both give the same for an exhaustive recompute).
+TraceStats RecomputeWork(const TraceStats& counted);
 
 }  // namespace zephyr::testbed

@@ -175,6 +175,16 @@ std::string WriteTinyScene(const TempDir& dir) {
   return path;
 }
 
+// A render of the tiny scene (written into dir) by `method` on the ufmg1992 testbed.
+RenderOptions TinyRender(const TempDir& dir, const std::string& method) {
+  RenderOptions o;
+  o.method = method;
+  o.scenePath = WriteTinyScene(dir);
+  o.progress = false;
+  o.testbed = "ufmg1992";
+  return o;
+}
+
 void ExpectEvents(const nlohmann::json& host, const std::map<std::string, double>& counts,
                   const std::string& what) {
   double seconds = 0;
@@ -211,11 +221,7 @@ TEST(TestbedClosedForm, SeqChargesEachCountedEventItsPublishedCost) {
 // its published cost (the counts read off the report's "bvh" section).
 TEST(TestbedClosedForm, SeqWithTheBvhChargesNodeVisitsBoxTestsAndTheBuild) {
   TempDir dir;
-  RenderOptions o;
-  o.method = "seq";
-  o.scenePath = WriteTinyScene(dir);
-  o.progress = false;
-  o.testbed = "ufmg1992";
+  RenderOptions o = TinyRender(dir, "seq");
   o.trace.accel = Accel::kBvh;
   const RenderOutput out = RunRender(o);
   const nlohmann::json report = RenderReportJson(out);
@@ -243,6 +249,49 @@ TEST(TestbedClosedForm, SeqWithTheBvhChargesNodeVisitsBoxTestsAndTheBuild) {
   double seconds = 0;
   for (const auto& [event, count] : counts) seconds += SecondsOf(event.c_str(), count);
   EXPECT_NEAR(t.at("modelledSeconds").get<double>(), seconds, 1e-15);
+}
+
+// simd with --accel bvh and every pixel uncertain (--frac-bits 6): the recompute walks the
+// hierarchy too, and the testbed prices what it counted (the report's simd.recomputeWork,
+// its hits unpriced) on top of the shading's counts; its build is charged once more (the
+// recompute's own tracer).
+TEST(TestbedClosedForm, SimdWithTheBvhPricesTheRecomputeAsCounted) {
+  TempDir dir;
+  RenderOptions o = TinyRender(dir, "simd");
+  o.simd.formats.fracBits = 6;
+  o.simd.uncertain = simd::UncertainPolicy::kRecompute;
+  o.trace.accel = Accel::kBvh;
+  const nlohmann::json report = RenderReportJson(RunRender(o));
+  const nlohmann::json& recompute = report.at("simd").at("recomputeWork");
+  ASSERT_EQ(report.at("simd").at("uncertain").at("recomputed").get<double>(), 6);
+  EXPECT_EQ(recompute.at("rays").at("primary").get<double>(), 6);
+  EXPECT_GT(recompute.at("bvh").at("nodeVisits").get<double>(), 0);
+  EXPECT_GT(recompute.at("bvh").at("nodesBuilt").get<double>(), 0);
+  // Each recomputed ray meets the floor; the walk skips the sphere and cone below it.
+  EXPECT_LT(recompute.at("tests").at("sphere").get<double>(), 6);
+  std::map<std::string, double> counts;
+  auto both = [&](const char* event, double shading, double recomputed) {
+    counts[event] = shading + recomputed;
+  };
+  uint64_t rays = 0, recomputeRays = 0;
+  for (const char* kind : kRayKindNames) {
+    rays += report.at("rays").at(kind).get<uint64_t>();
+    recomputeRays += recompute.at("rays").at(kind).get<uint64_t>();
+  }
+  both("ray", double(rays), double(recomputeRays));
+  for (const char* kind : {"sphere", "cone", "polygon"})
+    both((std::string(kind) + "Test").c_str(), report.at("tests").at(kind).get<double>(),
+         recompute.at("tests").at(kind).get<double>());
+  both("hit", report.at("hits").get<double>(), 0);  // the recompute's hits are not priced
+  both("shade", report.at("shades").get<double>(), 0);
+  both("lightSample", report.at("lightSamples").get<double>(), 0);
+  both("pixel", report.at("pixels").get<double>(), 0);
+  for (const auto& [event, key] : {std::pair{"nodeVisit", "nodeVisits"},
+                                   {"boxTest", "boxTests"},
+                                   {"bvhBin", "binned"},
+                                   {"bvhNode", "nodesBuilt"}})
+    both(event, report.at("bvh").at(key).get<double>(), recompute.at("bvh").at(key).get<double>());
+  ExpectEvents(report.at("testbed").at("host"), counts, "simd --accel bvh");
 }
 
 // The SIMD method: each array pass that ran (the first, and the refine pass when one ran) at

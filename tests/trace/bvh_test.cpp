@@ -94,6 +94,16 @@ RandomRayCounts ExpectSameRandomRays(const Tracer& none, const Tracer& bvh, cons
   return n;
 }
 
+// A scene on black seen from `from` toward `at` (up +y, hither 0) at size × size pixels
+// with the vertical angle `angle` (degrees), then `rest` (NFF lights, materials, objects).
+Scene Nff(const std::string& from, const std::string& at, int angle, int size,
+          const std::string& rest) {
+  return ParseNffOrThrow("b 0 0 0\nv\nfrom " + from + "\nat " + at + "\nup 0 1 0\nangle " +
+                             std::to_string(angle) + "\nhither 0\nresolution " +
+                             std::to_string(size) + " " + std::to_string(size) + "\n" + rest,
+                         "test.nff");
+}
+
 Bounds SceneBox(const Scene& s) {
   Bounds b;
   for (const Primitive& p : s.objects) b.Grow(WorldBound(p));
@@ -126,11 +136,7 @@ TEST(Bvh, TransparentShadowProductsMatchBitForBit) {
     objects += "s " + std::to_string(8 * u(rng) - 4) + " " + std::to_string(8 * u(rng) - 4) + " " +
                std::to_string(8 * u(rng) - 4) + " " + std::to_string(0.3 + 0.5 * u(rng)) + "\n";
   }
-  const Scene s = ParseNffOrThrow(
-      "b 0 0 0\nv\nfrom 0 0 12\nat 0 0 0\nup 0 1 0\nangle 40\nhither 0\nresolution 8 8\n"
-      "l 0 9 0\nl 7 -7 7\nl -3 0 -9\n" +
-          objects,
-      "glass.nff");
+  const Scene s = Nff("0 0 12", "0 0 0", 40, 8, "l 0 9 0\nl 7 -7 7\nl -3 0 -9\n" + objects);
   const auto none = Make(s, Accel::kNone), bvh = Make(s, Accel::kBvh);
   const RandomRayCounts n = ExpectSameRandomRays(*none, *bvh, {-4, -4, -4}, {4, 4, 4}, 3000, 9);
   EXPECT_GT(n.partial, 1000);
@@ -160,11 +166,7 @@ TEST(Bvh, CoincidentAndTouchingSpheresTieToTheLowerIndex) {
     objects += "s " + std::to_string(-4 + 2 * i) + " 3 -6 1\n";
   }
   objects += "s 3 -3 -4 1\ns 3 -3 -5 2\ns 3 -3 -4 1\n";
-  const Scene s = ParseNffOrThrow(
-      "b 0 0 0\nv\nfrom 0 0 0\nat 0 0 -1\nup 0 1 0\nangle 60\nhither 0\nresolution 61 61\n"
-      "l 0 10 0\nl 5 -5 5\n" +
-          objects,
-      "ties.nff");
+  const Scene s = Nff("0 0 0", "0 0 -1", 60, 61, "l 0 10 0\nl 5 -5 5\n" + objects);
   const auto none = Make(s, Accel::kNone), bvh = Make(s, Accel::kBvh);
   EXPECT_GT(ExpectSameImage(*none, *bvh), 0);
   TraceStats stats;
@@ -195,11 +197,10 @@ TEST(Bvh, CoincidentAndTouchingSpheresTieToTheLowerIndex) {
 // left child; both boxes are entered at 4 − pad, so the walk tests the spheres first and
 // must then hand the tie to the square, the lower index, as the exhaustive loop does.
 TEST(Bvh, ATieAcrossLeavesGoesToTheLowerIndex) {
-  const Scene s = ParseNffOrThrow(
-      "b 0 0 0\nv\nfrom 0 0 0\nat 0 0 -1\nup 0 1 0\nangle 40\nhither 0\nresolution 5 5\n"
-      "l 0 0 10\nf 1 1 1 1 0 0 0 1\np 4\n-50 -50 -4\n50 -50 -4\n50 50 -4\n-50 50 -4\n"
-      "s 0 0 -5 1\ns 0 3 -5.5 1\ns 0 -3 -5.5 1\n",
-      "tie.nff");
+  const Scene s =
+      Nff("0 0 0", "0 0 -1", 40, 5,
+          "l 0 0 10\nf 1 1 1 1 0 0 0 1\np 4\n-50 -50 -4\n50 -50 -4\n50 50 -4\n-50 50 -4\n"
+          "s 0 0 -5 1\ns 0 3 -5.5 1\ns 0 -3 -5.5 1\n");
   const auto none = Make(s, Accel::kNone), bvh = Make(s, Accel::kBvh);
   EXPECT_EQ(bvh->BuildWork().bvhNodes, 3u) << "the root split into two leaves";
   for (const Tracer* t : {none.get(), bvh.get()}) {
@@ -251,11 +252,7 @@ TEST(Bvh, TransformedQuadricsAndConesGiveTheExhaustiveHits) {
       "transform 1 0 0.5 0  0 1 0 0  0 0 1 0\nc\n-2 -1 -7 0.5\n-2 1 -7 0.5\n"
       "transform 0.5 0.2 0 0  0 1 0.3 0  0.1 0 2 0\nc\n0 -1 -4 0.6\n0 1 -4 0.1\n"
       "transform identity\nc\n2 -2 -8 1\n2 2 -8 0\nc\n-1 2 -6 0.3\n1 2 -6 0.3\n";
-  const Scene mine = ParseNffOrThrow(
-      "b 0 0 0\nv\nfrom 0 0 4\nat 0 0 -5\nup 0 1 0\nangle 50\nhither 0\nresolution 64 64\n"
-      "l 3 6 4\nl -4 2 0\n" +
-          more,
-      "quadrics.nff");
+  const Scene mine = Nff("0 0 4", "0 0 -5", 50, 64, "l 3 6 4\nl -4 2 0\n" + more);
   for (const Scene* s : {&showcase, &mine}) {
     for (const Precision p : {Precision::kDouble, Precision::kFloat}) {
       const auto none = Make(*s, Accel::kNone, p), bvh = Make(*s, Accel::kBvh, p);
@@ -305,10 +302,9 @@ TEST(Bvh, EverySampleSceneGivesTheExhaustiveImage) {
 //     but sphere 2, tested first and opaque, ends the walk: 3 box tests, 2 visits, 1 test,
 //     product 0.
 TEST(Bvh, NodeVisitsOfAHandBuiltSceneEqualTheHandCount) {
-  const Scene s = ParseNffOrThrow(
-      "b 0 0 0\nv\nfrom 0 0 10\nat 0 0 0\nup 0 1 0\nangle 40\nhither 0\nresolution 4 4\n"
-      "l 10 0 -5\nf 1 1 1 1 0 0 0 1\ns -10 0 0 1\ns -10 0 0 1\ns 10 0 0 1\ns 10 0 0 1\n",
-      "two.nff");
+  const Scene s =
+      Nff("0 0 10", "0 0 0", 40, 4,
+          "l 10 0 -5\nf 1 1 1 1 0 0 0 1\ns -10 0 0 1\ns -10 0 0 1\ns 10 0 0 1\ns 10 0 0 1\n");
   const auto bvh = Make(s, Accel::kBvh);
   EXPECT_EQ(bvh->BuildWork().bvhNodes, 3u);
   EXPECT_EQ(bvh->BuildWork().bvhBinned, 4u);

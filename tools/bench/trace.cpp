@@ -98,6 +98,54 @@ void TimeScalarAndKernel(const Scene& scene, const std::vector<PrimaryRay>& rays
   }
 }
 
+// Embree 3 (one thread) with its built-in sphere primitive: the nearest sphere of each ray
+// (-1: none), the build's seconds in *build and the median seconds of `repeats` passes over
+// the rays in *seconds.
+std::vector<int32_t> EmbreeFirstHits(const Scene& scene, const std::vector<PrimaryRay>& rays,
+                                     int repeats, double* build, double* seconds) {
+  const size_t count = scene.objects.size();
+  RTCDevice device = rtcNewDevice("threads=1");
+  RTCScene es = rtcNewScene(device);
+  RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_SPHERE_POINT);
+  auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
+      g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), count));
+  for (size_t i = 0; i < count; ++i) {
+    const auto& sp = std::get<Sphere>(scene.objects[i].shape);
+    v[4 * i] = float(sp.centre.x);
+    v[4 * i + 1] = float(sp.centre.y);
+    v[4 * i + 2] = float(sp.centre.z);
+    v[4 * i + 3] = float(sp.radius);
+  }
+  rtcCommitGeometry(g);
+  rtcAttachGeometry(es, g);
+  rtcReleaseGeometry(g);
+  *build = MedianSeconds(1, [&] { rtcCommitScene(es); });
+  std::vector<int32_t> hits(rays.size());
+  *seconds = MedianSeconds(repeats, [&] {
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    for (size_t i = 0; i < rays.size(); ++i) {
+      RTCRayHit rh{};
+      const PrimaryRay& r = rays[i];
+      rh.ray.org_x = float(r.origin.x);
+      rh.ray.org_y = float(r.origin.y);
+      rh.ray.org_z = float(r.origin.z);
+      rh.ray.dir_x = float(r.direction.x);
+      rh.ray.dir_y = float(r.direction.y);
+      rh.ray.dir_z = float(r.direction.z);
+      rh.ray.tnear = 0;
+      rh.ray.tfar = std::numeric_limits<float>::infinity();
+      rh.ray.mask = ~0u;
+      rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+      rtcIntersect1(es, &context, &rh);
+      hits[i] = rh.hit.geomID == RTC_INVALID_GEOMETRY_ID ? -1 : int32_t(rh.hit.primID);
+    }
+  });
+  rtcReleaseScene(es);
+  rtcReleaseDevice(device);
+  return hits;
+}
+
 void Run(int count, int size) {
   const Scene scene = GenerateRandomSpheres({count, 1, size, size});
   const PrimaryRays camera(scene.camera);
@@ -114,45 +162,8 @@ void Run(int count, int size) {
   TimeScalarAndKernel<float>(scene, rays, repeats, scalarF, kernelF, exactF, &scalarHit);
   TimeScalarAndKernel<double>(scene, rays, repeats, scalarD, kernelD, exactD, nullptr);
 
-  RTCDevice device = rtcNewDevice("threads=1");
-  RTCScene es = rtcNewScene(device);
-  RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_SPHERE_POINT);
-  auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
-      g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), size_t(count)));
-  for (int i = 0; i < count; ++i) {
-    const auto& sp = std::get<Sphere>(scene.objects[i].shape);
-    v[4 * i] = float(sp.centre.x);
-    v[4 * i + 1] = float(sp.centre.y);
-    v[4 * i + 2] = float(sp.centre.z);
-    v[4 * i + 3] = float(sp.radius);
-  }
-  rtcCommitGeometry(g);
-  rtcAttachGeometry(es, g);
-  rtcReleaseGeometry(g);
-  const double build = MedianSeconds(1, [&] { rtcCommitScene(es); });
-  std::vector<int32_t> embreeHit(nRays);
-  const double embree = MedianSeconds(repeats, [&] {
-    RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
-    for (size_t i = 0; i < nRays; ++i) {
-      RTCRayHit rh{};
-      const PrimaryRay& r = rays[i];
-      rh.ray.org_x = float(r.origin.x);
-      rh.ray.org_y = float(r.origin.y);
-      rh.ray.org_z = float(r.origin.z);
-      rh.ray.dir_x = float(r.direction.x);
-      rh.ray.dir_y = float(r.direction.y);
-      rh.ray.dir_z = float(r.direction.z);
-      rh.ray.tnear = 0;
-      rh.ray.tfar = std::numeric_limits<float>::infinity();
-      rh.ray.mask = ~0u;
-      rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-      rtcIntersect1(es, &context, &rh);
-      embreeHit[i] = rh.hit.geomID == RTC_INVALID_GEOMETRY_ID ? -1 : int32_t(rh.hit.primID);
-    }
-  });
-  rtcReleaseScene(es);
-  rtcReleaseDevice(device);
+  double build, embree;
+  const std::vector<int32_t> embreeHit = EmbreeFirstHits(scene, rays, repeats, &build, &embree);
 
   size_t embreeAgree = 0;
   for (size_t i = 0; i < nRays; ++i) embreeAgree += embreeHit[i] == scalarHit[i];
@@ -220,45 +231,8 @@ void BvhAgainstEmbree(int count, int size) {
     for (size_t i = 0; i < rays.size(); ++i) ours[i] = tracer->FirstHit(rays[i], stats).object;
   });
 
-  RTCDevice device = rtcNewDevice("threads=1");
-  RTCScene es = rtcNewScene(device);
-  RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_SPHERE_POINT);
-  auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
-      g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), size_t(count)));
-  for (int i = 0; i < count; ++i) {
-    const auto& sp = std::get<Sphere>(scene.objects[i].shape);
-    v[4 * i] = float(sp.centre.x);
-    v[4 * i + 1] = float(sp.centre.y);
-    v[4 * i + 2] = float(sp.centre.z);
-    v[4 * i + 3] = float(sp.radius);
-  }
-  rtcCommitGeometry(g);
-  rtcAttachGeometry(es, g);
-  rtcReleaseGeometry(g);
-  const double embreeBuild = MedianSeconds(1, [&] { rtcCommitScene(es); });
-  std::vector<int32_t> theirs(rays.size());
-  const double embree = MedianSeconds(repeats, [&] {
-    RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
-    for (size_t i = 0; i < rays.size(); ++i) {
-      RTCRayHit rh{};
-      const PrimaryRay& r = rays[i];
-      rh.ray.org_x = float(r.origin.x);
-      rh.ray.org_y = float(r.origin.y);
-      rh.ray.org_z = float(r.origin.z);
-      rh.ray.dir_x = float(r.direction.x);
-      rh.ray.dir_y = float(r.direction.y);
-      rh.ray.dir_z = float(r.direction.z);
-      rh.ray.tnear = 0;
-      rh.ray.tfar = std::numeric_limits<float>::infinity();
-      rh.ray.mask = ~0u;
-      rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-      rtcIntersect1(es, &context, &rh);
-      theirs[i] = rh.hit.geomID == RTC_INVALID_GEOMETRY_ID ? -1 : int32_t(rh.hit.primID);
-    }
-  });
-  rtcReleaseScene(es);
-  rtcReleaseDevice(device);
+  double embreeBuild, embree;
+  const std::vector<int32_t> theirs = EmbreeFirstHits(scene, rays, repeats, &embreeBuild, &embree);
   size_t agree = 0;
   for (size_t i = 0; i < rays.size(); ++i) agree += ours[i] == theirs[i];
   const double n = double(rays.size());
