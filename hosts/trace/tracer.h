@@ -1,9 +1,11 @@
-// hosts/trace/tracer.h — the exhaustive Whitted tracer every method shares (paper §2,
-// docs/shading.md).
+// hosts/trace/tracer.h — the Whitted tracer every method shares (paper §2,
+// docs/shading.md): exhaustive, as the paper's, or through a bounding-volume hierarchy
+// (TraceOptions::accel, --accel bvh; hosts/trace/bvh.h) with the same results bit for bit.
 //
 // It comes in three pieces so the other methods can swap the middle one:
 //   (a) PrimaryRays::At(x, y)        — the eye ray through pixel (x, y), in double;
-//   (b) Tracer::FirstHit(ray)        — the first object along it (every object tested);
+//   (b) Tracer::FirstHit(ray)        — the first object along it (every object tested, or
+//                                      the hierarchy walked);
 //   (c) Tracer::ShadeFromPrimaryHit  — the colour from that hit: shadow rays, reflection,
 //                                      refraction, recursively (docs/shading.md).
 // The sequential method is (a)+(b)+(c); the SIMD method does (b) on the emulated array and
