@@ -83,13 +83,14 @@ const WorkCost kCosts[kWorkEvents] = {
     // sort of the surfaces it crossed are not counted (assumed: a walk makes tens of box
     // tests, and a shadow ray crosses few surfaces).
     {2, 12,
-     "node visit in tracer.cpp NearestBvh/TransmissionBvh: pop (2 loads), prune t > best (1), "
-     "node first/count loads and the leaf branch, order the two children (1) and push them "
-     "(4 stores)"},
-    {24, 15,
-     "Enters in tracer.cpp: per axis (lo - o)*inv, (hi - o)*inv (4), their order (1), the "
-     "running near and far (2); the interval's three tests (3); 6 bound loads + 3 per axis "
-     "selects (assumed)"},
+     "node visit in tracer.cpp NearestBvh/TransmissionBvh: pop the entry (its reference and "
+     "t: 2 loads), prune t > best (1), the leaf branch, the pair record's address, order the "
+     "two children (1) and push them (4 stores)"},
+    {27, 15,
+     "one box of EntersPair in tracer.cpp (one SSE2 lane; Enters for the root): per axis "
+     "(lo - o)*inv and (hi - o)*inv (4), their min and max (2), the running near and far (2); "
+     "the interval's three tests (3); its 6 bounds' loads, the broadcasts and the mask "
+     "(assumed)"},
     {46, 40,
      "a primitive binned in bvh.cpp Build: node and centroid box growth (12 min/max), per axis "
      "the bin index (4: sub, div, mul, convert) and its bin's box grown (6), the partition's "

@@ -145,7 +145,7 @@ struct PublishedCost {
 constexpr PublishedCost kWorkTable[] = {
     {"sphereTest", 21, 12}, {"coneTest", 70, 25}, {"polygonTest", 44, 30}, {"ray", 25, 20},
     {"hit", 2, 10},         {"shade", 37, 40},    {"lightSample", 66, 40}, {"pixel", 0, 20},
-    {"nodeVisit", 2, 12},   {"boxTest", 24, 15},  {"bvhBin", 46, 40},      {"bvhNode", 1176, 600}};
+    {"nodeVisit", 2, 12},   {"boxTest", 27, 15},  {"bvhBin", 46, 40},      {"bvhNode", 1176, 600}};
 constexpr double kMflops = 4.2, kMips = 28.5;  // sparcstation2, the ufmg1992 host
 // The wavetracer array: a 10 MHz clock; one hostPlane (a bit of each of 8192 PEs, 1 KB over
 // SCSI) takes 2048 cycles.
