@@ -26,7 +26,8 @@ struct Bounds {
   void Grow(const Vec3& p);
   void Grow(const Bounds& b);
   bool Empty() const { return !(lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z); }
-  double HalfArea() const;  // xy + yz + zx of the extents (0 when empty): the SAH's weight
+  double HalfArea()
+      const;  // xy + yz + zx of the extents, world units² (0 when empty): the SAH's weight
   Vec3 Centre() const { return (lo + hi) * 0.5; }
 };
 
@@ -73,7 +74,8 @@ inline constexpr int kBvhMaxLeaf = 8;
 inline constexpr double kBvhTraversalCost = 2.0;
 
 // The binned-SAH hierarchy over `boxes` (one per object, Scene::objects order; none may be
-// empty), each node's box grown by `pad` world units on every side (>= 0). Leaves hold at
+// empty: ZEPHYR_CHECK, a caller's bug), each node's box grown by `pad` world units on every
+// side (>= 0, checked likewise). Leaves hold at
 // most kBvhMaxLeaf objects unless their centroids coincide or kBvhMaxDepth is reached. The
 // same boxes give the same hierarchy on every machine (no threads, no hashing).
 Bvh BuildBvh(const std::vector<Bounds>& boxes, double pad);
