@@ -26,8 +26,8 @@ struct Bounds {
   void Grow(const Vec3& p);
   void Grow(const Bounds& b);
   bool Empty() const { return !(lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z); }
-  double HalfArea()
-      const;  // xy + yz + zx of the extents, world units² (0 when empty): the SAH's weight
+  // xy + yz + zx of the extents, world units² (0 when empty): the SAH's weight.
+  double HalfArea() const;
   Vec3 Centre() const { return (lo + hi) * 0.5; }
 };
 
