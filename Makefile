@@ -123,7 +123,7 @@ FUZZ_BIN  := $(BUILD)/fuzz/nff_fuzz
 # every pixel and is far too slow per input, nor the OpenMP layer blocks (bitserial/blocks.cpp)
 # the planner never calls.
 FUZZ_SRCS := tests/fuzz/nff_fuzz.cpp hosts/scene/nff.cpp hosts/scene/scene.cpp hosts/io/output_file.cpp hosts/io/test_seam.cpp \
-             hosts/scene/geometry.cpp hosts/trace/tracer.cpp hosts/trace/sphere_kernels.cpp \
+             hosts/scene/geometry.cpp hosts/trace/tracer.cpp hosts/trace/bvh.cpp hosts/trace/sphere_kernels.cpp \
              $(filter-out $(OPENMP_SRCS),$(wildcard fixed/*.cpp bitserial/*.cpp)) \
              hosts/trace/exact.cpp \
              $(addprefix hosts/simd/,options.cpp plan.cpp program.cpp audit.cpp bounds.cpp ops.cpp sphere.cpp sphere_float.cpp ellipsoid.cpp polygon.cpp cone.cpp)

@@ -73,6 +73,8 @@ CommandRegistration reg("render", [](CLI::App& program) {
            "Host tracer scalar: float or double");
   AddNamed(*cmd, "--sphere-test", o->trace.sphereTest, kSphereTestNames,
            "Sphere test form: hb (Hearn-Baker) or naive");
+  AddNamed(*cmd, "--accel", o->trace.accel, kAccelNames,
+           "Host tracer: none (every object, the paper's) or bvh (a hierarchy; the same image)");
   cmd->add_flag("--no-progress", *noProgress, "No progress bar even on a terminal");
   auto simdFlags = std::make_shared<SimdFlags>();
   simdFlags->AddTo(*cmd, "simd: ");

@@ -15,7 +15,7 @@ void RenderArray(const Scene& scene, const RenderOptions& options, RenderOutput&
   const Camera& c = scene.camera;
   const auto tracer = Tracer::Create(scene, options.trace);  // its option errors before the pass
   simd::PrimaryPass pass = RunTimedPrimaryPass(scene, options, out);
-  TraceStats stats;
+  TraceStats stats = tracer->BuildWork();
   out.image = Image(c.width, c.height);
   wavefront::WavefrontResult wave;
   {

@@ -25,6 +25,7 @@ class DistWork : public FrameWork {
     farmed::ChildSetup setup = farmed::ReadSetup(setupText, "dist");
     scene_ = std::move(setup.scene);
     tracer_ = Tracer::Create(scene_, setup.trace);
+    stats_.AddFrame(tracer_->BuildWork());  // each child builds (and is charged) its own BVH
   }
   int ImageWidth() const override { return scene_.camera.width; }
   int ImageHeight() const override { return scene_.camera.height; }

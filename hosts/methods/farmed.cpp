@@ -24,7 +24,8 @@ std::string SetupText(const std::string& method, const Scene& scene, const Trace
                       {"scene", WriteNff(scene)},
                       {"depth", trace.depth},
                       {"precision", kPrecisionNames.NameOf(trace.precision)},
-                      {"sphereTest", kSphereTestNames.NameOf(trace.sphereTest)}};
+                      {"sphereTest", kSphereTestNames.NameOf(trace.sphereTest)},
+                      {"accel", kAccelNames.NameOf(trace.accel)}};
   j.update(more);
   return j.dump();
 }
@@ -43,6 +44,8 @@ ChildSetup ReadSetup(const std::string& text, const std::string& method) {
         kPrecisionNames.Parse(s.json.at("precision").get<std::string>(), "the set-up's precision");
     s.trace.sphereTest = kSphereTestNames.Parse(s.json.at("sphereTest").get<std::string>(),
                                                 "the set-up's sphere test");
+    s.trace.accel =
+        kAccelNames.Parse(s.json.at("accel").get<std::string>(), "the set-up's acceleration");
   } catch (const nlohmann::json::exception& e) {
     throw UserError(std::string("malformed set-up message: ") + e.what());
   }

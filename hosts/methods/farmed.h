@@ -19,7 +19,7 @@ static_assert(sizeof(Vec3) == 3 * sizeof(double), "pixels travel as 3 doubles");
 inline constexpr std::size_t kPixelBytes = sizeof(Vec3);  // linear RGB, 3 doubles
 
 // The set-up text for `method`: {"method", "scene" (NFF), "depth", "precision",
-// "sphereTest"} plus `more` (hetero: "dirFracBits", "refineDirFracBits").
+// "sphereTest", "accel"} plus `more` (hetero: "dirFracBits", "refineDirFracBits").
 std::string SetupText(const std::string& method, const Scene& scene, const TraceOptions& trace,
                       const nlohmann::json& more = nlohmann::json::object());
 

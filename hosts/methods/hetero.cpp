@@ -97,6 +97,7 @@ class HeteroWork : public FrameWork {
                       std::to_string(refineDirFracBits_));
     scene_ = std::move(setup.scene);
     tracer_ = Tracer::Create(scene_, setup.trace);
+    stats_.AddFrame(tracer_->BuildWork());  // each child builds (and is charged) its own BVH
   }
   int ImageWidth() const override { return scene_.camera.width; }
   int ImageHeight() const override { return scene_.camera.height; }
@@ -176,7 +177,7 @@ void RenderHetero(const Scene& scene, const RenderOptions& options, RenderOutput
   if (testbed::Simulated())
     job.parentPassSeconds = testbed::ChargeArrayCycles(
         pass.array.cycles, pass.refine ? &pass.refine->array.cycles : nullptr,
-        uint64_t(pass.recomputedPixels), scene, "heterogeneous");
+        testbed::RecomputeWork(pass.recomputeWork), "heterogeneous");
   job.setup =
       farmed::SetupText("hetero", scene, options.trace,
                         {{"dirFracBits", pass.plan.dirFracBits},

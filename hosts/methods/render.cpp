@@ -108,7 +108,9 @@ std::string RenderMethodsUsing(bool array, bool farm) {
   return names;
 }
 
-RenderOutput RunRender(const RenderOptions& options) {
+RenderOutput RunRender(const RenderOptions& given) {
+  RenderOptions options = given;
+  options.simd.hostAccel = options.trace.accel;  // the pass's recompute traces on the host too
   const RenderMethodEntry* it = &MethodNamed(options.method);
   RenderOutput out;
   if (it->child) it->child(options);  // a child rank serves frames and ends there
@@ -154,6 +156,7 @@ RenderOutput RunRender(const RenderOptions& options) {
     }
     if (out.simd->refine) work.refineCycles = &out.simd->refine->array.cycles;
     work.recomputedPixels = uint64_t(out.simd->recomputedPixels);
+    work.recomputeWork = &out.simd->recomputeWork;
   }
   testbed::FarmTimes farmTimes;
   if (out.farm) {

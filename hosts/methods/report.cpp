@@ -57,7 +57,8 @@ nlohmann::json PrimaryPassJson(const simd::PrimaryPass& pass) {
                        {{"overflow", pass.uncertain.overflow},
                         {"grazing", pass.uncertain.grazing},
                         {"nearTie", pass.uncertain.nearTie},
-                        {"recomputed", pass.recomputedPixels}}}};
+                        {"recomputed", pass.recomputedPixels}}},
+                      {"recomputeWork", pass.recomputeWork.ToJson()}};
   if (pass.refine) {
     const simd::RefineResult& r = *pass.refine;
     j["refine"] = {{"pixels", r.pixels},
@@ -122,7 +123,8 @@ nlohmann::json RenderReportJson(const RenderOutput& out) {
                 {"height", out.scene.height}};
   r["options"] = {{"depth", out.trace.depth},
                   {"precision", kPrecisionNames.NameOf(out.trace.precision)},
-                  {"sphereTest", kSphereTestNames.NameOf(out.trace.sphereTest)}};
+                  {"sphereTest", kSphereTestNames.NameOf(out.trace.sphereTest)},
+                  {"accel", kAccelNames.NameOf(out.trace.accel)}};
   r["phases"] = out.phases;
   if (out.hostWork) r.update(out.hostWork->ToJson());  // the counters at the top level
   if (out.simd) r["simd"] = PrimaryPassJson(*out.simd);

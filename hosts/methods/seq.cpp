@@ -8,7 +8,7 @@ namespace zephyr {
 void RenderSeq(const Scene& scene, const RenderOptions& options, RenderOutput& out) {
   const Camera& c = scene.camera;
   const auto tracer = Tracer::Create(scene, options.trace);
-  TraceStats stats;
+  TraceStats stats = tracer->BuildWork();
   std::vector<PrimaryHit> hits;
   Progress progress("seq", uint64_t(c.height), options.progress);
   out.image = Image(c.width, c.height);

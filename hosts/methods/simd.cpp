@@ -46,7 +46,7 @@ void RenderSimd(const Scene& scene, const RenderOptions& options, RenderOutput& 
                  (long long)pass.refine->pixels, pass.refine->fracBits, pass.refine->layers,
                  pass.refine->array.cycles.TotalCycles(), (long long)pass.refine->stillUncertain,
                  pass.refine->array.Table().c_str());
-  TraceStats stats;
+  TraceStats stats = tracer->BuildWork();
   out.image = Image(c.width, c.height);
   {
     PhaseTimer timer(out.phases, "hostShading");

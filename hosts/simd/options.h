@@ -11,6 +11,7 @@
 #include "bitserial/profile.h"
 #include "fixed/float.h"
 #include "fixed/named.h"
+#include "hosts/trace/tracer.h"
 
 namespace zephyr::simd {
 
@@ -75,6 +76,9 @@ struct SimdOptions {
   // (bitserial/blocks.h); 0 = bitserial::DefaultBlockLayers(), at least the pass's layers =
   // op by op over the whole machine. Results and reports do not depend on it.
   int blockLayers = 0;
+  // How the host recompute of uncertain pixels finds the nearest object (the render's
+  // --accel, RunRender copies it here): the same hits either way.
+  Accel hostAccel = Accel::kNone;
 };
 
 // The machine profile the options name, with their overrides (UserError on a bad one).

@@ -105,7 +105,7 @@ void DecodeMatrix(PrimaryPass& pass, const MatrixRaw& raw) {
 
 // Uncertain pixels by the policy: fail with the counts, keep, or recompute in double.
 void HandleUncertain(PrimaryPass& pass, const Scene& scene, const PrimaryRays& rays,
-                     UncertainPolicy policy, int threads) {
+                     UncertainPolicy policy, Accel accel, int threads) {
   PrimaryMatrix& out = pass.matrix;
   const auto isUncertain = [](uint32_t f) { return (f & kUncertainFlags) != 0; };
   const int64_t uncertain = std::count_if(out.flags.begin(), out.flags.end(), isUncertain);
@@ -118,21 +118,30 @@ void HandleUncertain(PrimaryPass& pass, const Scene& scene, const PrimaryRays& r
     return;
   TraceOptions trace;
   trace.depth = 1;
+  trace.accel = accel;
   const auto tracer = Tracer::Create(scene, trace);
   std::vector<int64_t> flagged;
   flagged.reserve(uncertain);
   for (int64_t pe = 0; pe < int64_t(out.flags.size()); ++pe)
     if (isUncertain(out.flags[pe])) flagged.push_back(pe);
-  // Each pixel on its own (the tracer is read-only): the same hits whatever the thread count.
+  // Each pixel on its own (the tracer is read-only): the same hits whatever the thread count,
+  // and the same counts (sums of whole numbers).
   const int64_t n = int64_t(flagged.size());
-#pragma omp parallel for schedule(dynamic, 64) num_threads(threads)
-  for (int64_t i = 0; i < n; ++i) {
-    const int64_t pe = flagged[i];
+  TraceStats work = tracer->BuildWork();
+#pragma omp parallel num_threads(threads)
+  {
     TraceStats stats;
-    out.hits[pe] = tracer->FirstHit(rays.At(int(pe % out.width), int(pe / out.width)), stats);
-    out.flags[pe] |= kRecomputed;
+#pragma omp for schedule(dynamic, 64)
+    for (int64_t i = 0; i < n; ++i) {
+      const int64_t pe = flagged[i];
+      out.hits[pe] = tracer->FirstHit(rays.At(int(pe % out.width), int(pe / out.width)), stats);
+      out.flags[pe] |= kRecomputed;
+    }
+#pragma omp critical
+    work.Add(stats);
   }
   pass.recomputedPixels += n;
+  pass.recomputeWork.Add(work);
 }
 
 // The program over the plan's PEs (pixel pixels[k] in PE k; every pixel when empty), in the
@@ -222,7 +231,7 @@ PrimaryPass RunPrimaryPass(const Scene& scene, const SimdOptions& options) {
   if (options.uncertain == UncertainPolicy::kRefine ||
       (options.uncertain == UncertainPolicy::kAuto && flagged > budget))
     Refine(pass, scene, options, rays);
-  HandleUncertain(pass, scene, rays, options.uncertain,
+  HandleUncertain(pass, scene, rays, options.uncertain, options.hostAccel,
                   options.threads > 0 ? options.threads : bitserial::HardwareThreads());
   pass.recomputeSeconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - hostStart).count();

@@ -95,6 +95,10 @@ struct PrimaryPass {
   // The first pass's uncertain pixels (by cause), and how many the host recomputed.
   UncertainCounts uncertain;
   int64_t recomputedPixels = 0;
+  // What that recompute counted (one primary ray a pixel; every object's test, or with
+  // SimdOptions::hostAccel = kBvh the hierarchy's tests, node visits, box tests and build):
+  // the host work the testbed prices for it (testbed::RecomputeWork).
+  TraceStats recomputeWork;
   std::optional<RefineResult> refine;  // when a refine pass ran
   int64_t RefinedPixels() const { return refine ? refine->pixels : 0; }
 };

@@ -58,6 +58,11 @@ enum class WorkEvent : int {
   kShade,        // one surface point shaded (point, normal, recursion set-up)
   kLightSample,  // one light evaluated at a shaded point (direction, diffuse, highlight)
   kPixel,        // one pixel written
+  // --accel bvh (TraceStats::nodeVisits, boxTests, bvhBinned, bvhNodes):
+  kNodeVisit,  // one hierarchy node taken from the walk's stack and examined
+  kBoxTest,    // one ray–box slab test
+  kBvhBin,     // the build: one primitive binned on three axes
+  kBvhNode,    // the build: one node made (its box, its SAH sweep over the bins)
   kCount
 };
 inline constexpr int kWorkEvents = int(WorkEvent::kCount);
@@ -68,7 +73,8 @@ struct WorkCost {
   double instructions = 0;  // other instructions per event (loads, loop, branches, calls)
   std::string source;       // how the numbers were counted
 };
-// The work table (counted from hosts/trace/tracer.cpp and hosts/trace/sphere_kernels.cpp).
+// The work table (counted from hosts/trace/tracer.cpp, hosts/trace/sphere_kernels.cpp and,
+// for the hierarchy's events, hosts/trace/bvh.cpp).
 const WorkCost& CostOf(WorkEvent e);
 
 // The events behind a TraceStats: count per event, in WorkEvent order.
@@ -90,5 +96,9 @@ HostTime ModelHostTime(const TraceStats& stats, const HostProfile& profile);
 // The host work of recomputing `pixels` primary rays in double against every object of the
 // scene (the SIMD pass's uncertain pixels): one primary ray and one test per object each.
 TraceStats RecomputeWork(uint64_t pixels, const Scene& scene);
+// The same from what the recompute counted (simd::PrimaryPass::recomputeWork): its rays,
+// tests, node visits, box tests and build; its hits are not priced (the closed form above
+// never priced them: both give the same for an exhaustive recompute).
+TraceStats RecomputeWork(const TraceStats& counted);
 
 }  // namespace zephyr::testbed

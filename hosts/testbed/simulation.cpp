@@ -93,8 +93,8 @@ nlohmann::json LinkLoads(double now) {
 }
 
 double ChargeArrayCycles(const bitserial::CycleReport& cycles,
-                         const bitserial::CycleReport* refineCycles, uint64_t recomputedPixels,
-                         const Scene& scene, const std::string& method) {
+                         const bitserial::CycleReport* refineCycles,
+                         const TraceStats& recomputeWork, const std::string& method) {
   const double start = SimulatedNow();
   simgrid::s4u::Host* self = simgrid::s4u::this_actor::get_host();
   const auto arrays =
@@ -111,7 +111,7 @@ double ChargeArrayCycles(const bitserial::CycleReport& cycles,
   // The array computes at its clock (the platform gives its speed in cycles per second).
   simgrid::s4u::this_actor::exec_init(a.arrayCycles)->set_host(arrays[0])->wait();
   if (a.scsiBytes > 0) simgrid::s4u::Comm::sendto(arrays[0], self, uint64_t(a.scsiBytes));
-  passHost += ChargeHostWork(RecomputeWork(recomputedPixels, scene));
+  passHost += ChargeHostWork(recomputeWork);
   return SimulatedNow() - start;
 }
 
@@ -121,8 +121,8 @@ bool Simulated() { return false; }
 double SimulatedNow() { return 0; }
 nlohmann::json SimulatedHost() { return nlohmann::json::object(); }
 double ChargeHostWork(const TraceStats&) { return 0; }
-double ChargeArrayCycles(const bitserial::CycleReport&, const bitserial::CycleReport*, uint64_t,
-                         const Scene&, const std::string&) {
+double ChargeArrayCycles(const bitserial::CycleReport&, const bitserial::CycleReport*,
+                         const TraceStats&, const std::string&) {
   return 0;
 }
 void StartLinkAccounting() {}

@@ -24,12 +24,13 @@ double ChargeHostWork(const TraceStats& work);
 // Under simulation, at the parent: the SIMD pass's array cycles (the first pass's report
 // and, when one ran, the refine pass's; null otherwise) on the platform's array host
 // ("zephyr:role" = "array"), the matrix over the SCSI link between them, and the host's
-// share of the pass (`recomputedPixels` uncertain pixels recomputed in double) on this
-// host. `method` names the caller in the UserError for a platform without exactly one array
-// host. Returns the simulated seconds it took (0 when not simulated).
+// share of the pass (`recomputeWork`: the uncertain pixels recomputed in double, as
+// testbed::RecomputeWork prices them) on this host. `method` names the caller in the UserError for
+// a platform without exactly one array host. Returns the simulated seconds it took (0 when not
+// simulated).
 double ChargeArrayCycles(const bitserial::CycleReport& cycles,
-                         const bitserial::CycleReport* refineCycles, uint64_t recomputedPixels,
-                         const Scene& scene, const std::string& method);
+                         const bitserial::CycleReport* refineCycles,
+                         const TraceStats& recomputeWork, const std::string& method);
 
 // This rank's simulated seconds charged so far: all host work (ChargeHostWork), and the part
 // ChargeArrayCycles charged (the uncertain pixels recomputed). 0 outside simulation.

@@ -154,7 +154,9 @@ std::optional<ModelledTime> ModelTime(const std::string& testbedName, const Coun
     t.simulatedHost = SimulatedHost();
     if (work.arrayCycles) {
       const double arrayStart = SimulatedNow();
-      ChargeArrayCycles(*work.arrayCycles, work.refineCycles, work.recomputedPixels, scene,
+      ChargeArrayCycles(*work.arrayCycles, work.refineCycles,
+                        work.recomputeWork ? RecomputeWork(*work.recomputeWork)
+                                           : RecomputeWork(work.recomputedPixels, scene),
                         "SIMD/sequential");
       t.simulatedArraySeconds = SimulatedNow() - arrayStart;
     }
@@ -174,7 +176,8 @@ std::optional<ModelledTime> ModelTime(const std::string& testbedName, const Coun
       throw UserError("testbed '" + bed.name + "': its array is '" + bed.arrayProfile +
                       "', but the machine profile is '" + profile + "'");
     // The host recomputes each uncertain pixel against every object, in double.
-    stats.Add(RecomputeWork(work.recomputedPixels, scene));
+    stats.Add(work.recomputeWork ? RecomputeWork(*work.recomputeWork)
+                                 : RecomputeWork(work.recomputedPixels, scene));
     t.array =
         ModelledTime::ArrayShare{profile, SplitArrayCycles(*work.arrayCycles, work.refineCycles)};
     arraySeconds = t.array->split.arraySeconds + t.array->split.scsiSeconds;

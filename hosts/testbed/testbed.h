@@ -94,6 +94,9 @@ struct CountedWork {
   const bitserial::CycleReport* arrayCycles = nullptr;
   const bitserial::CycleReport* refineCycles = nullptr;
   uint64_t recomputedPixels = 0;
+  // What the recompute counted (simd::PrimaryPass::recomputeWork), priced instead of
+  // recomputedPixels' closed form when given (with --accel bvh the two differ).
+  const TraceStats* recomputeWork = nullptr;
   const FarmTimes* farm = nullptr;  // the frame farm (dist, hetero); null: one process
 };
 

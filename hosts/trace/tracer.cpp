@@ -5,8 +5,14 @@
 #include <cstdio>
 #include <limits>
 #include <nlohmann/json.hpp>
+#include <type_traits>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+#include <utility>
 
 #include "fixed/check.h"
+#include "hosts/trace/bvh.h"
 #include "hosts/trace/sphere_kernels.h"
 
 namespace zephyr {
@@ -36,6 +42,10 @@ void TraceStats::Add(const TraceStats& o) {
   shades += o.shades;
   lightSamples += o.lightSamples;
   pixels += o.pixels;
+  nodeVisits += o.nodeVisits;
+  boxTests += o.boxTests;
+  bvhBinned += o.bvhBinned;
+  bvhNodes += o.bvhNodes;
 }
 
 TraceStats TraceStats::FromJson(const nlohmann::json& j) {
@@ -47,6 +57,11 @@ TraceStats TraceStats::FromJson(const nlohmann::json& j) {
   s.shades = j.at("shades").get<uint64_t>();
   s.lightSamples = j.at("lightSamples").get<uint64_t>();
   s.pixels = j.at("pixels").get<uint64_t>();
+  const nlohmann::json& bvh = j.at("bvh");
+  s.nodeVisits = bvh.at("nodeVisits").get<uint64_t>();
+  s.boxTests = bvh.at("boxTests").get<uint64_t>();
+  s.bvhBinned = bvh.at("binned").get<uint64_t>();
+  s.bvhNodes = bvh.at("nodesBuilt").get<uint64_t>();
   return s;
 }
 
@@ -68,6 +83,10 @@ nlohmann::json TraceStats::ToJson() const {
   j["shades"] = shades;
   j["lightSamples"] = lightSamples;
   j["pixels"] = pixels;
+  j["bvh"] = {{"nodeVisits", nodeVisits},
+              {"boxTests", boxTests},
+              {"binned", bvhBinned},
+              {"nodesBuilt", bvhNodes}};
   return j;
 }
 
@@ -318,6 +337,7 @@ class TracerT final : public Tracer {
     for (size_t i = 0; i < scene.lights.size(); ++i)
       lightColour_.push_back(V(scene.LightColour(i)));
     ambient_ = T(scene.Ambient());
+    if (options.accel == Accel::kBvh) BuildHierarchy(scene);
   }
 
   PrimaryHit FirstHit(const PrimaryRay& ray, TraceStats& stats) const override {
@@ -336,7 +356,15 @@ class TracerT final : public Tracer {
   }
 
  private:
+  // The nearest object along o + t d with its first root in (tMin, inf) in tBest: the
+  // hierarchy's walk when there is one and the origin lies within the reach its padding
+  // covers (BuildHierarchy), else every object. The same object and bits of t either way.
   int Nearest(const V& o, const V& d, T tMin, TraceStats& stats, T& tBest) const {
+    if (!nodes_.empty() && MaxAbs(o) <= originLimit_) return NearestBvh(o, d, tMin, stats, tBest);
+    return NearestExhaustive(o, d, tMin, stats, tBest);
+  }
+
+  int NearestExhaustive(const V& o, const V& d, T tMin, TraceStats& stats, T& tBest) const {
     for (int k = 0; k < kShapeKinds; ++k) stats.tests[k] += kindCount_[k];
     // The same answer as one scalar pass over objects_ in order keeping strictly nearer
     // roots: the kernel (bit-identical to IntersectSphere) gives the nearest untransformed
@@ -355,6 +383,313 @@ class TracerT final : public Tracer {
     return best;
   }
 
+  // ---- The hierarchy (--accel bvh; docs/shading.md, "The BVH") ----------------------------
+  // Exactness rests on two things. (1) The objects are tested by the very functions the
+  // exhaustive loops call (the leaf's untransformed sphere by IntersectSphere, which the
+  // vector kernel matches bit for bit; the rest by Intersect), so a tested object gives the
+  // same roots. (2) No object with a root that counts is culled: each box is grown by a pad
+  // far above the rounding of both the object's test and the slab test, so any root an
+  // object's test returns lies inside the (padded) box's computed slab interval. Both round
+  // with the magnitudes of the ray's origin and the scene (|o|, |x| <= reach): the pad is
+  // kBvhPadRelative·reach (2⁻²⁴ in double, 2⁻¹² in float: ~10⁸ and ~4000 ulps of reach), a
+  // transformed object's box grown further by its map's condition number (its test rounds in
+  // object space), and a ray whose origin lies beyond reach (which no hit point or light
+  // does) takes the exhaustive loop.
+  static constexpr double kBvhPadRelative = std::is_same_v<T, float> ? 0x1p-12 : 0x1p-24;
+
+  struct LeafObject {  // one entry of order[], with an untransformed sphere's data inline
+    V centre;
+    T radius2 = 0;
+    int32_t object = 0;
+    bool sphere = false;  // an untransformed sphere: IntersectSphere on centre, radius2
+    ShapeKind kind = ShapeKind::kSphere;
+    T transparency = 0;  // its material's T, as Transmission multiplies by it
+  };
+
+  // What the walk keeps of a node: a leaf's objects leaves_[first, first + count), or an
+  // inner node's index in pairs_ (count 0).
+  struct NodeRef {
+    int32_t first = 0, count = 0;
+  };
+  NodeRef Reference(int32_t node) const {
+    return nodes_[node].count > 0 ? NodeRef{nodes_[node].first, nodes_[node].count}
+                                  : NodeRef{node, 0};
+  }
+
+  static T RoundDown(double v) {
+    T f = T(v);
+    if (double(f) > v) f = std::nextafter(f, -std::numeric_limits<T>::infinity());
+    return f;
+  }
+  static T RoundUp(double v) {
+    T f = T(v);
+    if (double(f) < v) f = std::nextafter(f, std::numeric_limits<T>::infinity());
+    return f;
+  }
+
+  void BuildHierarchy(const Scene& scene) {
+    if (scene.objects.empty()) return;
+    std::vector<Bounds> boxes;
+    boxes.reserve(scene.objects.size());
+    double reach = MaxAbs(scene.camera.from);
+    for (const Light& l : scene.lights) reach = std::max(reach, MaxAbs(l.position));
+    for (const Primitive& p : scene.objects) {
+      boxes.push_back(WorldBound(p));
+      reach = std::max({reach, MaxAbs(boxes.back().lo), MaxAbs(boxes.back().hi)});
+    }
+    // Hit points lie within the boxes (up to rounding), so twice the reach holds every
+    // origin a secondary or shadow ray has.
+    originLimit_ = T(2 * reach);
+    const double pad = kBvhPadRelative * 2 * reach + double(std::numeric_limits<T>::min());
+    for (size_t i = 0; i < scene.objects.size(); ++i) {
+      const Primitive& p = scene.objects[i];
+      if (!p.transform || p.Kind() == ShapeKind::kPolygon) continue;  // polygons: world space
+      const double condition = LinearNormInf(*p.transform) * LinearNormInf(p.transform->Inverse());
+      const double grow = kBvhPadRelative * condition * 2 * reach;
+      boxes[i].lo = boxes[i].lo - Vec3{grow, grow, grow};
+      boxes[i].hi = boxes[i].hi + Vec3{grow, grow, grow};
+    }
+    const Bvh bvh = BuildBvh(boxes, pad);
+    nodes_.reserve(bvh.nodes.size());
+    for (const BvhNodeT<double>& n : bvh.nodes) {
+      BvhNodeT<T> m;
+      for (int a = 0; a < 3; ++a) {
+        m.lo[a] = RoundDown(n.lo[a]);
+        m.hi[a] = RoundUp(n.hi[a]);
+      }
+      m.first = n.first;
+      m.count = n.count;
+      nodes_.push_back(m);
+    }
+    // Each inner node's two child boxes side by side, for EntersPair, with what each child
+    // is: the walk reads nothing else of a node.
+    pairs_.resize(nodes_.size());
+    for (size_t i = 0; i < nodes_.size(); ++i) {
+      if (nodes_[i].count > 0) continue;
+      for (int c = 0; c < 2; ++c) {
+        const int32_t child = nodes_[i].first + c;
+        for (int a = 0; a < 3; ++a) {
+          pairs_[i].lo[a][c] = nodes_[child].lo[a];
+          pairs_[i].hi[a][c] = nodes_[child].hi[a];
+        }
+        pairs_[i].child[c] = Reference(child);
+      }
+    }
+    for (const int32_t i : bvh.order) {
+      const Prepared<T>& obj = objects_[i];
+      LeafObject leaf;
+      leaf.object = i;
+      leaf.kind = obj.kind;
+      leaf.sphere = obj.kind == ShapeKind::kSphere && !obj.transformed;
+      leaf.centre = obj.centre;
+      leaf.radius2 = obj.radius2;
+      leaf.transparency = T(scene.materials[obj.material].t);
+      leaves_.push_back(leaf);
+    }
+    buildWork_.bvhBinned = bvh.binnedPrimitives;
+    buildWork_.bvhNodes = bvh.nodesBuilt;
+  }
+
+  // A ray's set-up for slab tests: its origin and the reciprocals of its direction (±inf
+  // for a zero component).
+  struct SlabRay {
+    T o[3], inv[3];
+    SlabRay(const V& origin, const V& d)
+        : o{origin.x, origin.y, origin.z}, inv{T(1) / d.x, T(1) / d.y, T(1) / d.z} {}
+  };
+
+  // Whether the ray's slab interval [tNear, tFar] through node n meets [tMin, tMax]; tNear
+  // in *near. A NaN (0·inf: the origin on a box plane along a zero component) constrains
+  // nothing on that axis, or culls a ray lying in a padded face, which no object reaches.
+  static bool Enters(const BvhNodeT<T>& n, const SlabRay& r, T tMin, T tMax, T* near) {
+    T lo = -std::numeric_limits<T>::infinity(), hi = std::numeric_limits<T>::infinity();
+    for (int a = 0; a < 3; ++a) {
+      const T t0 = (n.lo[a] - r.o[a]) * r.inv[a], t1 = (n.hi[a] - r.o[a]) * r.inv[a];
+      const T tn = t0 < t1 ? t0 : t1, tf = t0 < t1 ? t1 : t0;
+      if (tn > lo) lo = tn;
+      if (tf < hi) hi = tf;
+    }
+    *near = lo;
+    return lo <= hi && hi >= tMin && lo <= tMax;
+  }
+
+  // The two children's boxes of an inner node, by axis then child (one SIMD lane a child).
+  struct alignas(16) ChildBoxes {
+    T lo[3][2], hi[3][2];
+    NodeRef child[2];
+  };
+
+  // Enters for both children of an inner node at once: bit c of the result set when child c
+  // is entered, its tNear in near[c]. With SSE2 (double) two lanes; otherwise the same
+  // operations lane by lane (min(a, b) = a < b ? a : b and max(a, b) = a > b ? a : b, as
+  // minpd and maxpd), so the same boxes are entered on every machine. NaN: as in Enters.
+  static int EntersPair(const ChildBoxes& b, const SlabRay& r, T tMin, T tMax, T near[2]) {
+#if defined(__SSE2__)
+    if constexpr (std::is_same_v<T, double>) {
+      // The three axes written out (the compiler keeps the loop at -O2).
+      const __m128d o0 = _mm_set1_pd(r.o[0]), o1 = _mm_set1_pd(r.o[1]), o2 = _mm_set1_pd(r.o[2]);
+      const __m128d i0 = _mm_set1_pd(r.inv[0]), i1 = _mm_set1_pd(r.inv[1]),
+                    i2 = _mm_set1_pd(r.inv[2]);
+      const __m128d a0 = _mm_mul_pd(_mm_sub_pd(_mm_load_pd(b.lo[0]), o0), i0);
+      const __m128d b0 = _mm_mul_pd(_mm_sub_pd(_mm_load_pd(b.hi[0]), o0), i0);
+      const __m128d a1 = _mm_mul_pd(_mm_sub_pd(_mm_load_pd(b.lo[1]), o1), i1);
+      const __m128d b1 = _mm_mul_pd(_mm_sub_pd(_mm_load_pd(b.hi[1]), o1), i1);
+      const __m128d a2 = _mm_mul_pd(_mm_sub_pd(_mm_load_pd(b.lo[2]), o2), i2);
+      const __m128d b2 = _mm_mul_pd(_mm_sub_pd(_mm_load_pd(b.hi[2]), o2), i2);
+      __m128d lo = _mm_set1_pd(-std::numeric_limits<double>::infinity());
+      __m128d hi = _mm_set1_pd(std::numeric_limits<double>::infinity());
+      lo = _mm_max_pd(_mm_min_pd(a0, b0), lo);
+      hi = _mm_min_pd(_mm_max_pd(a0, b0), hi);
+      lo = _mm_max_pd(_mm_min_pd(a1, b1), lo);
+      hi = _mm_min_pd(_mm_max_pd(a1, b1), hi);
+      lo = _mm_max_pd(_mm_min_pd(a2, b2), lo);
+      hi = _mm_min_pd(_mm_max_pd(a2, b2), hi);
+      _mm_storeu_pd(near, lo);
+      const __m128d ok =
+          _mm_and_pd(_mm_and_pd(_mm_cmple_pd(lo, hi), _mm_cmpge_pd(hi, _mm_set1_pd(tMin))),
+                     _mm_cmple_pd(lo, _mm_set1_pd(tMax)));
+      return _mm_movemask_pd(ok);
+    }
+#endif
+    int mask = 0;
+    for (int c = 0; c < 2; ++c) {
+      T lo = -std::numeric_limits<T>::infinity(), hi = std::numeric_limits<T>::infinity();
+      for (int a = 0; a < 3; ++a) {
+        const T t0 = (b.lo[a][c] - r.o[a]) * r.inv[a], t1 = (b.hi[a][c] - r.o[a]) * r.inv[a];
+        const T tn = t0 < t1 ? t0 : t1, tf = t0 > t1 ? t0 : t1;
+        lo = tn > lo ? tn : lo;
+        hi = tf < hi ? tf : hi;
+      }
+      near[c] = lo;
+      if (lo <= hi && hi >= tMin && lo <= tMax) mask |= 1 << c;
+    }
+    return mask;
+  }
+
+  // One leaf object's roots along the ray, as the exhaustive loops compute them; counted.
+  int TestLeaf(const LeafObject& leaf, const V& o, const V& d, T tMin, T* roots,
+               TraceStats& stats) const {
+    ++stats.tests[int(leaf.kind)];
+    if (leaf.sphere)
+      return IntersectSphere(options_.sphereTest, o, d, leaf.centre, leaf.radius2, tMin, roots);
+    return Intersect(objects_[leaf.object], options_.sphereTest, o, d, tMin, roots);
+  }
+
+  struct StackEntry {
+    NodeRef node;
+    T tNear;
+  };
+
+  // Nearest through the hierarchy: nearer child first; a box is skipped only when it is
+  // entered strictly beyond the best t (one entered at t may hold a lower index at t). Ties
+  // go to the lower index as in NearestExhaustive, whatever the visiting order.
+  int NearestBvh(const V& o, const V& d, T tMin, TraceStats& stats, T& tBest) const {
+    tBest = std::numeric_limits<T>::infinity();
+    int best = -1;
+    const SlabRay ray(o, d);
+    StackEntry stack[kBvhMaxDepth + 2];
+    int top = 0;
+    T near;
+    ++stats.boxTests;
+    if (!Enters(nodes_[0], ray, tMin, tBest, &near)) return best;
+    stack[top++] = {Reference(0), near};
+    T roots[2];
+    uint64_t boxTests = 0, visits = 0;  // kept in registers, added to stats at the end
+    while (top > 0) {
+      const StackEntry e = stack[--top];
+      if (e.tNear > tBest) continue;
+      ++visits;
+      const NodeRef n = e.node;
+      if (n.count > 0) {
+        for (int32_t k = n.first; k < n.first + n.count; ++k) {
+          const LeafObject& leaf = leaves_[k];
+          if (TestLeaf(leaf, o, d, tMin, roots, stats) > 0 &&
+              (roots[0] < tBest || (roots[0] == tBest && leaf.object < best))) {
+            tBest = roots[0];
+            best = leaf.object;
+          }
+        }
+        continue;
+      }
+      T nearChild[2];
+      boxTests += 2;
+      const ChildBoxes& pair = pairs_[n.first];
+      const int entered = EntersPair(pair, ray, tMin, tBest, nearChild);
+      if (entered == 3) {
+        const int first = nearChild[0] <= nearChild[1] ? 0 : 1;  // the nearer popped first
+        stack[top++] = {pair.child[1 - first], nearChild[1 - first]};
+        stack[top++] = {pair.child[first], nearChild[first]};
+      } else if (entered != 0) {
+        const int c = entered >> 1;
+        stack[top++] = {pair.child[c], nearChild[c]};
+      }
+    }
+    stats.boxTests += boxTests;
+    stats.nodeVisits += visits;
+    return best;
+  }
+
+  // Transmission through the hierarchy: every box the segment (tMin, dist) meets, the
+  // crossings (object, roots nearer than dist) collected and multiplied in object order, as
+  // TransmissionExhaustive multiplies them (floating-point products depend on the order). An
+  // opaque surface crossed makes the product 0 at once (the exhaustive product is 0 too).
+  T TransmissionBvh(const V& p, const V& toLight, T dist, T tMin, TraceStats& stats) const {
+    struct Crossing {
+      int32_t object, count;
+      T transparency;
+    };
+    thread_local std::vector<Crossing> crossed;
+    crossed.clear();
+    const SlabRay ray(p, toLight);
+    StackEntry stack[kBvhMaxDepth + 2];
+    int top = 0;
+    T near;
+    ++stats.boxTests;
+    if (Enters(nodes_[0], ray, tMin, dist, &near)) stack[top++] = {Reference(0), near};
+    T roots[2];
+    uint64_t boxTests = 0, visits = 0;
+    while (top > 0) {
+      const NodeRef n = stack[--top].node;
+      ++visits;
+      if (n.count > 0) {
+        for (int32_t k = n.first; k < n.first + n.count; ++k) {
+          const LeafObject& leaf = leaves_[k];
+          const int found = TestLeaf(leaf, p, toLight, tMin, roots, stats);
+          int count = 0;
+          for (int i = 0; i < found; ++i) {
+            if (roots[i] >= dist) break;
+            ++count;
+          }
+          if (count == 0) continue;
+          if (leaf.transparency == T(0)) {
+            stats.boxTests += boxTests;
+            stats.nodeVisits += visits;
+            return T(0);
+          }
+          crossed.push_back({leaf.object, count, leaf.transparency});
+        }
+        continue;
+      }
+      boxTests += 2;
+      T nearChild[2];
+      const ChildBoxes& pair = pairs_[n.first];
+      const int entered = EntersPair(pair, ray, tMin, dist, nearChild);
+      for (int c = 0; c < 2; ++c)
+        if (entered & (1 << c)) stack[top++] = {pair.child[c], nearChild[c]};
+    }
+    stats.boxTests += boxTests;
+    stats.nodeVisits += visits;
+    std::sort(crossed.begin(), crossed.end(),
+              [](const Crossing& a, const Crossing& b) { return a.object < b.object; });
+    T through = T(1);
+    for (const Crossing& c : crossed)
+      for (int i = 0; i < c.count; ++i) {
+        through *= c.transparency;
+        if (through == T(0)) return through;
+      }
+    return through;
+  }
+
   // How far a secondary or shadow ray leaving a hit skips, so it does not re-hit the
   // surface it leaves: a bound on the hit point's error, which grows with the magnitudes
   // that computed it — the ray's origin, the distance t and the object's own numbers as its
@@ -371,6 +706,12 @@ class TracerT final : public Tracer {
   // offset of the hit the ray leaves) are ignored.
   T Transmission(const V& p, const V& toLight, T dist, T tMin, TraceStats& stats) const {
     ++stats.rays[int(RayKind::kShadow)];
+    if (!nodes_.empty() && MaxAbs(p) <= originLimit_)
+      return TransmissionBvh(p, toLight, dist, tMin, stats);
+    return TransmissionExhaustive(p, toLight, dist, tMin, stats);
+  }
+
+  T TransmissionExhaustive(const V& p, const V& toLight, T dist, T tMin, TraceStats& stats) const {
     for (int k = 0; k < kShapeKinds; ++k) stats.tests[k] += kindCount_[k];
     T through = T(1);
     T roots[2];
@@ -482,6 +823,12 @@ class TracerT final : public Tracer {
   uint64_t kindCount_[kShapeKinds] = {};
   std::vector<V> lightColour_;  // Scene::LightColour of each light
   T ambient_, hither_;
+  // --accel bvh: the hierarchy (empty: none), its objects in leaf order, and the largest
+  // |coordinate| of an origin it answers for (BuildHierarchy).
+  std::vector<BvhNodeT<T>> nodes_;
+  std::vector<ChildBoxes> pairs_;  // per inner node (by index), its children's boxes
+  std::vector<LeafObject> leaves_;
+  T originLimit_ = 0;
 };
 
 }  // namespace

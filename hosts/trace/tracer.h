@@ -1,9 +1,11 @@
-// hosts/trace/tracer.h — the exhaustive Whitted tracer every method shares (paper §2,
-// docs/shading.md).
+// hosts/trace/tracer.h — the Whitted tracer every method shares (paper §2,
+// docs/shading.md): exhaustive, as the paper's, or through a bounding-volume hierarchy
+// (TraceOptions::accel, --accel bvh; hosts/trace/bvh.h) with the same results bit for bit.
 //
 // It comes in three pieces so the other methods can swap the middle one:
 //   (a) PrimaryRays::At(x, y)        — the eye ray through pixel (x, y), in double;
-//   (b) Tracer::FirstHit(ray)        — the first object along it (every object tested);
+//   (b) Tracer::FirstHit(ray)        — the first object along it (every object tested, or
+//                                      the hierarchy walked);
 //   (c) Tracer::ShadeFromPrimaryHit  — the colour from that hit: shadow rays, reflection,
 //                                      refraction, recursively (docs/shading.md).
 // The sequential method is (a)+(b)+(c); the SIMD method does (b) on the emulated array and
@@ -28,6 +30,12 @@ namespace zephyr {
 
 enum class Precision { kFloat, kDouble };
 
+// How the host tracer finds what a ray meets (--accel): kNone tests every object (the
+// paper's exhaustive method, the default); kBvh walks a bounding-volume hierarchy built
+// once per tracer (hosts/trace/bvh.h) and gives the same objects, t and shadow products bit
+// for bit (docs/shading.md, "The BVH").
+enum class Accel { kNone, kBvh };
+
 // The deepest ray tree a render may ask for (--depth): past any scene's useful bounces
 // (POV-Ray's max_trace_level default is 5; each level doubles the rays at worst).
 inline constexpr int kMaxDepth = 64;
@@ -36,6 +44,7 @@ struct TraceOptions {
   int depth = 5;  // 1 = primary rays only (local light); each bounce adds one level; 1..kMaxDepth
   Precision precision = Precision::kDouble;
   SphereTest sphereTest = SphereTest::kHearnBaker;
+  Accel accel = Accel::kNone;
 };
 
 // The names of the host tracer's scalar (--precision) and sphere test (--sphere-test;
@@ -46,6 +55,8 @@ inline constexpr NamedValues<SphereTest, 3> kSphereTestNames{
     {{{SphereTest::kHearnBaker, "hb"},
       {SphereTest::kNaive, "naive"},
       {SphereTest::kHearnBaker, "hearn-baker"}}}};
+inline constexpr NamedValues<Accel, 2> kAccelNames{
+    {{{Accel::kNone, "none"}, {Accel::kBvh, "bvh"}}}};
 
 struct PrimaryRay {
   Vec3 origin;     // the eye
@@ -88,8 +99,15 @@ struct TraceStats {
   uint64_t shades = 0;               // surface points shaded (normal, material, recursion)
   uint64_t lightSamples = 0;         // light sources evaluated at a shaded point (local light)
   uint64_t pixels = 0;               // pixels written
+  // --accel bvh (docs/shading.md, "The BVH"); all 0 under --accel none:
+  uint64_t nodeVisits = 0;  // hierarchy nodes a ray examined (a leaf's objects or an inner
+                            // node's two child boxes)
+  uint64_t boxTests = 0;    // ray–box slab tests
+  uint64_t bvhBinned = 0;   // the build: primitives binned (Bvh::binnedPrimitives)
+  uint64_t bvhNodes = 0;    // the build: nodes made, each with its SAH sweep (Bvh::nodesBuilt)
   void Add(const TraceStats& other);
-  // {"rays": {...}, "tests": {...}, "hits", "shades", "lightSamples", "pixels"}
+  // {"rays": {...}, "tests": {...}, "hits", "shades", "lightSamples", "pixels",
+  //  "bvh": {"nodeVisits", "boxTests", "binned", "nodesBuilt"}}
   nlohmann::json ToJson() const;
   static TraceStats FromJson(const nlohmann::json& j);  // ToJson's inverse (json exceptions)
 };
@@ -102,8 +120,12 @@ class Tracer {
   const Scene& GetScene() const { return scene_; }
   const TraceOptions& Options() const { return options_; }
   const PrimaryRays& Rays() const { return rays_; }
+  // The work of building this tracer's hierarchy (bvhBinned, bvhNodes; all zero under
+  // --accel none): a method adds it once to the host work of whoever built it.
+  const TraceStats& BuildWork() const { return buildWork_; }
 
-  // (b) The nearest hit beyond the camera's hither distance, testing every object.
+  // (b) The nearest hit beyond the camera's hither distance, of every object (tested one by
+  // one, or found through the hierarchy: the same hit).
   virtual PrimaryHit FirstHit(const PrimaryRay& ray, TraceStats& stats) const = 0;
   // (c) Linear RGB of the pixel whose primary ray from the eye along hit.direction first
   // meets hit.object at hit.t (background when hit.object < 0).
@@ -135,6 +157,7 @@ class Tracer {
   const Scene& scene_;
   TraceOptions options_;
   PrimaryRays rays_;
+  TraceStats buildWork_;
 };
 
 // One object against one ray, in double, with the chosen sphere form: the nearest t in

@@ -14,6 +14,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -90,17 +91,27 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     return 0;
   }
   // A scene that parsed must be traceable (in double and float: a scene float cannot hold
-  // is a UserError) and plannable for the SIMD pass (or a UserError saying why not).
+  // is a UserError) and plannable for the SIMD pass (or a UserError saying why not); the
+  // BVH (--accel bvh) must give the exhaustive tracer's pixels and primary hits bit for bit.
   if (scene->objects.size() <= 64) {
     for (const auto precision : {zephyr::Precision::kDouble, zephyr::Precision::kFloat}) {
       zephyr::TraceOptions options;
       options.precision = precision;
       try {
         const auto tracer = zephyr::Tracer::Create(*scene, options);
+        options.accel = zephyr::Accel::kBvh;
+        const auto bvh = zephyr::Tracer::Create(*scene, options);
         zephyr::TraceStats stats;
         const zephyr::Camera& c = scene->camera;
         for (int y : {0, c.height / 2, c.height - 1}) {
-          for (int x : {0, c.width / 2, c.width - 1}) tracer->TracePixel(x, y, stats);
+          for (int x : {0, c.width / 2, c.width - 1}) {
+            zephyr::PrimaryHit a, b;
+            const zephyr::Vec3 ca = tracer->TracePixel(x, y, stats, &a);
+            const zephyr::Vec3 cb = bvh->TracePixel(x, y, stats, &b);
+            if (a.object != b.object || std::memcmp(&a.t, &b.t, sizeof a.t) != 0 ||
+                std::memcmp(&ca, &cb, sizeof ca) != 0)
+              __builtin_trap();  // the hierarchy changed a result
+          }
         }
       } catch (const zephyr::UserError&) {
         if (precision == zephyr::Precision::kDouble)

@@ -166,6 +166,7 @@ TEST(FlagPreflight, EveryBadFlagIsRefusedBeforeTheSceneIsRead) {
       {"--child-timeout nan", "--child-timeout: expected a number >= 0.001, got 'nan'"},
       {"--machine bogus", "unknown machine profile 'bogus'"},
       {"--precision half", "half"},
+      {"--accel kd-tree", "--accel: expected none or bvh, got 'kd-tree'"},
       {"--uncertain maybe", "maybe"},
       {"--testbed bogus", "unknown testbed 'bogus'"},
   };

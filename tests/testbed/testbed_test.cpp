@@ -144,7 +144,8 @@ struct PublishedCost {
 };
 constexpr PublishedCost kWorkTable[] = {
     {"sphereTest", 21, 12}, {"coneTest", 70, 25}, {"polygonTest", 44, 30}, {"ray", 25, 20},
-    {"hit", 2, 10},         {"shade", 37, 40},    {"lightSample", 66, 40}, {"pixel", 0, 20}};
+    {"hit", 2, 10},         {"shade", 37, 40},    {"lightSample", 66, 40}, {"pixel", 0, 20},
+    {"nodeVisit", 2, 12},   {"boxTest", 27, 15},  {"bvhBin", 46, 40},      {"bvhNode", 1176, 600}};
 constexpr double kMflops = 4.2, kMips = 28.5;  // sparcstation2, the ufmg1992 host
 // The wavetracer array: a 10 MHz clock; one hostPlane (a bit of each of 8192 PEs, 1 KB over
 // SCSI) takes 2048 cycles.
@@ -172,6 +173,16 @@ std::string WriteTinyScene(const TempDir& dir) {
   const std::string path = dir / "tiny.nff";
   std::ofstream(path) << kTinyScene;
   return path;
+}
+
+// A render of the tiny scene (written into dir) by `method` on the ufmg1992 testbed.
+RenderOptions TinyRender(const TempDir& dir, const std::string& method) {
+  RenderOptions o;
+  o.method = method;
+  o.scenePath = WriteTinyScene(dir);
+  o.progress = false;
+  o.testbed = "ufmg1992";
+  return o;
 }
 
 void ExpectEvents(const nlohmann::json& host, const std::map<std::string, double>& counts,
@@ -203,6 +214,84 @@ TEST(TestbedClosedForm, SeqChargesEachCountedEventItsPublishedCost) {
   // 24 · (21/4.2 + 12/28.5) µs for the sphere tests alone, written out once.
   EXPECT_NEAR(t.at("host").at("events").at("sphereTest").at("seconds").get<double>(),
               24 * (21 / 4.2e6 + 12 / 28.5e6), 1e-15);
+}
+
+// seq with --accel bvh: the same rays, hits, shades and light samples as the exhaustive
+// run, fewer primitive tests, and the hierarchy's node visits, box tests and build, each at
+// its published cost (the counts read off the report's "bvh" section).
+TEST(TestbedClosedForm, SeqWithTheBvhChargesNodeVisitsBoxTestsAndTheBuild) {
+  TempDir dir;
+  RenderOptions o = TinyRender(dir, "seq");
+  o.trace.accel = Accel::kBvh;
+  const RenderOutput out = RunRender(o);
+  const nlohmann::json report = RenderReportJson(out);
+  const nlohmann::json& bvh = report.at("bvh");
+  // Three objects: the root (binned: 3) splits; its children are made too (>= 3 nodes).
+  EXPECT_GE(bvh.at("nodesBuilt").get<double>(), 3);
+  EXPECT_EQ(bvh.at("binned").get<double>() >= 3, true);
+  EXPECT_GT(bvh.at("nodeVisits").get<double>(), 0);
+  EXPECT_GT(bvh.at("boxTests").get<double>(), 0);
+  std::map<std::string, double> counts = {{"ray", 24},         {"hit", 6},      {"shade", 6},
+                                          {"lightSample", 12}, {"pixel", 6},    {"nodeVisit", 0},
+                                          {"boxTest", 0},      {"bvhBin", 0},   {"bvhNode", 0},
+                                          {"sphereTest", 0},   {"coneTest", 0}, {"polygonTest", 0}};
+  counts["nodeVisit"] = bvh.at("nodeVisits").get<double>();
+  counts["boxTest"] = bvh.at("boxTests").get<double>();
+  counts["bvhBin"] = bvh.at("binned").get<double>();
+  counts["bvhNode"] = bvh.at("nodesBuilt").get<double>();
+  for (const char* kind : {"sphere", "cone", "polygon"})
+    counts[std::string(kind) + "Test"] = report.at("tests").at(kind).get<double>();
+  // The sphere and cone lie below the floor, away from every ray: the walk skips them.
+  EXPECT_LT(counts["sphereTest"], 24);
+  EXPECT_LT(counts["coneTest"], 24);
+  const nlohmann::json t = report.at("testbed");
+  ExpectEvents(t.at("host"), counts, "seq --accel bvh");
+  double seconds = 0;
+  for (const auto& [event, count] : counts) seconds += SecondsOf(event.c_str(), count);
+  EXPECT_NEAR(t.at("modelledSeconds").get<double>(), seconds, 1e-15);
+}
+
+// simd with --accel bvh and every pixel uncertain (--frac-bits 6): the recompute walks the
+// hierarchy too, and the testbed prices what it counted (the report's simd.recomputeWork,
+// its hits unpriced) on top of the shading's counts; its build is charged once more (the
+// recompute's own tracer).
+TEST(TestbedClosedForm, SimdWithTheBvhPricesTheRecomputeAsCounted) {
+  TempDir dir;
+  RenderOptions o = TinyRender(dir, "simd");
+  o.simd.formats.fracBits = 6;
+  o.simd.uncertain = simd::UncertainPolicy::kRecompute;
+  o.trace.accel = Accel::kBvh;
+  const nlohmann::json report = RenderReportJson(RunRender(o));
+  const nlohmann::json& recompute = report.at("simd").at("recomputeWork");
+  ASSERT_EQ(report.at("simd").at("uncertain").at("recomputed").get<double>(), 6);
+  EXPECT_EQ(recompute.at("rays").at("primary").get<double>(), 6);
+  EXPECT_GT(recompute.at("bvh").at("nodeVisits").get<double>(), 0);
+  EXPECT_GT(recompute.at("bvh").at("nodesBuilt").get<double>(), 0);
+  // Each recomputed ray meets the floor; the walk skips the sphere and cone below it.
+  EXPECT_LT(recompute.at("tests").at("sphere").get<double>(), 6);
+  std::map<std::string, double> counts;
+  auto both = [&](const char* event, double shading, double recomputed) {
+    counts[event] = shading + recomputed;
+  };
+  uint64_t rays = 0, recomputeRays = 0;
+  for (const char* kind : kRayKindNames) {
+    rays += report.at("rays").at(kind).get<uint64_t>();
+    recomputeRays += recompute.at("rays").at(kind).get<uint64_t>();
+  }
+  both("ray", double(rays), double(recomputeRays));
+  for (const char* kind : {"sphere", "cone", "polygon"})
+    both((std::string(kind) + "Test").c_str(), report.at("tests").at(kind).get<double>(),
+         recompute.at("tests").at(kind).get<double>());
+  both("hit", report.at("hits").get<double>(), 0);  // the recompute's hits are not priced
+  both("shade", report.at("shades").get<double>(), 0);
+  both("lightSample", report.at("lightSamples").get<double>(), 0);
+  both("pixel", report.at("pixels").get<double>(), 0);
+  for (const auto& [event, key] : {std::pair{"nodeVisit", "nodeVisits"},
+                                   {"boxTest", "boxTests"},
+                                   {"bvhBin", "binned"},
+                                   {"bvhNode", "nodesBuilt"}})
+    both(event, report.at("bvh").at(key).get<double>(), recompute.at("bvh").at(key).get<double>());
+  ExpectEvents(report.at("testbed").at("host"), counts, "simd --accel bvh");
 }
 
 // The SIMD method: each array pass that ran (the first, and the refine pass when one ran) at

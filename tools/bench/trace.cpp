@@ -3,7 +3,10 @@
 // (NearestSphereScalar), the engine's Highway kernel (hosts/trace/sphere_kernels.h: many spheres
 // per vector, Hearn–Baker form, float and double, bit-identical to the scalar loop), and
 // Embree 3's BVH with its built-in sphere primitive tracing the same primary rays, for 10,
-// 100 and 1000 spheres. Prints medians of repeats.
+// 100 and 1000 spheres. Then the host tracer's own hierarchy (--accel bvh, hosts/trace/bvh.h)
+// against Embree in rays/s on one core, on the same jittered-grid sphere scenes of 1 000 and
+// 100 000 spheres, and seq at 4096 random spheres, 384×384, with --accel bvh against --accel
+// none in wall time. Prints medians of repeats and the ratios.
 #include <embree3/rtcore.h>
 
 #include <algorithm>
@@ -12,10 +15,13 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <limits>
+#include <memory>
 #include <vector>
 
 #include "hosts/scene/gen.h"
+#include "hosts/trace/bvh.h"
 #include "hosts/trace/sphere_kernels.h"
 #include "hosts/trace/tracer.h"
 
@@ -92,6 +98,54 @@ void TimeScalarAndKernel(const Scene& scene, const std::vector<PrimaryRay>& rays
   }
 }
 
+// Embree 3 (one thread) with its built-in sphere primitive: the nearest sphere of each ray
+// (-1: none), the build's seconds in *build and the median seconds of `repeats` passes over
+// the rays in *seconds.
+std::vector<int32_t> EmbreeFirstHits(const Scene& scene, const std::vector<PrimaryRay>& rays,
+                                     int repeats, double* build, double* seconds) {
+  const size_t count = scene.objects.size();
+  RTCDevice device = rtcNewDevice("threads=1");
+  RTCScene es = rtcNewScene(device);
+  RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_SPHERE_POINT);
+  auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
+      g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), count));
+  for (size_t i = 0; i < count; ++i) {
+    const auto& sp = std::get<Sphere>(scene.objects[i].shape);
+    v[4 * i] = float(sp.centre.x);
+    v[4 * i + 1] = float(sp.centre.y);
+    v[4 * i + 2] = float(sp.centre.z);
+    v[4 * i + 3] = float(sp.radius);
+  }
+  rtcCommitGeometry(g);
+  rtcAttachGeometry(es, g);
+  rtcReleaseGeometry(g);
+  *build = MedianSeconds(1, [&] { rtcCommitScene(es); });
+  std::vector<int32_t> hits(rays.size());
+  *seconds = MedianSeconds(repeats, [&] {
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    for (size_t i = 0; i < rays.size(); ++i) {
+      RTCRayHit rh{};
+      const PrimaryRay& r = rays[i];
+      rh.ray.org_x = float(r.origin.x);
+      rh.ray.org_y = float(r.origin.y);
+      rh.ray.org_z = float(r.origin.z);
+      rh.ray.dir_x = float(r.direction.x);
+      rh.ray.dir_y = float(r.direction.y);
+      rh.ray.dir_z = float(r.direction.z);
+      rh.ray.tnear = 0;
+      rh.ray.tfar = std::numeric_limits<float>::infinity();
+      rh.ray.mask = ~0u;
+      rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+      rtcIntersect1(es, &context, &rh);
+      hits[i] = rh.hit.geomID == RTC_INVALID_GEOMETRY_ID ? -1 : int32_t(rh.hit.primID);
+    }
+  });
+  rtcReleaseScene(es);
+  rtcReleaseDevice(device);
+  return hits;
+}
+
 void Run(int count, int size) {
   const Scene scene = GenerateRandomSpheres({count, 1, size, size});
   const PrimaryRays camera(scene.camera);
@@ -108,45 +162,8 @@ void Run(int count, int size) {
   TimeScalarAndKernel<float>(scene, rays, repeats, scalarF, kernelF, exactF, &scalarHit);
   TimeScalarAndKernel<double>(scene, rays, repeats, scalarD, kernelD, exactD, nullptr);
 
-  RTCDevice device = rtcNewDevice("threads=1");
-  RTCScene es = rtcNewScene(device);
-  RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_SPHERE_POINT);
-  auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
-      g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), size_t(count)));
-  for (int i = 0; i < count; ++i) {
-    const auto& sp = std::get<Sphere>(scene.objects[i].shape);
-    v[4 * i] = float(sp.centre.x);
-    v[4 * i + 1] = float(sp.centre.y);
-    v[4 * i + 2] = float(sp.centre.z);
-    v[4 * i + 3] = float(sp.radius);
-  }
-  rtcCommitGeometry(g);
-  rtcAttachGeometry(es, g);
-  rtcReleaseGeometry(g);
-  const double build = MedianSeconds(1, [&] { rtcCommitScene(es); });
-  std::vector<int32_t> embreeHit(nRays);
-  const double embree = MedianSeconds(repeats, [&] {
-    RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
-    for (size_t i = 0; i < nRays; ++i) {
-      RTCRayHit rh{};
-      const PrimaryRay& r = rays[i];
-      rh.ray.org_x = float(r.origin.x);
-      rh.ray.org_y = float(r.origin.y);
-      rh.ray.org_z = float(r.origin.z);
-      rh.ray.dir_x = float(r.direction.x);
-      rh.ray.dir_y = float(r.direction.y);
-      rh.ray.dir_z = float(r.direction.z);
-      rh.ray.tnear = 0;
-      rh.ray.tfar = std::numeric_limits<float>::infinity();
-      rh.ray.mask = ~0u;
-      rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-      rtcIntersect1(es, &context, &rh);
-      embreeHit[i] = rh.hit.geomID == RTC_INVALID_GEOMETRY_ID ? -1 : int32_t(rh.hit.primID);
-    }
-  });
-  rtcReleaseScene(es);
-  rtcReleaseDevice(device);
+  double build, embree;
+  const std::vector<int32_t> embreeHit = EmbreeFirstHits(scene, rays, repeats, &build, &embree);
 
   size_t embreeAgree = 0;
   for (size_t i = 0; i < nRays; ++i) embreeAgree += embreeHit[i] == scalarHit[i];
@@ -160,6 +177,101 @@ void Run(int count, int size) {
       tests / embree * 1e-9, double(embreeAgree) / nRays);
 }
 
+// `count` spheres in the generator's region (4.4 × 4.4 × 6 in front of the eye,
+// GenerateRandomSpheres' camera, lights and materials), one per cell of a jittered grid so none
+// overlap and the placement is O(count) (the generator's own rejection test is O(count²): minutes
+// at 10⁵).
+Scene GridSpheres(int count, int size) {
+  Scene s = GenerateRandomSpheres({1, 1, size, size});
+  s.objects.clear();
+  const int side = int(std::ceil(std::cbrt(double(count))));
+  const double cell[3] = {4.4 / side, 4.4 / side, 6.0 / side};
+  const double radius = 0.5 * std::min({cell[0], cell[1], cell[2]});
+  uint64_t state = 12345;
+  auto uniform = [&] {  // SplitMix64 in [0, 1)
+    uint64_t z = (state += 0x9e3779b97f4a7c15ull);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    return double((z ^ (z >> 31)) >> 11) * 0x1p-53;
+  };
+  for (int i = 0; i < count; ++i) {
+    const int c[3] = {i % side, (i / side) % side, i / (side * side)};
+    const double r = radius * (0.6 + 0.4 * uniform());
+    Vec3 centre;
+    double lo[3] = {-2.2, -2.2, -4};
+    double p[3];
+    for (int a = 0; a < 3; ++a)
+      p[a] = lo[a] + cell[a] * (c[a] + 0.5) + (cell[a] / 2 - r) * (2 * uniform() - 1);
+    centre = {p[0], p[1], p[2]};
+    Primitive prim;
+    prim.shape = Sphere{centre, r};
+    prim.material = int(i % s.materials.size());
+    s.objects.push_back(prim);
+  }
+  return s;
+}
+
+// Rays per second on one core: the host tracer's FirstHit with --accel bvh (double, the
+// hierarchy built before the clock starts) against Embree's rtcIntersect1 (float) on the
+// primary rays of a size × size image of `count` grid spheres.
+void BvhAgainstEmbree(int count, int size) {
+  const Scene scene = GridSpheres(count, size);
+  const PrimaryRays camera(scene.camera);
+  std::vector<PrimaryRay> rays;
+  for (int y = 0; y < size; ++y)
+    for (int x = 0; x < size; ++x) rays.push_back(camera.At(x, y));
+  const int repeats = 5;
+  TraceOptions options;
+  options.accel = Accel::kBvh;
+  std::unique_ptr<Tracer> tracer;
+  const double build = MedianSeconds(1, [&] { tracer = Tracer::Create(scene, options); });
+  std::vector<int32_t> ours(rays.size());
+  const double bvh = MedianSeconds(repeats, [&] {
+    TraceStats stats;
+    for (size_t i = 0; i < rays.size(); ++i) ours[i] = tracer->FirstHit(rays[i], stats).object;
+  });
+
+  double embreeBuild, embree;
+  const std::vector<int32_t> theirs = EmbreeFirstHits(scene, rays, repeats, &embreeBuild, &embree);
+  size_t agree = 0;
+  for (size_t i = 0; i < rays.size(); ++i) agree += ours[i] == theirs[i];
+  const double n = double(rays.size());
+  std::printf(
+      "%6d grid spheres %4dx%-4d | ours (--accel bvh, double) %7.3f Mrays/s (build %.1f ms) | "
+      "embree (float) %7.3f Mrays/s (build %.1f ms) | embree/ours %.2fx (target <= 4) | "
+      "same object %.4f\n",
+      count, size, size, n / bvh * 1e-6, build * 1e3, n / embree * 1e-6, embreeBuild * 1e3,
+      bvh / embree, double(agree) / n);
+}
+
+// seq's whole render (every ray of the tree, one core) of `count` random spheres at size ×
+// size, with --accel none and --accel bvh (the build inside the clock), and whether the two
+// images are the same bits.
+void SeqBvhAgainstExhaustive(int count, int size, int repeats) {
+  const Scene scene = GenerateRandomSpheres({count, 1, size, size});
+  std::vector<Vec3> pixels[2];
+  double seconds[2];
+  for (const Accel accel : {Accel::kNone, Accel::kBvh}) {
+    TraceOptions options;
+    options.accel = accel;
+    const int k = accel == Accel::kBvh;
+    seconds[k] = MedianSeconds(repeats, [&] {
+      const auto tracer = Tracer::Create(scene, options);
+      TraceStats stats;
+      RenderRegion(*tracer, 0, 0, size, size, pixels[k], stats);
+    });
+  }
+  std::printf(
+      "seq %d random spheres %dx%d: --accel none %.2f s, --accel bvh %.3f s: %.1fx faster "
+      "(target >= 50), images %s (medians of %d)\n",
+      count, size, size, seconds[0], seconds[1], seconds[0] / seconds[1],
+      pixels[0].size() == pixels[1].size() &&
+              std::memcmp(pixels[0].data(), pixels[1].data(), pixels[0].size() * sizeof(Vec3)) == 0
+          ? "bit-identical"
+          : "DIFFERENT",
+      repeats);
+}
+
 }  // namespace
 }  // namespace zephyr
 
@@ -170,5 +282,9 @@ int main() {
       "'exact' = same object and t bits as the scalar loop on every ray\n",
       zephyr::SphereKernelTargetName());
   for (int count : {10, 100, 1000}) zephyr::Run(count, count >= 1000 ? 128 : 256);
+  std::printf(
+      "bench_trace: the host tracer's BVH against Embree, primary rays, one core, medians of 5\n");
+  for (int count : {1000, 100000}) zephyr::BvhAgainstEmbree(count, 384);
+  zephyr::SeqBvhAgainstExhaustive(4096, 384, 3);
   return 0;
 }
