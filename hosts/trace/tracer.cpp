@@ -444,7 +444,8 @@ class TracerT final : public Tracer {
     for (size_t i = 0; i < scene.objects.size(); ++i) {
       const Primitive& p = scene.objects[i];
       if (!p.transform || p.Kind() == ShapeKind::kPolygon) continue;  // polygons: world space
-      const double condition = LinearNormInf(*p.transform) * LinearNormInf(p.transform->Inverse());
+      const double condition =
+          p.transform->LinearNormInf() * p.transform->Inverse().LinearNormInf();
       const double grow = kBvhPadRelative * condition * 2 * reach;
       boxes[i].lo = boxes[i].lo - Vec3{grow, grow, grow};
       boxes[i].hi = boxes[i].hi + Vec3{grow, grow, grow};
