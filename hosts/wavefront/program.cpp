@@ -473,12 +473,11 @@ SecondaryPlan PlanSecondary(const Scene& scene, int fracBits, double primaryTErr
     if (!t.fan.empty()) p.normalInverseBits = std::max(p.normalInverseBits, kPatchNormalBits);
   // A hit point's distance from its surface: t's error along |d| <= 1 + δ, t·| |d| − 1 |, and
   // the point's own rounding; a ray leaving it ignores roots up to four times that.
-  const double pointError =
-      1.01 * std::max(p.tError, primaryTError) + diameter * p.directionError + 2 * u;
+  p.pointSlack = diameter * p.directionError + 2 * u;
   // The surface a ray leaves is handled by the rule above (never met again, or at its far
   // root), so the array's own cut-off only keeps roots at the origin from counting: 2(E + u).
   // The host, which traces an uncertain ray without that rule, skips four times the point's
-  // error instead.
+  // error instead (HostOffset, from the error of the hit the ray leaves).
   // ε from the errors of certain hits at their best: a polygon's at its tightest rung (a root
   // nearer ε than its own error is flagged, never taken or dropped on a guess).
   double eEps = 0;
@@ -487,10 +486,30 @@ SecondaryPlan PlanSecondary(const Scene& scene, int fracBits, double primaryTErr
   for (const PolygonTerms& t : p.polygons) eEps = std::max(eEps, t.tErrorRung[2]);
   p.epsilon = 2 * (eEps + u);
   p.error = Format::Unsigned(IntBitsFor(2 * (p.tError + u)) + 1, F);
-  p.hostOffset = 4 * (p.tError + pointError);
   for (const Light& l : scene.lights)
     for (int k = 0; k < 3; ++k) p.lights[k].push_back(Tight(l.position[k], F));
   return p;
+}
+
+double HitError(const SecondaryPlan& plan, int bounce, int object, const Vec3& d) {
+  if (bounce == 1) return plan.primaryTError;
+  const ObjectTerms& ob = plan.objects.at(size_t(object));
+  if (ob.cone) return plan.cones[ob.index].tError;
+  if (ob.sphere) return plan.spheres[ob.index].tError;
+  const PolygonTerms& g = plan.polygons[ob.index];
+  const Vec3 n{fixed::ToDouble(g.normal[0]), fixed::ToDouble(g.normal[1]),
+               fixed::ToDouble(g.normal[2])};
+  // The array chose its rung from its own n·d: any rung the true |n·d| reaches bounds the
+  // error, and the host's n·d is within 2δ + 2^-F of the array's (both normalised).
+  const double nd = std::abs(Dot(n, d)) - 2 * plan.directionError - 4 * plan.ulp;
+  double e = g.tErrorRung[0];
+  for (int k = 1; k < 3; ++k)
+    if (nd >= kPolygonRungs[k]) e = g.tErrorRung[k];
+  return e;
+}
+
+double HostOffset(const SecondaryPlan& plan, double hitError) {
+  return 4 * (1.01 * hitError + plan.pointSlack);
 }
 
 namespace {

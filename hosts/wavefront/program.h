@@ -134,7 +134,7 @@ struct SecondaryPlan {
   fixed::Format unit;         // u1.F: transmissions
   double tError = 0;          // the largest sphere's tError (near ties: |t_i − t_j| < 2·tError)
   double epsilon = 0;         // the array's rays ignore roots at or below it (scene units)
-  double hostOffset = 0;      // the host's tMin for a ray or shadow ray it traces instead
+  double pointSlack = 0;      // a hit point's error beyond its t's: D·δ + 2·2^-F (HostOffset)
   double directionError = 0;  // | |d|² − 1 | of a direction normalised on the array
   bool anyMirror = false, anyTransparent = false;
   std::vector<SphereTerms> spheres;
@@ -150,6 +150,16 @@ struct SecondaryPlan {
   std::vector<fixed::Fixed> lights[3];  // light positions, per axis
   double primaryTError = 0;             // the primary pass's bound on t (bounce 1's hits)
 };
+
+// The t error of a certain hit on object `object` (scene index) of ray level `bounce` along the
+// unit direction `d`: the primary pass's bound at bounce 1; else the object's, a polygon's at
+// the tightest rung its |n·d| reaches (with a margin for the host's double of the array's d).
+double HitError(const SecondaryPlan& plan, int bounce, int object, const Vec3& d);
+
+// The host's tMin for a ray or shadow ray it traces instead of the array, from a point whose
+// hit had t error `hitError`: four times the point's distance from its surface, 1.01·E + D·δ
+// + 2·2^-F (the host's tracer has no rule for the surface a ray leaves).
+double HostOffset(const SecondaryPlan& plan, double hitError);
 
 // UserError naming the object's file:line for an ellipsoid too thin for F or a cone whose
 // discriminant would not fit the engine; fracBits: F (8..40); primaryTError: the primary plan's

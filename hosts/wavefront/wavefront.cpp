@@ -35,6 +35,7 @@ struct Slot {
   int64_t object = 0, t = 0;     // bounce 1 only: the primary pass's hit (index + 1, raw t)
   int64_t from = 0;              // the object the ray leaves (index + 1; 0: the eye)
   bool outward = true;           // it leaves that object outward
+  double originError = 0;        // the t error of the hit it starts at (HitError)
   // Which ray of its pixel's tree: one bit per bounce below the primary (0: the first child,
   // 1: the second). The host sums a pixel's rays of a bounce in this order, so the image does
   // not depend on which PE or layer held them.
@@ -361,7 +362,8 @@ WavefrontResult RenderWavefront(const Tracer& tracer, const simd::PrimaryPass& p
           const Vec3 o = VectorOf(out.o, i, F), d = Normalize(VectorOf(out.d, i, F));
           shares.push_back(
               {s.pixel, s.path,
-               tracer.TraceRay(o, d, plan.hostOffset, bounce, s.kind, hostWork) * s.weight});
+               tracer.TraceRay(o, d, HostOffset(plan, s.originError), bounce, s.kind, hostWork) *
+                   s.weight});
           continue;
         }
         const int64_t object = out.object[i] - 1;
@@ -373,12 +375,16 @@ WavefrontResult RenderWavefront(const Tracer& tracer, const simd::PrimaryPass& p
         result.arrayRays[int(RayKind::kShadow)] += lights;
         std::vector<double> nl(lights), rv(lights), through(lights);
         const Vec3 p = VectorOf(out.p, i, F);
+        // This hit's t error, for the host's offset from p and for its children's.
+        const double hitError =
+            HitError(plan, bounce, int(object),
+                     Normalize(Vec3{ValueOf(s.d[0], F), ValueOf(s.d[1], F), ValueOf(s.d[2], F)}));
         for (size_t j = 0; j < lights; ++j) {
           nl[j] = ValueOf(out.nl[j][i], F), rv[j] = ValueOf(out.rv[j][i], F);
           through[j] = ValueOf(out.through[j][i], F);
           if (out.shadowUncertain[j][i] && nl[j] > 0) {
             ++report.uncertainShadows;
-            through[j] = tracer.LightThrough(p, int(j), plan.hostOffset, hostWork);
+            through[j] = tracer.LightThrough(p, int(j), HostOffset(plan, hitError), hostWork);
           }
         }
         shares.push_back(
@@ -390,6 +396,7 @@ WavefrontResult RenderWavefront(const Tracer& tracer, const simd::PrimaryPass& p
         Slot child;
         child.pixel = s.pixel;
         child.from = object + 1;
+        child.originError = hitError;
         child.path = s.path << 1;
         for (int k = 0; k < 3; ++k) child.o[k] = out.p[k][i];
         size_t to = begin + i;
