@@ -492,7 +492,8 @@ SecondaryPlan PlanSecondary(const Scene& scene, int fracBits, double primaryTErr
 }
 
 double HitError(const SecondaryPlan& plan, int bounce, int object, const Vec3& d) {
-  if (bounce == 1) return plan.primaryTError;
+  if (bounce == 1)
+    return plan.primaryErrors.empty() ? plan.primaryTError : plan.primaryErrors.at(size_t(object));
   const ObjectTerms& ob = plan.objects.at(size_t(object));
   if (ob.cone) return plan.cones[ob.index].tError;
   if (ob.sphere) return plan.spheres[ob.index].tError;

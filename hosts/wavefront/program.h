@@ -149,6 +149,10 @@ struct SecondaryPlan {
   fixed::Format edgeValue;              // s<2I+7>.F: d · that
   std::vector<fixed::Fixed> lights[3];  // light positions, per axis
   double primaryTError = 0;             // the primary pass's bound on t (bounce 1's hits)
+  // Per scene object, the primary pass's bound on t of a hit on it (empty: primaryTError for
+  // all): its plan's own, or the refine pass's where that is larger; 0 for an object whose
+  // every candidate was flagged (recomputed in double on the host).
+  std::vector<double> primaryErrors;
 };
 
 // The t error of a certain hit on object `object` (scene index) of ray level `bounce` along the

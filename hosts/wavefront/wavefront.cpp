@@ -264,7 +264,13 @@ WavefrontResult RenderWavefront(const Tracer& tracer, const simd::PrimaryPass& p
   const int depth = tracer.Options().depth;
   const int F =
       options.fracBits > 0 ? options.fracBits : std::max(pass.plan.fracBits, kMinSecondaryFracBits);
-  const SecondaryPlan plan = PlanSecondary(scene, F, pass.plan.tErrorBound);
+  SecondaryPlan plan = PlanSecondary(scene, F, pass.plan.tErrorBound);
+  plan.primaryErrors.assign(scene.objects.size(), pass.plan.tErrorBound);
+  for (const simd::ObjectPlan& o : pass.plan.objects) {
+    const double e = std::isfinite(o.bounds.tError) ? o.bounds.tError : 0;
+    plan.primaryErrors.at(size_t(o.index)) =
+        std::max(e, pass.refine ? pass.refine->tErrorBound : 0);
+  }
   const bitserial::MachineProfile& profile = pass.array.cycles.Profile();
   const int pes = profile.physicalPes;
   if (options.compaction == Compaction::kMesh && (pes & (pes - 1)) != 0)
