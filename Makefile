@@ -61,7 +61,7 @@ ZEPHYR := $(BIN)/zephyr
 TESTS  := $(BIN)/zephyr_tests
 
 # ---------------------------------------------------------------------------
-.PHONY: all binaries test run bench charts validate fuzz fuzz-smoke mutants clean help setup
+.PHONY: all binaries test run bench charts future validate fuzz fuzz-smoke mutants clean help setup
 
 help: ## List the targets
 	@grep -hE '^[a-z][a-zA-Z_-]*:.*## ' Makefile | sed 's/:.*## /\t/' | \
@@ -104,6 +104,13 @@ bench: setup ## Build and run the benchmarks (figures printed; medians of repeat
 charts: setup ## Run the experiment sweeps and draw the charts under docs/results/ (QUICK=1: small; TESTBED=ufmg1992: modelled)
 	$(Q)$(MAKE) --no-print-directory -j$(JOBS) $(ZEPHYR) $(if $(TESTBED),$(ZEPHYR_SMPI_BIN))
 	$(Q)$(if $(TESTBED),TESTBED='$(TESTBED)' QUICK='$(QUICK)' bash tools/testbed/charts.sh,QUICK='$(QUICK)' bash tools/charts.sh)
+
+# The paper's future work (docs/results.md): every method exhaustive and with a BVH, 8 → 4096
+# spheres, on the 1992 testbed and two present-day ones, and where each wins with the BVH
+# (tools/testbed/future.sh; REUSE=1 renders only the points docs/results/future/runs.csv lacks).
+future: setup ## Modelled time of every method, exhaustive and BVH, 1992 and today, into docs/results/future/ (QUICK=1: small)
+	$(Q)$(MAKE) --no-print-directory -j$(JOBS) $(ZEPHYR) $(ZEPHYR_SMPI_BIN)
+	$(Q)QUICK='$(QUICK)' REUSE='$(REUSE)' TESTBEDS='$(TESTBEDS)' bash tools/testbed/future.sh
 
 # The fidelity ledger (docs/validation.md): published figures against the model, the paper's
 # findings on the testbed sweep (run first, reusing the points docs/results/ already has).

@@ -34,12 +34,15 @@ constexpr const char* kClassNames[kCycleClassCount] = {
   extern "C" const char symbol[];
 ZEPHYR_EMBED_PROFILE(zephyr_profile_blitzen, "bitserial/profiles/blitzen.json")
 ZEPHYR_EMBED_PROFILE(zephyr_profile_mpp, "bitserial/profiles/mpp.json")
+ZEPHYR_EMBED_PROFILE(zephyr_profile_pim_bitsimd_v_bank,
+                     "bitserial/profiles/pim-bitsimd-v-bank.json")
 ZEPHYR_EMBED_PROFILE(zephyr_profile_wavetracer, "bitserial/profiles/wavetracer.json")
 
 const std::map<std::string, std::string>& BuiltIns() {
   static const std::map<std::string, std::string> builtIns = {
       {"blitzen", zephyr_profile_blitzen},
       {"mpp", zephyr_profile_mpp},
+      {"pim-bitsimd-v-bank", zephyr_profile_pim_bitsimd_v_bank},
       {"wavetracer", zephyr_profile_wavetracer}};
   return builtIns;
 }

@@ -4,8 +4,10 @@
 #include "hosts/methods/render.h"
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cstdio>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "fixed/check.h"
@@ -14,6 +16,7 @@
 #include "hosts/cmd/simd_flags.h"
 #include "hosts/methods/phases.h"
 #include "hosts/scene/nff.h"
+#include "hosts/testbed/testbed.h"
 
 namespace zephyr {
 // One line a user reads after a render: what was made, how long it took, where it went;
@@ -95,9 +98,16 @@ CommandRegistration reg("render", [](CLI::App& program) {
       AddInteger(*cmd, "--array-frac-bits", o->wavefront.fracBits, 8, 40,
                  "array: fraction bits of the secondary rays' numbers (default: the primary "
                  "plan's, at least 16)")};
+  std::string testbeds;
+  for (const auto& name : testbed::TestbedNames())
+    testbeds += (testbeds.empty() ? "" : ", ") + name;
   cmd->add_option("--testbed", o->testbed,
-                  "Model the paper's 1992 system (ufmg1992): the report's \"testbed\" gives "
-                  "modelled seconds (dist/hetero: under smpirun, docs/testbed.md)");
+                  "Model a whole system (" + testbeds +
+                      "): the report's \"testbed\" gives modelled seconds (dist/hetero: under "
+                      "smpirun; the array is the testbed's unless --machine; docs/testbed.md)");
+  cmd->add_option("--also-testbed", o->alsoTestbeds,
+                  "seq, simd, array: also price the same counted work on this testbed (repeat "
+                  "for more; each must share the array): the report's \"alsoTestbeds\"");
   cmd->callback([o, positional, noProgress, simdFlags, outputs, farmFlags, wavefrontFlags] {
     RenderOptions options = *o;
     for (CLI::Option* flag : outputs)  // `--out ''` is a mistake, not "no output"
@@ -128,6 +138,13 @@ CommandRegistration reg("render", [](CLI::App& program) {
       if (!use.wavefront && flag->count() > 0)
         throw UserError(flag->get_name() + ": --method " + options.method +
                         " traces no secondary ray on the array (the flag applies to array)");
+    // On a named testbed the array is the testbed's unless --machine says otherwise (and then
+    // it must be the same profile: testbed::CheckModelledTimeRequest).
+    const std::vector<std::string> simdGiven = simdFlags->Given();
+    if (use.array && !options.testbed.empty() &&
+        std::find(simdGiven.begin(), simdGiven.end(), "--machine") == simdGiven.end())
+      if (const std::optional<std::string> array = testbed::TestbedArrayProfile(options.testbed))
+        options.simd.profile = *array;
     RenderOutput out = RunRender(options);
     std::printf("%s\n", RenderSummary(options, out).c_str());
   });

@@ -21,7 +21,9 @@ namespace {
 
 CommandRegistration testbedCommand("testbed", [](CLI::App& program) {
   auto* cmd =
-      program.add_subcommand("testbed", "The paper's 1992 testbed: host profiles, platform files");
+      program.add_subcommand("testbed",
+                             "Testbeds (the paper's 1992 one, present-day ones): host profiles, "
+                             "platform files");
   cmd->require_subcommand(1);
   auto* profiles =
       cmd->add_subcommand("profiles", "Print the host profiles and the work table, with sources");
@@ -36,6 +38,11 @@ CommandRegistration testbedCommand("testbed", [](CLI::App& program) {
     for (const auto& name : TestbedNames())
       std::printf("\ntestbed %s:\n%s\n", name.c_str(), TestbedNamed(name).Json().dump(2).c_str());
   });
+  auto* show =
+      cmd->add_subcommand("show", "Print one testbed as JSON, every entry with its source");
+  auto shown = std::make_shared<std::string>("ufmg1992");
+  show->add_option("testbed", *shown, "Testbed name")->capture_default_str();
+  show->callback([shown] { std::printf("%s\n", TestbedNamed(*shown).Json().dump(2).c_str()); });
   auto* platform =
       cmd->add_subcommand("platform", "Write a SimGrid platform file (and hostfile) of a testbed");
   auto bed = std::make_shared<std::string>("ufmg1992");
@@ -50,16 +57,22 @@ CommandRegistration testbedCommand("testbed", [](CLI::App& program) {
   auto bps = std::make_shared<double>(0);
   AddNumber(*platform, "--ethernet-bps", *bps, 1e3, kNoUpperEnd,
             "Override the Ethernet's bandwidth, bit/s (what-if runs)");
+  auto latency = std::make_shared<double>(-1);
+  AddNumber(*platform, "--ethernet-latency", *latency, 0, 10,
+            "Override the Ethernet's one-way message latency, s (what-if runs)");
   auto hostOps = std::make_shared<double>(0);
   AddNumber(*platform, "--host-ops", *hostOps, 1e3, kNoUpperEnd,
             "Parent and children run this many counted operations per second, no profile "
             "(the this-host speed from `zephyr testbed calibrate`)");
-  platform->callback([bed, children, out, hostfile, bps, hostOps] {
+  platform->callback([bed, children, out, hostfile, bps, latency, hostOps] {
     Testbed t = TestbedNamed(*bed);
     if (*bps < 0 || (*bps > 0 && *bps < 1e3))
       throw UserError("--ethernet-bps: expected a bandwidth of at least 1000 bit/s");
     if (*bps > 0)
-      t.ethernetBandwidth = {*bps, "bit/s", "--ethernet-bps (what-if; not the paper's network)"};
+      t.ethernetBandwidth = {*bps, "bit/s", "--ethernet-bps (what-if; not the testbed's network)"};
+    if (*latency >= 0)
+      t.ethernetLatency = {*latency, "s",
+                           "--ethernet-latency (what-if; not the testbed's network)"};
     if (*hostOps < 0 || (*hostOps > 0 && *hostOps < 1e3))
       throw UserError("--host-ops: expected at least 1000 operations per second");
     CheckOutputs({{"--out", *out}, {"--hostfile", *hostfile}});

@@ -13,6 +13,7 @@
 #include "hosts/methods/phases.h"
 #include "hosts/methods/report.h"
 #include "hosts/scene/nff.h"
+#include "hosts/testbed/simulation.h"
 #include "hosts/testbed/testbed.h"
 
 namespace zephyr {
@@ -120,6 +121,16 @@ RenderOutput RunRender(const RenderOptions& given) {
   if (it->check) it->check(options);
   testbed::CheckModelledTimeRequest(options.testbed, options.method, it->child != nullptr,
                                     it->usesArray, options.simd.profile);
+  if (!options.alsoTestbeds.empty()) {
+    if (options.testbed.empty())
+      throw UserError("more testbeds to price a render on need a first one (the testbed)");
+    if (it->child != nullptr || testbed::Simulated())
+      throw UserError("method '" + options.method +
+                      "' is timed by a simulation of one testbed's network: one testbed a run");
+    for (const std::string& bed : options.alsoTestbeds)
+      testbed::CheckModelledTimeRequest(bed, options.method, false, it->usesArray,
+                                        options.simd.profile);
+  }
   out.method = options.method;
   out.trace = options.trace;
   Scene scene;
@@ -143,7 +154,7 @@ RenderOutput RunRender(const RenderOptions& given) {
     PhaseTimer timer(out.phases, "render");
     it->render(scene, options, out);
   }
-  // --testbed: modelled 1992 seconds of the counted work.
+  // --testbed (and --also-testbed): modelled seconds of the counted work.
   testbed::CountedWork work;
   if (out.hostWork) work.host = &*out.hostWork;
   bitserial::CycleReport everyBounce;  // array: the primary pass's and the wavefront's
@@ -164,6 +175,8 @@ RenderOutput RunRender(const RenderOptions& given) {
     work.farm = &farmTimes;
   }
   out.testbed = testbed::ModelTime(options.testbed, work, scene);
+  for (const std::string& bed : options.alsoTestbeds)
+    out.alsoTestbeds.push_back(*testbed::ModelTime(bed, work, scene));
   ZEPHYR_CHECK(out.image.width == c.width && out.image.height == c.height);
   try {
     if (!options.out.empty()) {

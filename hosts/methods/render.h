@@ -53,6 +53,10 @@ struct RenderOptions {
   // --testbed: the modelled system whose seconds the report gives ("" = none; the names are
   // testbed::TestbedNames(), docs/testbed.md). UserError for an unknown name.
   std::string testbed;
+  // --also-testbed: more testbeds the same counted work is priced on (seq, simd, array: one
+  // process, no SimGrid), each a separate ModelledTime; with an array, each must have the
+  // array's profile. Needs `testbed`. UserError for a farmed method or a mismatch.
+  std::vector<std::string> alsoTestbeds;
 };
 
 // One primary-ray record per pixel for --dump-primary; `flags` is method-specific (0 = plain
@@ -81,6 +85,7 @@ struct RenderOutput {
   std::optional<FarmReport> farm;                       // dist, hetero: the frame farm's figures
   std::optional<wavefront::WavefrontResult> wavefront;  // array: every bounce on the array
   std::optional<testbed::ModelledTime> testbed;         // --testbed: modelled seconds
+  std::vector<testbed::ModelledTime> alsoTestbeds;      // --also-testbed, in the order given
   // Files deleted once every output is written (dist/hetero's frame checkpoint); kept when
   // a write fails, so --resume can finish the job.
   std::vector<std::string> removeWhenWritten;

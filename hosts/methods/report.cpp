@@ -131,6 +131,10 @@ nlohmann::json RenderReportJson(const RenderOutput& out) {
   if (out.wavefront) r["wavefront"] = WavefrontJson(*out.wavefront);
   if (out.farm) r["distributed"] = out.farm->Json();
   if (out.testbed) r["testbed"] = out.testbed->Json();
+  if (!out.alsoTestbeds.empty()) {
+    r["alsoTestbeds"] = nlohmann::json::array();
+    for (const testbed::ModelledTime& t : out.alsoTestbeds) r["alsoTestbeds"].push_back(t.Json());
+  }
   return r;
 }
 

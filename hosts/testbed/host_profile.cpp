@@ -47,6 +47,37 @@ const std::map<std::string, HostProfile>& Profiles() {
          "none published: the SLC left the price list before SPEC CPU92 "
          "(1992); not used by the model"},
         {0, "SPECfp92", "none published (as SPECint92); not used by the model"}}},
+      // Present-day cores (issue 26 item 3; docs/present-day.md, table (a)). SPEC CPU92 was
+      // retired in the 1990s: no present-day core has its ratings.
+      {"today-calibrated",
+       {"today-calibrated",
+        "a present-day core, this project's development machine calibrated: one rate for "
+        "flops and instructions (docs/testbed.md, this-host)",
+        {2596e6, "Hz",
+         "/proc/cpuinfo of the machine calibrated: AMD EPYC (Zen 5), KVM guest, 2 cores; "
+         "reported, not used by the model"},
+        {2247.7, "MIPS",
+         "zephyr testbed calibrate --report m64.json (seq, 64 random spheres, 384x384, seed 1): "
+         "2.2477e9 counted operations/s, flops and instructions at one rate (assumed: one "
+         "measurement cannot separate them); docs/present-day.md (a)"},
+        {2247.7, "MFLOPS", "the same calibration as mips (one rate for both kinds)"},
+        {0, "SPECint92", "none: SPEC CPU92 was retired in the 1990s; not used by the model"},
+        {0, "SPECfp92", "none (as SPECint92); not used by the model"}}},
+      {"today-published",
+       {"today-published",
+        "a present-day core by published ratings (for comparison with today-calibrated; "
+        "the two ratings come from different machines)",
+        {0, "Hz", "none: the two ratings are not of one machine; not used by the model"},
+        {27210, "MIPS",
+         "Dhrystone 2.2, one thread, Apple M2 Ultra: 47,808,764 Dhrystones/s / 1757 = 27,210 "
+         "DMIPS (D. W. Plummer's port, Nov 2025; VAX-relative, as Sun's 28.5); "
+         "docs/present-day.md (a)"},
+        {4500, "MFLOPS",
+         "netlib linpackc (200x200, double), one core, gcc -O3 -march=native: 'around 4.5 "
+         "GFLOPS' (Linux Format, 9 May 2017; the machine not named: a weak source); "
+         "docs/present-day.md (a)"},
+        {0, "SPECint92", "none: SPEC CPU92 was retired in the 1990s; not used by the model"},
+        {0, "SPECfp92", "none (as SPECint92); not used by the model"}}},
   };
   return profiles;
 }

@@ -1,5 +1,7 @@
 #include "hosts/testbed/testbed.h"
 
+#include <fmt/format.h>
+
 #include <cstdio>
 #include <filesystem>
 #include <map>
@@ -11,6 +13,27 @@
 namespace zephyr::testbed {
 
 namespace {
+
+// A present-day core calibrated (host_profile.cpp "today-calibrated") behind 25 GbE: the
+// network of both present-day testbeds (docs/present-day.md (b)).
+constexpr double kTodayEthernetBps = 25e9;
+const char* const kTodayEthernetSource =
+    "IEEE 802.3by-2016: 25 Gb/s Ethernet line rate (SimGrid's link gets the line rate; TCP's "
+    "payload share at MTU 1500, 94 %, is not modelled)";
+constexpr double kTodayLatency = 1.6e-5;
+const char* const kTodayLatencySource =
+    "sockperf ping-pong --tcp, 400-byte messages, between two cloud VMs (Mellanox/sockperf "
+    "issue #155, 2021): 31.2 us a round trip, 15.6 us one way; the NIC's speed not stated "
+    "(assumed 25 Gb/s class); MPI's own cost on top assumed 0 (docs/present-day.md (b))";
+constexpr double kTodayPoll = 1e-6;
+const char* const kTodayPollSource =
+    "assumed: a present-day MPI_Test or MPI_Iprobe is a call into the progress engine of the "
+    "order of a microsecond (no published figure found; SimGrid's default 1e-4 s is a 1990s "
+    "daemon round trip and would poll away the parent's time)";
+const char* const kSwitchedSource =
+    "assumed: a present-day cluster's hosts each on their own full-duplex port of one "
+    "switch whose backplane never limits; a port is modelled as one SHARED link (both "
+    "directions share it: the farm's traffic is mostly one way at a time)";
 
 const std::map<std::string, Testbed>& Testbeds() {
   static const std::map<std::string, Testbed> testbeds = {
@@ -27,9 +50,52 @@ const std::map<std::string, Testbed>& Testbeds() {
         {1e-3, "s",
          "assumed: per-message latency of PVM 3 over Ethernet of the order of a "
          "millisecond (daemon-routed UDP)"},
+        EthernetTopology::kShared,
+        "assumed: 10BASE coax or a hub, one collision domain: every station's traffic "
+        "shares one medium",
+        "scsi",
         {5e6, "byte/s",
          "assumed: SCSI-1 synchronous at 5 MB/s, the same figure as the "
-         "wavetracer profile's hostPlane cost"}}},
+         "wavetracer profile's hostPlane cost"},
+        {0, "s",
+         "SimGrid 3.32's default (1e-4 s a call; not from a source): PVM 3's polling "
+         "(pvm_nrecv) was of that order, a daemon round trip"}}},
+      {"today-zephyr",
+       {"today-zephyr",
+        "the paper's future work (§8) on a present-day cluster: the Zephyr as it would "
+        "stand today (10 MHz, SCSI-1) behind a present-day host and children on switched "
+        "25 GbE (docs/present-day.md)",
+        "today-calibrated",
+        "today-calibrated",
+        "wavetracer",
+        {kTodayEthernetBps, "bit/s", kTodayEthernetSource},
+        {kTodayLatency, "s", kTodayLatencySource},
+        EthernetTopology::kSwitched,
+        kSwitchedSource,
+        "scsi",
+        {5e6, "byte/s",
+         "the Zephyr's own board: SCSI-1 synchronous at 5 MB/s (assumed, as ufmg1992), the "
+         "wavetracer profile's hostPlane cost"},
+        {kTodayPoll, "s", kTodayPollSource}}},
+      {"today-pim",
+       {"today-pim",
+        "the paper's future work (§8) on present-day parts: a bit-serial processing-in-DRAM "
+        "array (PIMeval's BitSIMD-V, one DDR4-3200 bank, 262,144 PEs at 1.6 GHz) on the "
+        "host's memory bus, present-day host and children on switched 25 GbE "
+        "(docs/present-day.md)",
+        "today-calibrated",
+        "today-calibrated",
+        "pim-bitsimd-v-bank",
+        {kTodayEthernetBps, "bit/s", kTodayEthernetSource},
+        {kTodayLatency, "s", kTodayLatencySource},
+        EthernetTopology::kSwitched,
+        kSwitchedSource,
+        "memory-bus",
+        {25.6e9, "byte/s",
+         "JEDEC JESD79-4 DDR4-3200: 3200 MT/s x 64 bits = 25.6 GB/s, one channel (PIMeval's "
+         "host<->PIM copies use the same figure, pimParamsDDRDram.h m_typicalRankBW); the "
+         "pim-bitsimd-v-bank profile's hostPlane cost (docs/present-day.md (c))"},
+        {kTodayPoll, "s", kTodayPollSource}}},
   };
   return testbeds;
 }
@@ -65,7 +131,12 @@ nlohmann::json Testbed::Json() const {
           {"arrayProfile", arrayProfile},
           {"ethernetBandwidth", ethernetBandwidth.Json()},
           {"ethernetLatency", ethernetLatency.Json()},
-          {"scsiBandwidth", scsiBandwidth.Json()}};
+          {"ethernetTopology",
+           {{"value", ethernetTopology == EthernetTopology::kShared ? "shared" : "switched"},
+            {"source", ethernetTopologySource}}},
+          {"arrayLink", arrayLink},
+          {"arrayLinkBandwidth", arrayLinkBandwidth.Json()},
+          {"mpiPollSeconds", mpiPollSeconds.Json()}};
 }
 
 const Testbed& TestbedNamed(const std::string& name) {
@@ -81,6 +152,12 @@ const Testbed& TestbedNamed(const std::string& name) {
     throw UserError("unknown testbed '" + name + "' (known: " + known + ")");
   }
   return it->second;
+}
+
+std::optional<std::string> TestbedArrayProfile(const std::string& name) {
+  auto it = Testbeds().find(name);
+  if (it == Testbeds().end()) return std::nullopt;
+  return it->second.arrayProfile;
 }
 
 std::vector<std::string> TestbedNames() {
@@ -324,7 +401,14 @@ std::string PlatformXml(const Testbed& bed, int children, double hostOps) {
            : "     Host speeds are the profiles' Linpack rates (flops/s) and the array's clock "
              "(cycles/s);\n     work is charged as the profiles' modelled seconds, so the speeds "
              "only convert. -->\n") +
-      "<platform version=\"4.1\">\n  <zone id=\"" + bed.name + "\" routing=\"Full\">\n";
+      "<platform version=\"4.1\">\n";
+  if (bed.mpiPollSeconds.value > 0) {
+    const std::string poll = fmt::format("{:g}", bed.mpiPollSeconds.value);
+    x += "  <!-- " + Comment(bed.mpiPollSeconds.source) +
+         " -->\n  <config>\n    <prop id=\"smpi/test\" value=\"" + poll +
+         "\"/>\n    <prop id=\"smpi/iprobe\" value=\"" + poll + "\"/>\n  </config>\n";
+  }
+  x += "  <zone id=\"" + bed.name + "\" routing=\"Full\">\n";
   const bool calibrated = hostOps > 0;
   x += host("parent", calibrated ? hostOps : parent.mflops.value * 1e6,
             calibrated ? "" : parent.name, "parent");
@@ -332,18 +416,31 @@ std::string PlatformXml(const Testbed& bed, int children, double hostOps) {
   for (int i = 1; i <= children; ++i)
     x += host("child-" + std::to_string(i), calibrated ? hostOps : child.mflops.value * 1e6,
               calibrated ? "" : child.name, "child");
-  x += "    <!-- " + Comment(bed.ethernetBandwidth.source + "; " + bed.ethernetLatency.source) +
+  const std::string bps = std::to_string(bed.ethernetBandwidth.value) + "bps";
+  x += "    <!-- " +
+       Comment(bed.ethernetBandwidth.source + "; " + bed.ethernetLatency.source + "; " +
+               bed.ethernetTopologySource) +
        " -->\n";
-  x += "    <link id=\"ethernet\" bandwidth=\"" + std::to_string(bed.ethernetBandwidth.value) +
-       "bps\" latency=\"" + std::to_string(bed.ethernetLatency.value) +
-       "s\" sharing_policy=\"SHARED\"/>\n";
-  x += "    <!-- " + Comment(bed.scsiBandwidth.source) + " -->\n";
-  x += "    <link id=\"scsi\" bandwidth=\"" + std::to_string(bed.scsiBandwidth.value) +
-       "Bps\" latency=\"0s\"/>\n";
-  x += "    <route src=\"parent\" dst=\"zephyr\"><link_ctn id=\"scsi\"/></route>\n";
-  for (int i = 1; i <= children; ++i)
-    x += "    <route src=\"parent\" dst=\"child-" + std::to_string(i) +
-         "\"><link_ctn id=\"ethernet\"/></route>\n";
+  const bool switched = bed.ethernetTopology == EthernetTopology::kSwitched;
+  // Switched: a message crosses two ports, each half the one-way latency.
+  const std::string latency =
+      std::to_string(switched ? bed.ethernetLatency.value / 2 : bed.ethernetLatency.value) + "s";
+  x += "    <link id=\"ethernet\" bandwidth=\"" + bps + "\" latency=\"" + latency +
+       "\" sharing_policy=\"SHARED\"/>\n";
+  if (switched)
+    for (int i = 1; i <= children; ++i)
+      x += "    <link id=\"ethernet-child-" + std::to_string(i) + "\" bandwidth=\"" + bps +
+           "\" latency=\"" + latency + "\" sharing_policy=\"SHARED\"/>\n";
+  x += "    <!-- " + Comment(bed.arrayLinkBandwidth.source) + " -->\n";
+  x += "    <link id=\"" + bed.arrayLink + "\" bandwidth=\"" +
+       std::to_string(bed.arrayLinkBandwidth.value) + "Bps\" latency=\"0s\"/>\n";
+  x +=
+      "    <route src=\"parent\" dst=\"zephyr\"><link_ctn id=\"" + bed.arrayLink + "\"/></route>\n";
+  for (int i = 1; i <= children; ++i) {
+    const std::string child = "child-" + std::to_string(i);
+    x += "    <route src=\"parent\" dst=\"" + child + "\"><link_ctn id=\"ethernet\"/>" +
+         (switched ? "<link_ctn id=\"ethernet-" + child + "\"/>" : "") + "</route>\n";
+  }
   x += "  </zone>\n</platform>\n";
   return x;
 }

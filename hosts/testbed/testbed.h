@@ -25,26 +25,45 @@
 
 namespace zephyr::testbed {
 
+// How the hosts reach one another over the Ethernet.
+enum class EthernetTopology {
+  kShared,    // one medium every station's traffic shares (10BASE coax: one SimGrid link)
+  kSwitched,  // each host its own port to a switch whose backplane never limits (switched
+              // 10/25 GbE): the parent's port carries all the farm's traffic
+};
+
 struct Testbed {
-  std::string name;  // "ufmg1992"
+  std::string name;  // "ufmg1992", "today-zephyr", "today-pim"
   std::string description;
   std::string parentProfile;  // host profile of the host/parent (seq, simd, parent of dist/hetero)
   std::string childProfile;   // host profile of every child
-  std::string arrayProfile;   // bitserial machine profile of the SIMD array
-  Sourced ethernetBandwidth;  // bit/s, one medium shared by every host
-  Sourced ethernetLatency;    // s, per message
-  Sourced scsiBandwidth;      // byte/s, host <-> array
+  std::string arrayProfile;   // bitserial machine profile of the SIMD array (a built-in name)
+  Sourced ethernetBandwidth;  // bit/s: the shared medium's, or each switch port's
+  Sourced ethernetLatency;    // s, one way per message (over both ports when switched)
+  EthernetTopology ethernetTopology = EthernetTopology::kShared;
+  std::string ethernetTopologySource;  // why this topology (a citation or "assumed: ...")
+  std::string arrayLink;               // the host <-> array link's name: "scsi", "memory-bus"
+  Sourced arrayLinkBandwidth;          // byte/s, host <-> array
+  // s of simulated time each MPI_Test and MPI_Iprobe costs its caller (SimGrid's smpi/test and
+  // smpi/iprobe, written into the platform file); 0: SimGrid's default (1e-4 s), as ufmg1992.
+  Sourced mpiPollSeconds;
   nlohmann::json Json() const;
 };
 
 // The named testbeds ("ufmg1992"); UserError for an unknown name, listing the known ones.
 const Testbed& TestbedNamed(const std::string& name);
 std::vector<std::string> TestbedNames();
+// The array profile of the named testbed `name`; nothing when `name` names no built-in
+// testbed (a platform file, or a mistake that ModelTime reports).
+std::optional<std::string> TestbedArrayProfile(const std::string& name);
 
 // A SimGrid platform (XML v4.1) of the testbed with `children` child hosts: "parent" (the
-// parent's profile), "zephyr" (the array, speed = its clock), "child-1".."child-K", one
-// SHARED Ethernet link on every parent-child route, the SCSI link parent-zephyr. Hosts carry
-// "zephyr:profile" and "zephyr:role" properties. UserError for children outside
+// parent's profile), "zephyr" (the array, speed = its clock), "child-1".."child-K"; the
+// Ethernet as one SHARED link "ethernet" on every parent-child route (kShared), or (kSwitched)
+// a port link per host, "ethernet" the parent's and "ethernet-child-I" each child's, a route
+// crossing the parent's port and the child's, each port half the one-way latency; the array
+// link (bed.arrayLink) parent-zephyr. Hosts carry "zephyr:profile" and "zephyr:role"
+// properties. UserError for children outside
 // 1..kMaxPlatformChildren.
 // With hostOps > 0 the parent and the children have that speed and no profile: each counted
 // operation (work-table flop or instruction) costs 1/hostOps seconds (a calibrated this-host).

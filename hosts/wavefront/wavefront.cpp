@@ -247,9 +247,24 @@ int LayersPerPass(const bitserial::MachineProfile& profile, int64_t layers,
                   const SecondaryPlan& plan, bool intersect) {
   int l = int(std::min<int64_t>(layers, 1 << 20));
   while (!BounceFits(profile, l, plan, intersect)) {
-    if (l == 1)
+    if (l == 1) {
+      // Say how much it would take: the PE memory scaled until one layer fits.
+      std::string needs;
+      for (int scale = 2; scale <= 64; scale *= 2) {
+        bitserial::MachineProfile larger = profile;
+        larger.internalBitsPerPe *= scale, larger.externalBitsPerPe *= scale;
+        if (BounceFits(larger, 1, plan, intersect)) {
+          needs = "; it fits " + std::to_string(larger.internalBitsPerPe) + " internal + " +
+                  std::to_string(larger.externalBitsPerPe) + " external bits, " +
+                  std::to_string(scale) + " times these";
+          break;
+        }
+      }
       throw UserError("the wavefront's bounce program does not fit one virtual-PE layer of the " +
-                      profile.name + " PE memory (docs/wavefront.md, \"Several array passes\")");
+                      profile.name + " PE memory (" + std::to_string(profile.internalBitsPerPe) +
+                      " internal + " + std::to_string(profile.externalBitsPerPe) +
+                      " external bits" + needs + "; docs/wavefront.md, \"Several array passes\")");
+    }
     l = (l + 1) / 2;
   }
   return l;

@@ -12,6 +12,7 @@
 #include <sstream>
 #include <vector>
 
+#include "bitserial/profile.h"
 #include "bitserial/report.h"
 #include "fixed/check.h"
 #include "hosts/methods/render.h"
@@ -37,8 +38,10 @@ std::string WriteScene(const TempDir& dir, int count = 6, const std::string& siz
   return path;
 }
 
-RenderOutput Render(const std::string& scene, const std::string& method, const std::string& bed) {
+RenderOutput Render(const std::string& scene, const std::string& method, const std::string& bed,
+                    const std::string& machine = "") {
   RenderOptions o;
+  if (!machine.empty()) o.simd.profile = machine;
   o.method = method;
   o.scenePath = scene;
   o.progress = false;
@@ -97,35 +100,48 @@ TEST(TestbedModel, SeqReportsModelledSecondsFromItsCounts) {
   EXPECT_EQ(t.at("host").at("events").at("pixel").at("count").get<double>(), 24 * 16);
 }
 
-TEST(TestbedModel, SimdIsArrayPlusScsiPlusHostShading) {
+// On every testbed: the array's cycles at its clock, the matrix over the testbed's array link
+// (SCSI in 1992, the memory bus of today-pim), the host's shading on the parent's profile.
+TEST(TestbedModel, SimdIsArrayPlusItsLinkPlusHostShadingOnEveryTestbed) {
   TempDir dir;
-  const RenderOutput out = Render(WriteScene(dir), "simd", "ufmg1992");
-  const nlohmann::json t = RenderReportJson(out).at("testbed");
-  const nlohmann::json cycles = RenderReportJson(out).at("simd").at("cycles");
-  const double clock = cycles.at("clockHz").get<double>();
-  EXPECT_DOUBLE_EQ(t.at("array").at("scsiSeconds").get<double>(),
-                   cycles.at("byClass").at("host").get<double>() / clock);
-  EXPECT_DOUBLE_EQ(
-      t.at("array").at("seconds").get<double>() + t.at("array").at("scsiSeconds").get<double>(),
-      cycles.at("totalCycles").get<double>() / clock);
-  EXPECT_DOUBLE_EQ(
-      t.at("modelledSeconds").get<double>(),
-      cycles.at("totalCycles").get<double>() / clock + t.at("host").at("seconds").get<double>());
-  EXPECT_GT(t.at("array").at("scsiBytes").get<double>(), 0);
-  // Two independent sources agree: the bytes the array profile's hostPlane cost moves per
-  // second at the array clock are the testbed's SCSI bandwidth (5 MB/s, docs/testbed.md) —
-  // which pins bytes to bits / 8, not to bits.
-  EXPECT_NEAR(
-      t.at("array").at("scsiBytes").get<double>() / t.at("array").at("scsiSeconds").get<double>(),
-      t.at("testbed").at("scsiBandwidth").at("value").get<double>(), 1e-6 * 5e6);
-  // "array active X % of elapsed": the array's own seconds over the modelled time.
-  EXPECT_DOUBLE_EQ(
-      t.at("arrayActiveShare").get<double>(),
-      t.at("array").at("seconds").get<double>() / t.at("modelledSeconds").get<double>());
-  EXPECT_GT(t.at("arrayActiveShare").get<double>(), 0);
-  EXPECT_LT(t.at("arrayActiveShare").get<double>(), 1);
-  EXPECT_EQ(RenderReportJson(out).at("simd").at("cycles").at("virtualPeRatio").get<int>(),
-            cycles.at("layers").get<int>());
+  for (const std::string& bed : testbed::TestbedNames()) {
+    SCOPED_TRACE(bed);
+    const testbed::Testbed& testbed = testbed::TestbedNamed(bed);
+    const RenderOutput out = Render(WriteScene(dir), "simd", bed, testbed.arrayProfile);
+    const nlohmann::json t = RenderReportJson(out).at("testbed");
+    const nlohmann::json cycles = RenderReportJson(out).at("simd").at("cycles");
+    const double clock = cycles.at("clockHz").get<double>();
+    EXPECT_EQ(clock, bitserial::Profile(testbed.arrayProfile).clockHz);
+    EXPECT_DOUBLE_EQ(t.at("array").at("scsiSeconds").get<double>(),
+                     cycles.at("byClass").at("host").get<double>() / clock);
+    EXPECT_DOUBLE_EQ(
+        t.at("array").at("seconds").get<double>() + t.at("array").at("scsiSeconds").get<double>(),
+        cycles.at("totalCycles").get<double>() / clock);
+    EXPECT_DOUBLE_EQ(
+        t.at("modelledSeconds").get<double>(),
+        cycles.at("totalCycles").get<double>() / clock + t.at("host").at("seconds").get<double>());
+    TraceStats hostWork = *out.hostWork;  // the shading and the uncertain pixels' recompute
+    hostWork.Add(testbed::RecomputeWork(out.simd->recomputeWork));
+    EXPECT_DOUBLE_EQ(
+        t.at("host").at("seconds").get<double>(),
+        testbed::ModelHostTime(hostWork, testbed::HostProfileNamed(testbed.parentProfile)).seconds);
+    EXPECT_GT(t.at("array").at("scsiBytes").get<double>(), 0);
+    // Two independent sources agree: the bytes the array profile's hostPlane cost moves per
+    // second at the array clock are the testbed's link bandwidth (SCSI's 5 MB/s, the memory
+    // bus's 25.6 GB/s: docs/testbed.md, docs/present-day.md) — which pins bytes to bits / 8.
+    EXPECT_NEAR(
+        t.at("array").at("scsiBytes").get<double>() / t.at("array").at("scsiSeconds").get<double>(),
+        t.at("testbed").at("arrayLinkBandwidth").at("value").get<double>(),
+        1e-6 * testbed.arrayLinkBandwidth.value);
+    // "array active X % of elapsed": the array's own seconds over the modelled time.
+    EXPECT_DOUBLE_EQ(
+        t.at("arrayActiveShare").get<double>(),
+        t.at("array").at("seconds").get<double>() / t.at("modelledSeconds").get<double>());
+    EXPECT_GT(t.at("arrayActiveShare").get<double>(), 0);
+    EXPECT_LT(t.at("arrayActiveShare").get<double>(), 1);
+    EXPECT_EQ(RenderReportJson(out).at("simd").at("cycles").at("virtualPeRatio").get<int>(),
+              cycles.at("layers").get<int>());
+  }
   // seq runs no array: no share.
   EXPECT_FALSE(RenderReportJson(Render(WriteScene(dir), "seq", "ufmg1992"))
                    .at("testbed")
@@ -455,6 +471,68 @@ TEST(TestbedPlatform, OneSharedEthernetOnEveryChildRoute) {
   EXPECT_THROW(testbed::PlatformXml(testbed::TestbedNamed("ufmg1992"), 0), UserError);
 }
 
+// Present-day testbeds: each host its own switch port, "ethernet" the parent's (which every
+// child's route crosses) and "ethernet-child-I" each child's, each half the one-way latency;
+// the array on its own link (the memory bus for today-pim).
+TEST(TestbedPlatform, SwitchedEthernetGivesEveryHostAPort) {
+  const testbed::Testbed& bed = testbed::TestbedNamed("today-pim");
+  ASSERT_EQ(bed.ethernetTopology, testbed::EthernetTopology::kSwitched);
+  const std::string xml = testbed::PlatformXml(bed, 3);
+  const std::string half = std::to_string(bed.ethernetLatency.value / 2) + "s";
+  for (const char* link : {"ethernet", "ethernet-child-1", "ethernet-child-3"})
+    EXPECT_NE(
+        xml.find(std::string("<link id=\"") + link + "\" bandwidth=\"" +
+                 std::to_string(bed.ethernetBandwidth.value) + "bps\" latency=\"" + half + "\""),
+        std::string::npos)
+        << link << "\n"
+        << xml;
+  EXPECT_EQ(xml.find("ethernet-child-4"), std::string::npos);
+  EXPECT_NE(xml.find("<route src=\"parent\" dst=\"child-2\"><link_ctn id=\"ethernet\"/>"
+                     "<link_ctn id=\"ethernet-child-2\"/></route>"),
+            std::string::npos)
+      << xml;
+  EXPECT_NE(xml.find("<link id=\"memory-bus\" bandwidth=\"" +
+                     std::to_string(bed.arrayLinkBandwidth.value) + "Bps\""),
+            std::string::npos);
+  EXPECT_NE(xml.find("<route src=\"parent\" dst=\"zephyr\"><link_ctn id=\"memory-bus\"/>"),
+            std::string::npos);
+  // The array host computes at the PIM array's DDR4 command clock.
+  EXPECT_NE(xml.find("<host id=\"zephyr\" speed=\"" +
+                     std::to_string(bitserial::Profile(bed.arrayProfile).clockHz) + "f\">"),
+            std::string::npos);
+  // Every entry of every testbed has a source.
+  for (const std::string& name : testbed::TestbedNames()) {
+    const testbed::Testbed& t = testbed::TestbedNamed(name);
+    for (const testbed::Sourced* e :
+         {&t.ethernetBandwidth, &t.ethernetLatency, &t.arrayLinkBandwidth})
+      EXPECT_FALSE(e->source.empty()) << name;
+    EXPECT_FALSE(t.ethernetTopologySource.empty()) << name;
+    EXPECT_NO_THROW(testbed::HostProfileNamed(t.parentProfile)) << name;
+    EXPECT_NO_THROW(testbed::HostProfileNamed(t.childProfile)) << name;
+    EXPECT_NO_THROW(bitserial::Profile(t.arrayProfile)) << name;
+  }
+}
+
+// `render --testbed NAME` runs the array of that testbed unless --machine names one, which must
+// then be the testbed's.
+TEST(TestbedModel, ARenderOnATestbedRunsItsArray) {
+  TempDir dir;
+  const std::string scene = WriteScene(dir), report = dir / "r.json";
+  auto r = RunZephyrProcess("render --no-progress --method simd " + scene +
+                            " --testbed today-pim --report " + report);
+  ASSERT_EQ(r.status, 0) << r.output;
+  const nlohmann::json j = ReadJson(report);
+  EXPECT_EQ(j.at("testbed").at("array").at("profile").get<std::string>(), "pim-bitsimd-v-bank");
+  EXPECT_EQ(j.at("testbed").at("hostProfile").at("name").get<std::string>(), "today-calibrated");
+  r = RunZephyrProcess("render --no-progress --method simd " + scene +
+                       " --testbed today-pim --machine wavetracer --report " + report);
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.output.find("its array is 'pim-bitsimd-v-bank', but the machine profile is "
+                          "'wavetracer'"),
+            std::string::npos)
+      << r.output;
+}
+
 std::string Repo() {  // the checkout: $(BUILD)/bin/zephyr_tests -> ../../
   return std::filesystem::read_symlink("/proc/self/exe")
       .parent_path()
@@ -543,6 +621,27 @@ TEST(TestbedSimulated, DistAndHeteroMatchSeqAndSimdAndRepeatToTheLastDigit) {
 // `make charts TESTBED=ufmg1992 QUICK=1` (tools/testbed/charts.sh) end to end: every figure
 // in modelled seconds, no cell missing; the winner of each grid point is the fastest of the
 // four; dist's children process every pixel of the image.
+// A CSV file's rows, each split at its commas (no quoting: the charts' files have none).
+std::vector<std::vector<std::string>> CsvRows(const std::string& file) {
+  std::ifstream f(file);
+  EXPECT_TRUE(f) << file;
+  std::vector<std::vector<std::string>> table;
+  for (std::string line; std::getline(f, line);) {
+    std::vector<std::string> cells;
+    std::stringstream in(line);
+    for (std::string cell; std::getline(in, cell, ',');) cells.push_back(cell);
+    table.push_back(cells);
+  }
+  return table;
+}
+
+bool IsPng(const std::string& file) {
+  std::ifstream png(file, std::ios::binary);
+  char magic[4] = {};
+  png.read(magic, 4);
+  return std::string(magic + 1, 3) == "PNG";
+}
+
 TEST(TestbedCharts, QuickRunDrawsEveryFigureInModelledSeconds) {
   if (!std::filesystem::exists(SmpiPath())) GTEST_SKIP() << "no zephyr-smpi (make smpi)";
   TempDir dir;
@@ -552,18 +651,7 @@ TEST(TestbedCharts, QuickRunDrawsEveryFigureInModelledSeconds) {
                       "/zephyr ZEPHYR_SMPI=" + SmpiPath() + " timeout -k 5 600 bash " + Repo() +
                       "/tools/testbed/charts.sh");
   ASSERT_EQ(r.status, 0) << r.output;
-  auto rows = [&](const std::string& name) {
-    std::ifstream f(out + "/" + name + ".csv");
-    EXPECT_TRUE(f) << name;
-    std::vector<std::vector<std::string>> table;
-    for (std::string line; std::getline(f, line);) {
-      std::vector<std::string> cells;
-      std::stringstream in(line);
-      for (std::string cell; std::getline(in, cell, ',');) cells.push_back(cell);
-      table.push_back(cells);
-    }
-    return table;
-  };
+  auto rows = [&](const std::string& name) { return CsvRows(out + "/" + name + ".csv"); };
   for (const char* name :
        {"fig05_seq_vs_simd", "fig06_seq_vs_dist", "fig07_hetero_vs_dist_2children",
         "fig10_data_flow", "fig11_pixels", "fig12_all_methods", "past_efficiency", "past_ethernet",
@@ -575,10 +663,7 @@ TEST(TestbedCharts, QuickRunDrawsEveryFigureInModelledSeconds) {
         ASSERT_NE(table[i][c], "NaN") << name << " row " << i << " column " << c;
         EXPECT_GE(std::stod(table[i][c]), 0) << name << " row " << i << " column " << c;
       }
-    std::ifstream png(out + "/" + std::string(name) + ".png", std::ios::binary);
-    char magic[4] = {};
-    png.read(magic, 4);
-    EXPECT_EQ(std::string(magic + 1, 3), "PNG") << name;
+    EXPECT_TRUE(IsPng(out + "/" + std::string(name) + ".png")) << name;
   }
   for (const auto& row : rows("fig11_pixels")) {
     if (row[0] == "frame") continue;                  // the header
@@ -593,6 +678,55 @@ TEST(TestbedCharts, QuickRunDrawsEveryFigureInModelledSeconds) {
       if (std::stod(row[2 + m]) < std::stod(row[2 + fastest])) fastest = m;
     EXPECT_EQ(std::stoi(row[2]), fastest) << row[0] << " bit/s, " << row[1] << " objects";
   }
+}
+
+// `make future` (tools/testbed/future.sh) in its quick form: on every testbed a crossover chart
+// of every method exhaustive and with the BVH and a where-each-wins map with the BVH, each a
+// CSV without holes and a PNG; the two testbeds that share the Zephyr priced from one render
+// (the same array seconds, their hosts' own); the winners the least of their rows.
+TEST(TestbedFuture, QuickRunChartsEveryTestbedExhaustiveAndWithTheBvh) {
+  if (!std::filesystem::exists(SmpiPath())) GTEST_SKIP() << "no zephyr-smpi (make smpi)";
+  TempDir dir;
+  const std::string out = dir / "future";
+  const std::string bin = std::filesystem::path(SmpiPath()).parent_path().string();
+  auto r =
+      RunCommand("QUICK=1 OUT=" + out + " ZEPHYR=" + bin + "/zephyr ZEPHYR_SMPI=" + SmpiPath() +
+                 " timeout -k 5 600 bash " + Repo() + "/tools/testbed/future.sh");
+  ASSERT_EQ(r.status, 0) << r.output;
+  for (const std::string& bed : testbed::TestbedNames()) {
+    const auto crossover = CsvRows(out + "/crossover_" + bed + ".csv");
+    ASSERT_EQ(crossover.size(), 3u) << bed;  // a header and 8, 32 objects
+    ASSERT_EQ(crossover[0].size(), 10u) << bed;
+    for (size_t i = 1; i < crossover.size(); ++i)
+      for (size_t c = 1; c < crossover[i].size(); ++c) {
+        ASSERT_NE(crossover[i][c], "NaN") << bed << " row " << i << " " << crossover[0][c];
+        EXPECT_GT(std::stod(crossover[i][c]), 0) << bed << " " << crossover[0][c];
+      }
+    for (const std::string name : {"crossover_", "wins_bvh_"})
+      EXPECT_TRUE(IsPng(out + "/" + name + bed + ".png")) << name << bed;
+    for (const auto& row : CsvRows(out + "/wins_bvh_" + bed + ".csv")) {
+      if (row[0] == "ethernet_bps") continue;  // the header
+      ASSERT_EQ(row.size(), 8u) << bed;
+      int fastest = 1;
+      for (int m = 2; m <= 5; ++m)
+        if (std::stod(row[2 + m]) < std::stod(row[2 + fastest])) fastest = m;
+      EXPECT_EQ(std::stoi(row[2]), fastest) << bed << " " << row[0] << " bit/s, " << row[1];
+    }
+  }
+  // runs.csv: testbed,method,accel,objects,children,frame,ethernet_bps,model_s,array_s,host_s.
+  std::map<std::string, std::vector<std::string>> runs;
+  for (const auto& row : CsvRows(out + "/runs.csv"))
+    runs[row[0] + " " + row[1] + " " + row[2] + " " + row[3] + " " + row[4] + " " + row[6]] = row;
+  for (const char* method : {"simd", "array"}) {
+    const auto& then = runs.at(std::string("ufmg1992 ") + method + " bvh 32 0 0");
+    const auto& now = runs.at(std::string("today-zephyr ") + method + " bvh 32 0 0");
+    EXPECT_EQ(then[8], now[8]) << method;  // the same Zephyr, the same cycles and SCSI
+    EXPECT_GT(std::stod(then[9]), 100 * std::stod(now[9])) << method;  // SPARC vs today's core
+  }
+  // The hierarchy pays on the host even at 32 spheres: fewer tests, fewer modelled seconds.
+  EXPECT_LT(std::stod(runs.at("ufmg1992 seq bvh 32 0 0")[7]),
+            std::stod(runs.at("ufmg1992 seq none 32 0 0")[7]));
+  EXPECT_EQ(CsvRows(out + "/summary.csv").size(), 1 + testbed::TestbedNames().size() * 2 * 2);
 }
 
 // seq and simd on a platform file (`simrun.sh --children 0`): on the paper's platform the

@@ -5,9 +5,9 @@
 //   build/bin/kernels --markdown docs/kernels.md
 //
 // For every kernel of tools/kernels/suite.h and every built-in profile
-// (bitserial::ProfileNames()), at one layer (the profile's PEs) and at the largest size up
-// to --max-elements (default 2^20) that fits the profile's PE memory: the array run timed on
-// the Highway target the machine picks by itself, then the same run on every compiled
+// (kernels::GridProfiles(): those with a 2-D mesh), at one layer (the profile's PEs) and at the
+// largest size up to --max-elements (default 2^20) that fits the profile's PE memory: the array run
+// timed on the Highway target the machine picks by itself, then the same run on every compiled
 // target the CPU has, each checked bit for bit against plain C++ and for the same cycles.
 // Prints one table per kernel (machine cycles, modelled seconds, the emulator's host time,
 // plain C++'s, cycles by class). Exit 1 if any result differs, 2 on bad arguments.
@@ -143,7 +143,7 @@ int main(int argc, char** argv) {
   std::vector<kernels::Kernel*> chosen;
   std::vector<std::string> profiles;
   try {
-    profiles = profileList.empty() ? bitserial::ProfileNames() : SplitList(profileList);
+    profiles = profileList.empty() ? kernels::GridProfiles() : SplitList(profileList);
     for (const auto& p : profiles) bitserial::Profile(p);  // an unknown name fails here
     const std::vector<std::string> names = SplitList(kernelList);
     for (auto& k : suite)

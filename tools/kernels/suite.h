@@ -22,6 +22,16 @@
 
 namespace zephyr::kernels {
 
+// The built-in profiles whose default mesh is 2-D, which the suite's grid kernels need (the
+// era machines; a DRAM PIM array's default is its 1-D row shift, docs/present-day.md): the
+// profiles `make kernels` runs when none is named.
+inline std::vector<std::string> GridProfiles() {
+  std::vector<std::string> names;
+  for (const std::string& n : bitserial::ProfileNames())
+    if (bitserial::Profile(n).shapes.at(0).extent.size() == 2) names.push_back(n);
+  return names;
+}
+
 // The 2-D virtual grid of `elements` virtual PEs on profile p's default mesh (P_x × P_y):
 // each physical PE holds a b_x × b_y block (b_x·b_y = the layers, b_x = b_y or 2·b_y), so
 // 2^20 elements are a 1024 × 1024 grid on both the WaveTracer (64×128) and the MPP

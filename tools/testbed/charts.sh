@@ -31,24 +31,13 @@ else
   PAST="8 16 32 64 128 256" PAST_SERIES="64:128 64:64 64:32 8:16"
   MAP_BW="1e5 1e6 1e7 1e8" MAP_COUNTS="8 32 128"
 fi
-SEED=${SEED:-1}
-for tool in jq gnuplot awk xmllint; do
-  command -v "$tool" >/dev/null || { echo "charts: $tool not found (run tools/setup.sh)" >&2; exit 1; }
-done
-[ -x "$ZEPHYR" ] || { echo "charts: $ZEPHYR not built (make)" >&2; exit 1; }
-[ -f "$ZEPHYR_SMPI" ] || { echo "charts: $ZEPHYR_SMPI not built (make smpi)" >&2; exit 1; }
-mkdir -p "$OUT"
-WORK=$(mktemp -d "${TMPDIR:-/tmp}/zephyr-testbed.XXXXXX")
-trap 'rm -rf "$WORK"' EXIT
-say() { echo "testbed charts: $*" >&2; }
+SEED=${SEED:-1} NAME="testbed charts"
+. "$ROOT/tools/testbed/sweep.sh"
 # Past the paper: series OBJECTS:FRAME over the child counts PAST (and CHILDREN).
 PAST_COUNTS=$(for s in $PAST_SERIES; do echo "${s%%:*}"; done | sort -n | uniq | tr '\n' ' ')
 say "$TESTBED: ${SIZE}x${SIZE}, objects {$COUNTS}, children {$CHILDREN}, frames {$FRAMES}, past {$PAST} x {$PAST_SERIES}"
 
-scene() { echo "$WORK/spheres-$1.nff"; }
-for n in $COUNTS $REF_COUNT $MAP_COUNTS $PAST_COUNTS; do
-  [ -f "$(scene "$n")" ] || "$ZEPHYR" gen spheres --count "$n" --seed "$SEED" --size "${SIZE}x${SIZE}" --out "$(scene "$n")"
-done
+make_scenes $COUNTS $REF_COUNT $MAP_COUNTS $PAST_COUNTS
 
 RUNS=$OUT/runs.csv
 HEADER="method,objects,children,frame,ethernet_bps,model_s,bytes,pixels,frames_sent,frames_skipped,child_busy_s,ethernet_busy,parent_busy,wall_s"

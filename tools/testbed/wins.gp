@@ -1,11 +1,14 @@
 # tools/testbed/wins.gp — "where each method wins": the fastest method (modelled seconds) at
 # each Ethernet bandwidth × object count, the paper's network marked. Called by
-# tools/testbed/charts.sh with in= (CSV: ethernet_bps,objects,winner 1..5,...), out=,
-# paperbw=, note=.
+# tools/testbed/charts.sh and tools/testbed/future.sh with in= (CSV:
+# ethernet_bps,objects,winner 1..5,...), out=, paperbw= (the testbed's own bandwidth, marked),
+# note=, and optionally ttl= (the title) and paperlabel= (the mark's label).
 set terminal pngcairo size 900,600 font ',10'
 set output out
 set datafile separator ','
-set title 'Where each method wins (fastest in modelled 1992 seconds)'
+if (!exists('ttl')) ttl = 'Where each method wins (fastest in modelled 1992 seconds)'
+if (!exists('paperlabel')) paperlabel = "the paper's 10 Mbit/s"
+set title ttl noenhanced
 set xlabel 'Ethernet bandwidth (bit/s)'
 set ylabel 'objects'
 set logscale x 10
@@ -24,7 +27,7 @@ b = strlen(note) > 140 ? brk(note, 140) : 0
 wrapped = b > 0 ? substr(note, 1, b - 1) . "\n" . substr(note, b + 1, strlen(note)) : note
 set label 1 wrapped at screen 0.02, screen 0.05 left font ',8' noenhanced
 set arrow from paperbw, graph 0 to paperbw, graph 1 nohead dt 2 lw 2 lc 'red'
-set label 2 "the paper's 10 Mbit/s" at paperbw, graph 1.02 center tc 'red'
+set label 2 paperlabel at paperbw, graph 1.02 center tc 'red'
 names = 'sequential SIMD/seq distributed heterogeneous all-on-array'
 plot in using 1:2:3 every ::1 with points pt 5 ps 5 lc palette notitle, \
      in using 1:2:(word(names, int($3))) every ::1 with labels offset 0,2 notitle, \
