@@ -1,5 +1,6 @@
 // hosts/testbed/host_profile.h — host profiles: counted tracer work turned into modelled
-// seconds on a named 1992 workstation (the paper's testbed, §5–6.1; docs/testbed.md).
+// seconds on a named workstation: the paper's 1992 ones (§5–6.1) or a present-day core
+// (docs/testbed.md, docs/present-day.md).
 //
 // Two tables, both data:
 //   * the WORK table: what one counted event (a ray–sphere test, a shaded point, a light
@@ -34,7 +35,7 @@ struct Sourced {
 };
 
 struct HostProfile {
-  std::string name;             // "sparcstation2", "sparcstation-slc"
+  std::string name;             // "sparcstation2", "sparcstation-slc", "today-calibrated", ...
   std::string description;      // "Sun SPARCstation 2 (Sun 4/75), the paper's host and parent"
   Sourced clock;                // Hz (reported; not used by the model)
   Sourced mips;                 // million instructions per second (used: non-FP work)

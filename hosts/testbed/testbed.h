@@ -1,8 +1,9 @@
-// hosts/testbed/testbed.h — the paper's 1992 testbed, modelled (§5–6.1; docs/testbed.md).
+// hosts/testbed/testbed.h — the paper's 1992 testbed, modelled (§5–6.1; docs/testbed.md), and
+// present-day ones for its future work (§8; docs/present-day.md).
 //
 // A testbed names the machines of a run: the host/parent and the children (host profiles,
 // hosts/testbed/host_profile.h), the SIMD array (a bitserial machine profile) and the
-// network (a SimGrid platform: one shared Ethernet, the SCSI link to the array).
+// network (a SimGrid platform: a shared or a switched Ethernet, the link to the array).
 //
 //   * seq and simd need no network: `zephyr render --testbed ufmg1992` adds report
 //     "testbed" with the modelled seconds from the counted work (ModelTime).
