@@ -601,11 +601,13 @@ class TracerT final : public Tracer {
 
   // One leaf object's roots along the ray, as the exhaustive loops compute them; counted in
   // tests[kind] (the walk's own counters, added to TraceStats at its end).
-  int TestLeaf(const LeafObject& leaf, const V& o, const V& d, T tMin, T* roots,
-               uint64_t* tests) const {
+  inline __attribute__((always_inline)) int TestLeaf(const LeafObject& leaf, const V& o, const V& d,
+                                                     T tMin, T* roots, uint64_t* tests) const {
     ++tests[int(leaf.kind)];
-    if (leaf.sphere)
-      return IntersectSphere(options_.sphereTest, o, d, leaf.centre, leaf.radius2, tMin, roots);
+    if (leaf.sphere)  // IntersectSphere's two forms called by name, so both are inlined
+      return options_.sphereTest == SphereTest::kHearnBaker
+                 ? IntersectSphereHearnBaker(o, d, leaf.centre, leaf.radius2, tMin, roots)
+                 : IntersectSphereNaive(o, d, leaf.centre, leaf.radius2, tMin, roots);
     return Intersect(objects_[leaf.object], options_.sphereTest, o, d, tMin, roots);
   }
 
