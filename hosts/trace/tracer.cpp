@@ -360,7 +360,7 @@ class TracerT final : public Tracer {
   // hierarchy's walk when there is one and the origin lies within the reach its padding
   // covers (BuildHierarchy), else every object. The same object and bits of t either way.
   int Nearest(const V& o, const V& d, T tMin, TraceStats& stats, T& tBest) const {
-    if (!nodes_.empty() && MaxAbs(o) <= originLimit_) return NearestBvh(o, d, tMin, stats, tBest);
+    if (hierarchy_ && MaxAbs(o) <= originLimit_) return NearestBvh(o, d, tMin, stats, tBest);
     return NearestExhaustive(o, d, tMin, stats, tBest);
   }
 
@@ -407,14 +407,20 @@ class TracerT final : public Tracer {
   };
 
   // What the walk keeps of a node: a leaf's objects leaves_[first, first + count), or an
-  // inner node's index in pairs_ (count 0).
+  // inner node's index in inner_ (count 0). Trivial (no initialisers), so a walk's stack of
+  // them costs nothing to declare.
   struct NodeRef {
-    int32_t first = 0, count = 0;
+    int32_t first, count;
   };
-  NodeRef Reference(int32_t node) const {
-    return nodes_[node].count > 0 ? NodeRef{nodes_[node].first, nodes_[node].count}
-                                  : NodeRef{node, 0};
-  }
+
+  // An inner node as the walk reads it: its two children's boxes by axis then child (one
+  // SIMD lane a child) and what each child is. One record per inner node, nothing else
+  // between them, aligned to whole cache lines: 112 bytes padded to 128 in double (two
+  // 64-byte lines, the pair the L2's adjacent-line prefetch fetches together), 64 in float.
+  struct alignas(64) Inner {
+    T lo[3][2], hi[3][2];
+    NodeRef child[2];
+  };
 
   static T RoundDown(double v) {
     T f = T(v);
@@ -451,7 +457,9 @@ class TracerT final : public Tracer {
       boxes[i].hi = boxes[i].hi + Vec3{grow, grow, grow};
     }
     const Bvh bvh = BuildBvh(boxes, pad);
-    nodes_.reserve(bvh.nodes.size());
+    // Each node's box in T, rounded outward.
+    std::vector<BvhNodeT<T>> nodes;
+    nodes.reserve(bvh.nodes.size());
     for (const BvhNodeT<double>& n : bvh.nodes) {
       BvhNodeT<T> m;
       for (int a = 0; a < 3; ++a) {
@@ -460,20 +468,33 @@ class TracerT final : public Tracer {
       }
       m.first = n.first;
       m.count = n.count;
-      nodes_.push_back(m);
+      nodes.push_back(m);
     }
+    // The inner nodes numbered densely in the build's order (a node's near descendants
+    // stay near it in memory).
+    std::vector<int32_t> innerIndex(nodes.size(), -1);
+    int32_t inner = 0;
+    for (size_t i = 0; i < nodes.size(); ++i)
+      if (nodes[i].count == 0) innerIndex[i] = inner++;
+    auto reference = [&](int32_t node) {
+      return nodes[node].count > 0 ? NodeRef{nodes[node].first, nodes[node].count}
+                                   : NodeRef{innerIndex[node], 0};
+    };
+    rootBox_ = nodes[0];
+    root_ = reference(0);
     // Each inner node's two child boxes side by side, for EntersPair, with what each child
     // is: the walk reads nothing else of a node.
-    pairs_.resize(nodes_.size());
-    for (size_t i = 0; i < nodes_.size(); ++i) {
-      if (nodes_[i].count > 0) continue;
+    inner_.resize(size_t(inner));
+    for (size_t i = 0; i < nodes.size(); ++i) {
+      if (nodes[i].count > 0) continue;
+      Inner& record = inner_[size_t(innerIndex[i])];
       for (int c = 0; c < 2; ++c) {
-        const int32_t child = nodes_[i].first + c;
+        const int32_t child = nodes[i].first + c;
         for (int a = 0; a < 3; ++a) {
-          pairs_[i].lo[a][c] = nodes_[child].lo[a];
-          pairs_[i].hi[a][c] = nodes_[child].hi[a];
+          record.lo[a][c] = nodes[child].lo[a];
+          record.hi[a][c] = nodes[child].hi[a];
         }
-        pairs_[i].child[c] = Reference(child);
+        record.child[c] = reference(child);
       }
     }
     for (const int32_t i : bvh.order) {
@@ -487,19 +508,38 @@ class TracerT final : public Tracer {
       leaf.transparency = T(scene.materials[obj.material].t);
       leaves_.push_back(leaf);
     }
+    hierarchy_ = true;
     buildWork_.bvhBinned = bvh.binnedPrimitives;
     buildWork_.bvhNodes = bvh.nodesBuilt;
   }
 
-  // A ray's set-up for slab tests: its origin and the reciprocals of its direction (±inf
-  // for a zero component).
+#if defined(__SSE2__)
+  static constexpr bool kPairSse2 = std::is_same_v<T, double>;
+#else
+  static constexpr bool kPairSse2 = false;
+#endif
+
+  // A ray's set-up for slab tests, made once per ray: its origin and the reciprocals of its
+  // direction (±inf for a zero component), and with SSE2 in double each broadcast to both
+  // lanes, so a visit loads only the node's boxes.
   struct SlabRay {
     T o[3], inv[3];
+#if defined(__SSE2__)
+    __m128d vo[3], vinv[3];
+#endif
     SlabRay(const V& origin, const V& d)
-        : o{origin.x, origin.y, origin.z}, inv{T(1) / d.x, T(1) / d.y, T(1) / d.z} {}
+        : o{origin.x, origin.y, origin.z}, inv{T(1) / d.x, T(1) / d.y, T(1) / d.z} {
+#if defined(__SSE2__)
+      if constexpr (kPairSse2)
+        for (int a = 0; a < 3; ++a) {
+          vo[a] = _mm_set1_pd(o[a]);
+          vinv[a] = _mm_set1_pd(inv[a]);
+        }
+#endif
+    }
   };
 
-  // Whether the ray's slab interval [tNear, tFar] through node n meets [tMin, tMax]; tNear
+  // Whether the ray's slab interval [tNear, tFar] through box n meets [tMin, tMax]; tNear
   // in *near. A NaN (0·inf: the origin on a box plane along a zero component) constrains
   // nothing on that axis, or culls a ray lying in a padded face, which no object reaches.
   static bool Enters(const BvhNodeT<T>& n, const SlabRay& r, T tMin, T tMax, T* near) {
@@ -514,29 +554,21 @@ class TracerT final : public Tracer {
     return lo <= hi && hi >= tMin && lo <= tMax;
   }
 
-  // The two children's boxes of an inner node, by axis then child (one SIMD lane a child).
-  struct alignas(16) ChildBoxes {
-    T lo[3][2], hi[3][2];
-    NodeRef child[2];
-  };
-
   // Enters for both children of an inner node at once: bit c of the result set when child c
   // is entered, its tNear in near[c]. With SSE2 (double) two lanes; otherwise the same
   // operations lane by lane (min(a, b) = a < b ? a : b and max(a, b) = a > b ? a : b, as
   // minpd and maxpd), so the same boxes are entered on every machine. NaN: as in Enters.
-  static int EntersPair(const ChildBoxes& b, const SlabRay& r, T tMin, T tMax, T near[2]) {
+  static inline __attribute__((always_inline)) int EntersPair(const Inner& b, const SlabRay& r,
+                                                              T tMin, T tMax, T near[2]) {
 #if defined(__SSE2__)
-    if constexpr (std::is_same_v<T, double>) {
+    if constexpr (kPairSse2) {
       // The three axes written out (the compiler keeps the loop at -O2).
-      const __m128d o0 = _mm_set1_pd(r.o[0]), o1 = _mm_set1_pd(r.o[1]), o2 = _mm_set1_pd(r.o[2]);
-      const __m128d i0 = _mm_set1_pd(r.inv[0]), i1 = _mm_set1_pd(r.inv[1]),
-                    i2 = _mm_set1_pd(r.inv[2]);
-      const __m128d a0 = _mm_mul_pd(_mm_sub_pd(_mm_load_pd(b.lo[0]), o0), i0);
-      const __m128d b0 = _mm_mul_pd(_mm_sub_pd(_mm_load_pd(b.hi[0]), o0), i0);
-      const __m128d a1 = _mm_mul_pd(_mm_sub_pd(_mm_load_pd(b.lo[1]), o1), i1);
-      const __m128d b1 = _mm_mul_pd(_mm_sub_pd(_mm_load_pd(b.hi[1]), o1), i1);
-      const __m128d a2 = _mm_mul_pd(_mm_sub_pd(_mm_load_pd(b.lo[2]), o2), i2);
-      const __m128d b2 = _mm_mul_pd(_mm_sub_pd(_mm_load_pd(b.hi[2]), o2), i2);
+      const __m128d a0 = _mm_mul_pd(_mm_sub_pd(_mm_load_pd(b.lo[0]), r.vo[0]), r.vinv[0]);
+      const __m128d b0 = _mm_mul_pd(_mm_sub_pd(_mm_load_pd(b.hi[0]), r.vo[0]), r.vinv[0]);
+      const __m128d a1 = _mm_mul_pd(_mm_sub_pd(_mm_load_pd(b.lo[1]), r.vo[1]), r.vinv[1]);
+      const __m128d b1 = _mm_mul_pd(_mm_sub_pd(_mm_load_pd(b.hi[1]), r.vo[1]), r.vinv[1]);
+      const __m128d a2 = _mm_mul_pd(_mm_sub_pd(_mm_load_pd(b.lo[2]), r.vo[2]), r.vinv[2]);
+      const __m128d b2 = _mm_mul_pd(_mm_sub_pd(_mm_load_pd(b.hi[2]), r.vo[2]), r.vinv[2]);
       __m128d lo = _mm_set1_pd(-std::numeric_limits<double>::infinity());
       __m128d hi = _mm_set1_pd(std::numeric_limits<double>::infinity());
       lo = _mm_max_pd(_mm_min_pd(a0, b0), lo);
@@ -567,66 +599,100 @@ class TracerT final : public Tracer {
     return mask;
   }
 
-  // One leaf object's roots along the ray, as the exhaustive loops compute them; counted.
-  int TestLeaf(const LeafObject& leaf, const V& o, const V& d, T tMin, T* roots,
-               TraceStats& stats) const {
-    ++stats.tests[int(leaf.kind)];
-    if (leaf.sphere)
-      return IntersectSphere(options_.sphereTest, o, d, leaf.centre, leaf.radius2, tMin, roots);
+  // One leaf object's roots along the ray, as the exhaustive loops compute them; counted in
+  // tests[kind] (the walk's own counters, added to TraceStats at its end).
+  inline __attribute__((always_inline)) int TestLeaf(const LeafObject& leaf, const V& o, const V& d,
+                                                     T tMin, T* roots, uint64_t* tests) const {
+    ++tests[int(leaf.kind)];
+    if (leaf.sphere)  // IntersectSphere's two forms called by name, so both are inlined
+      return options_.sphereTest == SphereTest::kHearnBaker
+                 ? IntersectSphereHearnBaker(o, d, leaf.centre, leaf.radius2, tMin, roots)
+                 : IntersectSphereNaive(o, d, leaf.centre, leaf.radius2, tMin, roots);
     return Intersect(objects_[leaf.object], options_.sphereTest, o, d, tMin, roots);
   }
 
-  struct StackEntry {
+  // The walk's counts, kept in locals (not behind the TraceStats reference, which the
+  // compiler must assume aliases the walk's own state) and added once per ray.
+  struct WalkCounts {
+    uint64_t boxTests = 0, visits = 0, tests[kShapeKinds] = {};
+    void AddTo(TraceStats& stats) const {
+      stats.boxTests += boxTests;
+      stats.nodeVisits += visits;
+      for (int k = 0; k < kShapeKinds; ++k) stats.tests[k] += tests[k];
+    }
+  };
+
+  struct StackEntry {  // trivial, like NodeRef
     NodeRef node;
     T tNear;
   };
 
   // Nearest through the hierarchy: nearer child first; a box is skipped only when it is
   // entered strictly beyond the best t (one entered at t may hold a lower index at t). Ties
-  // go to the lower index as in NearestExhaustive, whatever the visiting order.
-  int NearestBvh(const V& o, const V& d, T tMin, TraceStats& stats, T& tBest) const {
-    tBest = std::numeric_limits<T>::infinity();
+  // go to the lower index as in NearestExhaustive, whatever the visiting order. The nearer
+  // (or only) child entered is visited at once rather than pushed and popped: it was
+  // entered at or before the best t, which nothing has changed since, so the pop's test
+  // would pass it (the same visits in the same order).
+  int NearestBvh(const V& o, const V& d, T tMin, TraceStats& stats, T& tBestOut) const {
+    T tBest = std::numeric_limits<T>::infinity();
     int best = -1;
     const SlabRay ray(o, d);
-    StackEntry stack[kBvhMaxDepth + 2];
-    int top = 0;
     T near;
     ++stats.boxTests;
-    if (!Enters(nodes_[0], ray, tMin, tBest, &near)) return best;
-    stack[top++] = {Reference(0), near};
+    if (!Enters(rootBox_, ray, tMin, tBest, &near)) {
+      tBestOut = tBest;
+      return best;
+    }
+    StackEntry stack[kBvhMaxDepth + 2];
+    int top = 0;
+    NodeRef n = root_;
     T roots[2];
-    uint64_t boxTests = 0, visits = 0;  // kept in registers, added to stats at the end
-    while (top > 0) {
-      const StackEntry e = stack[--top];
-      if (e.tNear > tBest) continue;
-      ++visits;
-      const NodeRef n = e.node;
+    WalkCounts counts;
+    for (;;) {
+      ++counts.visits;
       if (n.count > 0) {
         for (int32_t k = n.first; k < n.first + n.count; ++k) {
           const LeafObject& leaf = leaves_[k];
-          if (TestLeaf(leaf, o, d, tMin, roots, stats) > 0 &&
+          if (TestLeaf(leaf, o, d, tMin, roots, counts.tests) > 0 &&
               (roots[0] < tBest || (roots[0] == tBest && leaf.object < best))) {
             tBest = roots[0];
             best = leaf.object;
           }
         }
-        continue;
+      } else {
+        T nearChild[2];
+        counts.boxTests += 2;
+        const Inner& node = inner_[n.first];
+        const int entered = EntersPair(node, ray, tMin, tBest, nearChild);
+        // Which child comes next is chosen by branches, not by an index computed from the
+        // test: a predicted branch lets the next node's loads start before this node's test
+        // has finished (an index would make every visit wait for the last one's test).
+        if (entered == 3) {
+          if (nearChild[0] <= nearChild[1]) {  // the nearer first
+            stack[top++] = {node.child[1], nearChild[1]};
+            n = node.child[0];
+          } else {
+            stack[top++] = {node.child[0], nearChild[0]};
+            n = node.child[1];
+          }
+          continue;
+        }
+        if (entered == 1) {
+          n = node.child[0];
+          continue;
+        }
+        if (entered == 2) {
+          n = node.child[1];
+          continue;
+        }
       }
-      T nearChild[2];
-      boxTests += 2;
-      const ChildBoxes& pair = pairs_[n.first];
-      const int entered = EntersPair(pair, ray, tMin, tBest, nearChild);
-      if (entered == 3) {
-        const int first = nearChild[0] <= nearChild[1] ? 0 : 1;  // the nearer popped first
-        stack[top++] = {pair.child[1 - first], nearChild[1 - first]};
-        stack[top++] = {pair.child[first], nearChild[first]};
-      } else if (entered != 0) {
-        const int c = entered >> 1;
-        stack[top++] = {pair.child[c], nearChild[c]};
-      }
+      // The next entry not entered beyond the best t.
+      while (top > 0 && stack[top - 1].tNear > tBest) --top;
+      if (top == 0) break;
+      n = stack[--top].node;
     }
-    stats.boxTests += boxTests;
-    stats.nodeVisits += visits;
+    counts.AddTo(stats);
+    tBestOut = tBest;
     return best;
   }
 
@@ -634,6 +700,7 @@ class TracerT final : public Tracer {
   // crossings (object, roots nearer than dist) collected and multiplied in object order, as
   // TransmissionExhaustive multiplies them (floating-point products depend on the order). An
   // opaque surface crossed makes the product 0 at once (the exhaustive product is 0 too).
+  // Child 1 is visited before child 0 (as a stack pushed 0 then 1 would pop them).
   T TransmissionBvh(const V& p, const V& toLight, T dist, T tMin, TraceStats& stats) const {
     struct Crossing {
       int32_t object, count;
@@ -642,20 +709,20 @@ class TracerT final : public Tracer {
     thread_local std::vector<Crossing> crossed;
     crossed.clear();
     const SlabRay ray(p, toLight);
-    StackEntry stack[kBvhMaxDepth + 2];
-    int top = 0;
     T near;
     ++stats.boxTests;
-    if (Enters(nodes_[0], ray, tMin, dist, &near)) stack[top++] = {Reference(0), near};
+    if (!Enters(rootBox_, ray, tMin, dist, &near)) return T(1);
+    NodeRef stack[kBvhMaxDepth + 2];
+    int top = 0;
+    NodeRef n = root_;
     T roots[2];
-    uint64_t boxTests = 0, visits = 0;
-    while (top > 0) {
-      const NodeRef n = stack[--top].node;
-      ++visits;
+    WalkCounts counts;
+    for (;;) {
+      ++counts.visits;
       if (n.count > 0) {
         for (int32_t k = n.first; k < n.first + n.count; ++k) {
           const LeafObject& leaf = leaves_[k];
-          const int found = TestLeaf(leaf, p, toLight, tMin, roots, stats);
+          const int found = TestLeaf(leaf, p, toLight, tMin, roots, counts.tests);
           int count = 0;
           for (int i = 0; i < found; ++i) {
             if (roots[i] >= dist) break;
@@ -663,23 +730,34 @@ class TracerT final : public Tracer {
           }
           if (count == 0) continue;
           if (leaf.transparency == T(0)) {
-            stats.boxTests += boxTests;
-            stats.nodeVisits += visits;
+            counts.AddTo(stats);
             return T(0);
           }
           crossed.push_back({leaf.object, count, leaf.transparency});
         }
-        continue;
+      } else {
+        counts.boxTests += 2;
+        T nearChild[2];
+        const Inner& node = inner_[n.first];
+        const int entered = EntersPair(node, ray, tMin, dist, nearChild);
+        if (entered == 3) {  // (branches, not an index: as in NearestBvh)
+          stack[top++] = node.child[0];
+          n = node.child[1];
+          continue;
+        }
+        if (entered == 1) {
+          n = node.child[0];
+          continue;
+        }
+        if (entered == 2) {
+          n = node.child[1];
+          continue;
+        }
       }
-      boxTests += 2;
-      T nearChild[2];
-      const ChildBoxes& pair = pairs_[n.first];
-      const int entered = EntersPair(pair, ray, tMin, dist, nearChild);
-      for (int c = 0; c < 2; ++c)
-        if (entered & (1 << c)) stack[top++] = {pair.child[c], nearChild[c]};
+      if (top == 0) break;
+      n = stack[--top];
     }
-    stats.boxTests += boxTests;
-    stats.nodeVisits += visits;
+    counts.AddTo(stats);
     std::sort(crossed.begin(), crossed.end(),
               [](const Crossing& a, const Crossing& b) { return a.object < b.object; });
     T through = T(1);
@@ -707,7 +785,7 @@ class TracerT final : public Tracer {
   // offset of the hit the ray leaves) are ignored.
   T Transmission(const V& p, const V& toLight, T dist, T tMin, TraceStats& stats) const {
     ++stats.rays[int(RayKind::kShadow)];
-    if (!nodes_.empty() && MaxAbs(p) <= originLimit_)
+    if (hierarchy_ && MaxAbs(p) <= originLimit_)
       return TransmissionBvh(p, toLight, dist, tMin, stats);
     return TransmissionExhaustive(p, toLight, dist, tMin, stats);
   }
@@ -826,8 +904,10 @@ class TracerT final : public Tracer {
   T ambient_, hither_;
   // --accel bvh: the hierarchy (empty: none), its objects in leaf order, and the largest
   // |coordinate| of an origin it answers for (BuildHierarchy).
-  std::vector<BvhNodeT<T>> nodes_;
-  std::vector<ChildBoxes> pairs_;  // per inner node (by index), its children's boxes
+  bool hierarchy_ = false;
+  BvhNodeT<T> rootBox_;
+  NodeRef root_{0, 0};
+  std::vector<Inner> inner_;  // the inner nodes' records (Inner)
   std::vector<LeafObject> leaves_;
   T originLimit_ = 0;
 };
