@@ -107,7 +107,8 @@ CommandRegistration reg("render", [](CLI::App& program) {
                       "smpirun; the array is the testbed's unless --machine; docs/testbed.md)");
   cmd->add_option("--also-testbed", o->alsoTestbeds,
                   "seq, simd, array: also price the same counted work on this testbed (repeat "
-                  "for more; each must share the array): the report's \"alsoTestbeds\"");
+                  "for more; each must share the array): the report's \"alsoTestbeds\"")
+      ->allow_extra_args(false);  // one name a flag: a scene given after it is the scene
   cmd->callback([o, positional, noProgress, simdFlags, outputs, farmFlags, wavefrontFlags] {
     RenderOptions options = *o;
     for (CLI::Option* flag : outputs)  // `--out ''` is a mistake, not "no output"
@@ -134,6 +135,9 @@ CommandRegistration reg("render", [](CLI::App& program) {
         throw UserError(flag->get_name() + ": --method " + options.method +
                         " has no frame farm (the flag applies to " +
                         RenderMethodsUsing(false, true) + ")");
+    if (use.farm && !options.alsoTestbeds.empty())
+      throw UserError("--also-testbed: --method " + options.method +
+                      " is timed by a simulation of one testbed's network: one testbed a run");
     for (const CLI::Option* flag : wavefrontFlags)
       if (!use.wavefront && flag->count() > 0)
         throw UserError(flag->get_name() + ": --method " + options.method +

@@ -10,6 +10,7 @@
 #include <memory>
 #include <sstream>
 
+#include "bitserial/profile.h"
 #include "fixed/check.h"
 #include "hosts/cmd/command.h"
 #include "hosts/cmd/flags.h"
@@ -42,7 +43,14 @@ CommandRegistration testbedCommand("testbed", [](CLI::App& program) {
       cmd->add_subcommand("show", "Print one testbed as JSON, every entry with its source");
   auto shown = std::make_shared<std::string>("ufmg1992");
   show->add_option("testbed", *shown, "Testbed name")->capture_default_str();
-  show->callback([shown] { std::printf("%s\n", TestbedNamed(*shown).Json().dump(2).c_str()); });
+  show->callback([shown] {
+    const Testbed& t = TestbedNamed(*shown);
+    nlohmann::json j = t.Json();  // with its hosts' rates and the array's clock (what-if runs)
+    j["parentHost"] = HostProfileNamed(t.parentProfile).Json();
+    j["childHost"] = HostProfileNamed(t.childProfile).Json();
+    j["arrayClockHz"] = bitserial::Profile(t.arrayProfile).clockHz;
+    std::printf("%s\n", j.dump(2).c_str());
+  });
   auto* platform =
       cmd->add_subcommand("platform", "Write a SimGrid platform file (and hostfile) of a testbed");
   auto bed = std::make_shared<std::string>("ufmg1992");
@@ -60,23 +68,30 @@ CommandRegistration testbedCommand("testbed", [](CLI::App& program) {
   auto latency = std::make_shared<double>(-1);
   AddNumber(*platform, "--ethernet-latency", *latency, 0, 10,
             "Override the Ethernet's one-way message latency, s (what-if runs)");
+  auto poll = std::make_shared<double>(0);
+  AddNumber(*platform, "--mpi-poll", *poll, 1e-9, 1,
+            "Override the simulated seconds of each MPI_Test and MPI_Iprobe (what-if runs)");
+  auto arrayClock = std::make_shared<double>(0);
+  AddNumber(*platform, "--array-clock", *arrayClock, 1e3, kNoUpperEnd,
+            "Override the array host's clock, Hz: its cycles take cycles/Hz (what-if runs)");
   auto hostOps = std::make_shared<double>(0);
   AddNumber(*platform, "--host-ops", *hostOps, 1e3, kNoUpperEnd,
             "Parent and children run this many counted operations per second, no profile "
             "(the this-host speed from `zephyr testbed calibrate`)");
-  platform->callback([bed, children, out, hostfile, bps, latency, hostOps] {
+  platform->callback([bed, children, out, hostfile, bps, latency, poll, arrayClock, hostOps] {
     Testbed t = TestbedNamed(*bed);
     if (*bps < 0 || (*bps > 0 && *bps < 1e3))
       throw UserError("--ethernet-bps: expected a bandwidth of at least 1000 bit/s");
     if (*bps > 0)
       t.ethernetBandwidth = {*bps, "bit/s", "--ethernet-bps (what-if; not the testbed's network)"};
+    if (*poll > 0) t.mpiPollSeconds = {*poll, "s", "--mpi-poll (what-if; not the testbed's)"};
     if (*latency >= 0)
       t.ethernetLatency = {*latency, "s",
                            "--ethernet-latency (what-if; not the testbed's network)"};
     if (*hostOps < 0 || (*hostOps > 0 && *hostOps < 1e3))
       throw UserError("--host-ops: expected at least 1000 operations per second");
     CheckOutputs({{"--out", *out}, {"--hostfile", *hostfile}});
-    const std::string xml = PlatformXml(t, *children, *hostOps);
+    const std::string xml = PlatformXml(t, *children, *hostOps, *arrayClock);
     if (out->empty())
       std::fputs(xml.c_str(), stdout);
     else

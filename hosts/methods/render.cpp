@@ -118,9 +118,6 @@ RenderOutput RunRender(const RenderOptions& given) {
   // Every output and option is checked before the scene is read: nothing is computed for an
   // output that could not be written.
   CheckRenderOutputs(options);
-  if (it->check) it->check(options);
-  testbed::CheckModelledTimeRequest(options.testbed, options.method, it->child != nullptr,
-                                    it->usesArray, options.simd.profile);
   if (!options.alsoTestbeds.empty()) {
     if (options.testbed.empty())
       throw UserError("more testbeds to price a render on need a first one (the testbed)");
@@ -131,6 +128,9 @@ RenderOutput RunRender(const RenderOptions& given) {
       testbed::CheckModelledTimeRequest(bed, options.method, false, it->usesArray,
                                         options.simd.profile);
   }
+  if (it->check) it->check(options);
+  testbed::CheckModelledTimeRequest(options.testbed, options.method, it->child != nullptr,
+                                    it->usesArray, options.simd.profile);
   out.method = options.method;
   out.trace = options.trace;
   Scene scene;

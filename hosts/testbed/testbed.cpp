@@ -374,7 +374,7 @@ nlohmann::json CalibrateThisHost(const nlohmann::json& r, const std::string& fil
                   " --children K --out this-host.xml"}};
 }
 
-std::string PlatformXml(const Testbed& bed, int children, double hostOps) {
+std::string PlatformXml(const Testbed& bed, int children, double hostOps, double arrayClockHz) {
   if (children < 1 || children > kMaxPlatformChildren)
     throw UserError("a platform's children must be 1.." + std::to_string(kMaxPlatformChildren) +
                     ", got " + std::to_string(children));
@@ -412,7 +412,7 @@ std::string PlatformXml(const Testbed& bed, int children, double hostOps) {
   const bool calibrated = hostOps > 0;
   x += host("parent", calibrated ? hostOps : parent.mflops.value * 1e6,
             calibrated ? "" : parent.name, "parent");
-  x += host("zephyr", array.clockHz, "", "array");
+  x += host("zephyr", arrayClockHz > 0 ? arrayClockHz : array.clockHz, "", "array");
   for (int i = 1; i <= children; ++i)
     x += host("child-" + std::to_string(i), calibrated ? hostOps : child.mflops.value * 1e6,
               calibrated ? "" : child.name, "child");

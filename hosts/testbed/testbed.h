@@ -68,8 +68,10 @@ std::optional<std::string> TestbedArrayProfile(const std::string& name);
 // 1..kMaxPlatformChildren.
 // With hostOps > 0 the parent and the children have that speed and no profile: each counted
 // operation (work-table flop or instruction) costs 1/hostOps seconds (a calibrated this-host).
+// With arrayClockHz > 0 the array host runs at that clock instead of its profile's (what-if).
 inline constexpr int kMaxPlatformChildren = 4096;
-std::string PlatformXml(const Testbed& bed, int children, double hostOps = 0);
+std::string PlatformXml(const Testbed& bed, int children, double hostOps = 0,
+                        double arrayClockHz = 0);
 
 // The this-host profile: from the report of a seq render measured on this host, its counted
 // operations (the work table's flops + instructions) over the render phase's seconds:

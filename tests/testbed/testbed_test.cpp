@@ -471,6 +471,43 @@ TEST(TestbedPlatform, OneSharedEthernetOnEveryChildRoute) {
   EXPECT_THROW(testbed::PlatformXml(testbed::TestbedNamed("ufmg1992"), 0), UserError);
 }
 
+// --also-testbed: one render priced on more testbeds that share its array gives each the
+// seconds a render on that testbed alone gives (the counts do not depend on the testbed); a
+// farmed method, a testbed without a first one, or another array are refused before any work.
+TEST(TestbedModel, AlsoTestbedPricesTheSameCountsAsARenderOnIt) {
+  TempDir dir;
+  const std::string scene = WriteScene(dir);
+  for (const char* method : {"seq", "simd"}) {
+    RenderOptions o;
+    o.method = method;
+    o.scenePath = scene;
+    o.progress = false;
+    o.testbed = "ufmg1992";
+    o.alsoTestbeds = {"today-zephyr"};
+    const RenderOutput both = RunRender(o);
+    ASSERT_EQ(both.alsoTestbeds.size(), 1u);
+    const RenderOutput alone = Render(scene, method, "today-zephyr");
+    EXPECT_EQ(both.alsoTestbeds[0].modelledSeconds, alone.testbed->modelledSeconds) << method;
+    EXPECT_EQ(both.testbed->modelledSeconds,
+              Render(scene, method, "ufmg1992").testbed->modelledSeconds)
+        << method;
+    EXPECT_EQ(RenderReportJson(both).at("alsoTestbeds").at(0).at("testbed").at("name"),
+              "today-zephyr");
+  }
+  for (const auto& [flags, message] :
+       {std::pair{"--method dist --testbed ufmg1992 --also-testbed today-zephyr",
+                  "one testbed a run"},
+        std::pair{"--method seq --also-testbed today-zephyr", "need a first one"},
+        std::pair{"--method simd --testbed ufmg1992 --also-testbed today-pim",
+                  "its array is 'pim-bitsimd-v-bank'"}}) {
+    const auto r = RunZephyrProcess(std::string("render --no-progress ") + flags + " " + scene +
+                                    " --out " + (dir / "x.png"));
+    EXPECT_NE(r.status, 0) << flags;
+    EXPECT_NE(r.output.find(message), std::string::npos) << flags << "\n" << r.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / "x.png")) << flags;
+  }
+}
+
 // Present-day testbeds: each host its own switch port, "ethernet" the parent's (which every
 // child's route crosses) and "ethernet-child-I" each child's, each half the one-way latency;
 // the array on its own link (the memory bus for today-pim).

@@ -28,11 +28,11 @@ GP=$ROOT/tools/charts
 SIMRUN=$ROOT/tools/testbed/simrun.sh
 
 if [ -n "${QUICK:-}" ] && [ "${QUICK}" != 0 ]; then
-  SIZE=64 COUNTS="8 32" K=2 FRAME=16 MAP_COUNTS="8 32" ARRAY_2K_MAX=32
+  SIZE=64 COUNTS="8 32" K=2 FRAME=16 MAP_COUNTS="8 32" ARRAY_2K_MAX=32 SENS_COUNTS="32"
   MAP_BW_ufmg1992="1e6 1e7" MAP_BW_today="1e9 2.5e10"
 else
   SIZE=384 COUNTS="8 32 128 512 1024 2048 4096" K=8 FRAME=32 MAP_COUNTS="8 128 1024 4096"
-  ARRAY_2K_MAX=1024
+  ARRAY_2K_MAX=1024 SENS_COUNTS="128 1024"
   MAP_BW_ufmg1992="1e5 1e6 1e7 1e8" MAP_BW_today="1e8 1e9 2.5e10 1e11"
 fi
 SEED=${SEED:-1} NAME=future
@@ -137,6 +137,49 @@ for t in $TESTBEDS; do
   say "$t: map done (${SECONDS} s)"
 done
 
+# ---- How the answer moves: the present-day testbeds' assumed values halved and doubled -----
+# (docs/present-day.md). With the BVH, at SENS_COUNTS objects: the host's speed (--host-ops:
+# the calibrated core has one rate), the array's clock (--array-clock), the message latency
+# and the MPI poll, each × 0.5 and × 2. dist/hetero are simulated again on a platform so
+# changed (sensitivity_runs.csv); seq/simd/array are additive (array + host seconds), so
+# their figures scale: the host's seconds by 1/f, the array's (its link priced in its cycles)
+# by 1/f.
+SENS=$OUT/sensitivity_runs.csv
+SENS_HEADER="variation,factor,$HEADER"
+if [ "${REUSE:-0}" = 0 ] || [ ! -f "$SENS" ] || [ "$(head -1 "$SENS")" != "$SENS_HEADER" ]; then
+  echo "$SENS_HEADER" >"$SENS"
+fi
+VARIATIONS="host array latency poll"
+sens_pick() {  # variation factor testbed method objects: model_s or NaN
+  awk -F, -v v="$1" -v f="$2" -v t="$3" -v m="$4" -v n="$5" \
+    'NR > 1 && $1 == v && $2 == f && $3 == t && $4 == m && $6 == n { print $10; found = 1; exit }
+     END { if (!found) print "NaN" }' "$SENS"
+}
+sens_run() {  # testbed method objects variation factor
+  [ "$(sens_pick "$4" "$5" "$1" "$2" "$3")" = NaN ] || return 0
+  local show r=$WORK/r.json t0=$SECONDS flag
+  show=$("$ZEPHYR" testbed show "$1")
+  case $4 in
+    host) flag=(--host-ops "$(jq -r --arg f "$5" '.parentHost.mips.value * 1e6 * ($f | tonumber)' <<<"$show")") ;;
+    array) flag=(--array-clock "$(jq -r --arg f "$5" '.arrayClockHz * ($f | tonumber)' <<<"$show")") ;;
+    latency) flag=(--ethernet-latency "$(jq -r --arg f "$5" '.ethernetLatency.value * ($f | tonumber)' <<<"$show")") ;;
+    poll) flag=(--mpi-poll "$(jq -r --arg f "$5" '.mpiPollSeconds.value * ($f | tonumber)' <<<"$show")") ;;
+  esac
+  "$ZEPHYR" testbed platform --testbed "$1" --children "$K" "${flag[@]}" --out "$WORK/p.xml" --hostfile "$WORK/h"
+  rm -f "$r"
+  bash "$SIMRUN" --children "$K" --platform "$WORK/p.xml" --hostfile "$WORK/h" --zephyr "$ZEPHYR_SMPI" -- \
+    render --no-progress --method "$2" --accel bvh "$(scene "$3")" --frame "$FRAME" --testbed "$1" \
+    --report "$r" >"$WORK/log" 2>&1 || { say "failed: $*"; tail -n 3 "$WORK/log" >&2; return 0; }
+  local before; before=$(wc -l <"$RUNS")
+  row "$1" "$2" bvh "$3" "$K" "$FRAME" 0 "$(( SECONDS - t0 ))" "$r" .testbed
+  tail -n +"$((before + 1))" "$RUNS" | sed "s/^/$4,$5,/" >>"$SENS"  # moved from runs.csv
+  sed -i "$((before + 1)),\$d" "$RUNS"
+}
+SENS_TESTBEDS=$(for t in $TESTBEDS; do case $t in today-*) echo "$t" ;; esac; done)
+for t in $SENS_TESTBEDS; do for n in $SENS_COUNTS; do for v in $VARIATIONS; do for f in 0.5 2; do
+  for m in dist hetero; do sens_run "$t" "$m" "$n" "$v" "$f"; done
+done; done; done; say "$t: sensitivity done (${SECONDS} s)"; done
+
 # ---- Charts ----------------------------------------------------------------------------------
 NAMES=(seq simd dist hetero)
 TITLES=("sequential" "SIMD/sequential" "distributed $K" "heterogeneous $K")
@@ -212,6 +255,37 @@ done
       printf "%s,%s,%s,%s,%s,%s,%s\n", t, acc, n, best ? name[best] : "none", best ? v[best] : "NaN", hd, ss }'
   done; done; done
 } >"$OUT/summary.csv"
+
+# sensitivity.csv: per present-day testbed, count, variation and factor, every method's
+# modelled seconds (BVH), the winner, heterogeneous ÷ distributed; factor 1 is the sweep's.
+{
+  echo "testbed,objects,variation,factor,seq_s,simd_s,dist_s,hetero_s,array_s,winner,hetero_vs_dist"
+  for t in $SENS_TESTBEDS; do for n in $SENS_COUNTS; do for v in base $VARIATIONS; do
+    for f in $([ "$v" = base ] && echo 1 || echo 0.5 2); do
+      local_s=() 
+      for m in seq simd array; do
+        mm=$m; [ "$m" = array ] && mm=$(array_method "$t")
+        a=$(pick "$t" "$mm" bvh "$n" 0 0 9) h=$(pick "$t" "$mm" bvh "$n" 0 0 10)
+        local_s+=("$(awk -v a="$a" -v h="$h" -v v="$v" -v f="$f" 'BEGIN {
+          if (a == "NaN" || h == "NaN") { print "NaN"; exit }
+          if (v == "host") h /= f; else if (v == "array") a /= f
+          print a + h }')")
+      done
+      if [ "$v" = base ]; then
+        di=$(pick_method "$t" dist bvh "$n"); h=$(pick_method "$t" hetero bvh "$n")
+      else
+        di=$(sens_pick "$v" "$f" "$t" dist "$n"); h=$(sens_pick "$v" "$f" "$t" hetero "$n")
+      fi
+      awk -v t="$t" -v n="$n" -v var="$v" -v f="$f" -v s="${local_s[0]}" -v d="${local_s[1]}" \
+          -v ar="${local_s[2]}" -v di="$di" -v h="$h" 'BEGIN {
+        split("seq simd dist hetero array", name, " ")
+        x[1] = s; x[2] = d; x[3] = di; x[4] = h; x[5] = ar; best = 0
+        for (i = 1; i <= 5; ++i) if (x[i] != "NaN" && (best == 0 || x[i] + 0 < x[best] + 0)) best = i
+        hd = (h == "NaN" || di == "NaN") ? "NaN" : h / di
+        printf "%s,%s,%s,%s,%s,%s,%s,%s,%s,%s,%s\n", t, n, var, f, s, d, di, h, ar, best ? name[best] : "none", hd }'
+    done
+  done; done; done
+} >"$OUT/sensitivity.csv"
 
 say "wrote $OUT (runs.csv has every render)"
 exit 0
