@@ -31,7 +31,7 @@ if [ -n "${QUICK:-}" ] && [ "${QUICK}" != 0 ]; then
   SIZE=64 COUNTS="8 32" K=2 FRAME=16 MAP_COUNTS="8 32" ARRAY_2K_MAX=32 SENS_COUNTS="32"
   MAP_BW_ufmg1992="1e6 1e7" MAP_BW_today="1e9 2.5e10"
 else
-  SIZE=384 COUNTS="8 32 128 512 1024 2048 4096" K=8 FRAME=32 MAP_COUNTS="8 128 1024 4096"
+  SIZE=384 COUNTS="8 32 64 128 256 512 1024 2048 4096" K=8 FRAME=32 MAP_COUNTS="8 128 1024 4096"
   ARRAY_2K_MAX=1024 SENS_COUNTS="128 1024"
   MAP_BW_ufmg1992="1e5 1e6 1e7 1e8" MAP_BW_today="1e8 1e9 2.5e10 1e11"
 fi
@@ -187,7 +187,7 @@ note() {  # testbed
   case "$1" in
     ufmg1992) echo "modelled 1992 seconds (ufmg1992: SPARCstation 2 parent, SLC children, 10 Mbit/s shared Ethernet, 10 MHz Zephyr); docs/testbed.md" ;;
     today-zephyr) echo "modelled seconds (today-zephyr: a present-day core calibrated, switched 25 GbE, the 10 MHz Zephyr on SCSI-1); docs/present-day.md" ;;
-    today-pim) echo "modelled seconds (today-pim: a present-day core calibrated, switched 25 GbE, a DDR4 bit-serial PIM bank at 1.6 GHz on the memory bus; all rays on the array with 2048-row subarrays); docs/present-day.md" ;;
+    today-pim) echo "modelled seconds (today-pim: calibrated core, switched 25 GbE, PIM bank at 1.6 GHz on DDR4; array method: 2048 rows); docs/present-day.md" ;;
     *) echo "modelled seconds ($1)" ;;
   esac
 }
@@ -215,7 +215,7 @@ for t in $TESTBEDS; do
     echo "$line,$(pick_method "$t" array bvh "$n")" >>"$csv"
   done
   gnuplot -e "in='$csv'; out='${csv%.csv}.png'; ttl='$t: modelled time against objects, exhaustive and with a BVH (${SIZE}x${SIZE})'; \
-xl='random spheres'; yl='modelled s'; logx=1; logy=1; note='$(note "$t")'; ncols=10; empty=0" "$GP/lines.gp" ||
+xl='random spheres'; yl='modelled s'; logx=1; logy=1; note='$(note "$t")'; ncols=10; pairs=4; empty=0" "$GP/lines.gp" ||
     say "gnuplot failed for crossover_$t"
 
   # Where each method wins with the BVH: objects × Ethernet bandwidth.
