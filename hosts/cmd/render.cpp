@@ -16,6 +16,7 @@
 #include "hosts/cmd/simd_flags.h"
 #include "hosts/methods/phases.h"
 #include "hosts/scene/nff.h"
+#include "hosts/testbed/simulation.h"
 #include "hosts/testbed/testbed.h"
 
 namespace zephyr {
@@ -104,7 +105,7 @@ CommandRegistration reg("render", [](CLI::App& program) {
   cmd->add_option("--testbed", o->testbed,
                   "Model a whole system (" + testbeds +
                       "): the report's \"testbed\" gives modelled seconds (dist/hetero: under "
-                      "smpirun; the array is the testbed's unless --machine; docs/testbed.md)");
+                      "tools/testbed/simrun.sh; it runs the testbed's array; docs/testbed.md)");
   cmd->add_option("--also-testbed", o->alsoTestbeds,
                   "seq, simd, array: also price the same counted work on this testbed (repeat "
                   "for more; each must share the array): the report's \"alsoTestbeds\"")
@@ -138,6 +139,10 @@ CommandRegistration reg("render", [](CLI::App& program) {
     if (use.farm && !options.alsoTestbeds.empty())
       throw UserError("--also-testbed: --method " + options.method +
                       " is timed by a simulation of one testbed's network: one testbed a run");
+    if (use.farm && !options.testbed.empty() && !testbed::Simulated())
+      throw UserError("--testbed: --method " + options.method +
+                      " is timed on a simulated network: run it under tools/testbed/simrun.sh "
+                      "--testbed NAME (build/bin/zephyr-smpi, `make smpi`; docs/testbed.md)");
     for (const CLI::Option* flag : wavefrontFlags)
       if (!use.wavefront && flag->count() > 0)
         throw UserError(flag->get_name() + ": --method " + options.method +

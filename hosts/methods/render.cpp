@@ -124,9 +124,21 @@ RenderOutput RunRender(const RenderOptions& given) {
     if (it->child != nullptr || testbed::Simulated())
       throw UserError("method '" + options.method +
                       "' is timed by a simulation of one testbed's network: one testbed a run");
-    for (const std::string& bed : options.alsoTestbeds)
+    std::vector<std::string> seen = {options.testbed};
+    for (const std::string& bed : options.alsoTestbeds) {
+      if (std::find(seen.begin(), seen.end(), bed) != seen.end())
+        throw UserError("testbed '" + bed + "' is named twice: each is priced once");
+      seen.push_back(bed);
+      const auto first = testbed::TestbedArrayProfile(options.testbed);
+      const auto also = testbed::TestbedArrayProfile(bed);
+      if (it->usesArray && first && also && *first != *also)
+        throw UserError(
+            "testbed '" + bed + "' has the array '" + *also + "' and testbed '" + options.testbed +
+            "' the array '" + *first +
+            "': a render runs one array, so the testbeds it is priced on must share it");
       testbed::CheckModelledTimeRequest(bed, options.method, false, it->usesArray,
                                         options.simd.profile);
+    }
   }
   if (it->check) it->check(options);
   testbed::CheckModelledTimeRequest(options.testbed, options.method, it->child != nullptr,

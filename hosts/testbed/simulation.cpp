@@ -31,6 +31,19 @@ bool Simulated() { return true; }
 
 double SimulatedNow() { return simgrid::s4u::Engine::get_clock(); }
 
+std::string SimulatedPlatformName() {
+  return simgrid::s4u::Engine::get_instance()->get_netzone_root()->get_name();
+}
+
+std::string SimulatedArrayProfile() {
+  for (simgrid::s4u::Host* h : simgrid::s4u::Engine::get_instance()->get_all_hosts()) {
+    const char* role = h->get_property("zephyr:role");
+    const char* profile = h->get_property("zephyr:array-profile");
+    if (role && std::string(role) == "array" && profile) return profile;
+  }
+  return "";
+}
+
 namespace {
 const HostProfile* ProfileOf(simgrid::s4u::Host* h) {
   const char* name = h->get_property("zephyr:profile");
@@ -119,6 +132,8 @@ double ChargeArrayCycles(const bitserial::CycleReport& cycles,
 
 bool Simulated() { return false; }
 double SimulatedNow() { return 0; }
+std::string SimulatedPlatformName() { return ""; }
+std::string SimulatedArrayProfile() { return ""; }
 nlohmann::json SimulatedHost() { return nlohmann::json::object(); }
 double ChargeHostWork(const TraceStats&) { return 0; }
 double ChargeArrayCycles(const bitserial::CycleReport&, const bitserial::CycleReport*,

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "bitserial/report.h"
 #include "hosts/scene/scene.h"
@@ -45,6 +46,12 @@ void StartLinkAccounting();
 // Per platform link: {"link", "bytes", "bandwidthBytesPerSecond", "busyFraction"} over `now`
 // simulated seconds (empty when not counted).
 nlohmann::json LinkLoads(double now);
+
+// Under simulation, the platform's root zone's name (a testbed's platform names it after the
+// testbed: PlatformXml) and the machine profile its array host declares
+// ("zephyr:array-profile"); empty when not simulated or not declared.
+std::string SimulatedPlatformName();
+std::string SimulatedArrayProfile();
 
 // The simulated seconds since the simulation started (0 when not simulated).
 double SimulatedNow();

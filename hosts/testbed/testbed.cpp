@@ -57,9 +57,10 @@ const std::map<std::string, Testbed>& Testbeds() {
         {5e6, "byte/s",
          "assumed: SCSI-1 synchronous at 5 MB/s, the same figure as the "
          "wavetracer profile's hostPlane cost"},
-        {0, "s",
-         "SimGrid 3.32's default (1e-4 s a call; not from a source): PVM 3's polling "
-         "(pvm_nrecv) was of that order, a daemon round trip"}}},
+        {1e-4, "s",
+         "SimGrid 3.32's default for smpi/test and smpi/iprobe (not from a source), kept as "
+         "the 1992 model ran: PVM 3's polling (pvm_nrecv) was of that order, a daemon round "
+         "trip"}}},
       {"today-zephyr",
        {"today-zephyr",
         "the paper's future work (§8) on a present-day cluster: the Zephyr as it would "
@@ -169,14 +170,24 @@ std::vector<std::string> TestbedNames() {
 void CheckModelledTimeRequest(const std::string& testbedName, const std::string& method,
                               bool farmed, bool usesArray, const std::string& arrayProfile) {
   if (testbedName.empty()) return;
-  if (farmed) {
-    if (!Simulated())
-      throw UserError("a testbed's time of method '" + method +
-                      "' runs on a simulated network: build/bin/zephyr-smpi under smpirun "
-                      "(`make smpi`; docs/testbed.md)");
+  if (farmed && !Simulated())
+    throw UserError("a testbed's time of method '" + method +
+                    "' runs on a simulated network: build/bin/zephyr-smpi under smpirun "
+                    "(tools/testbed/simrun.sh --testbed " +
+                    testbedName + "; `make smpi`; docs/testbed.md)");
+  if (Simulated()) {
+    // The platform file names the hosts; a testbed's own platform must be the testbed named,
+    // and its array the machine profile the pass runs.
+    const std::string platform = SimulatedPlatformName();
+    if (Testbeds().count(testbedName) && Testbeds().count(platform) && platform != testbedName)
+      throw UserError("testbed '" + testbedName + "': the simulated platform is testbed '" +
+                      platform + "''s (tools/testbed/simrun.sh --testbed " + testbedName + ")");
+    const std::string array = SimulatedArrayProfile();
+    if (usesArray && !array.empty() && array != arrayProfile)
+      throw UserError("the simulated platform's array is '" + array +
+                      "', but the machine profile is '" + arrayProfile + "'");
     return;
   }
-  if (Simulated()) return;  // the platform file names the hosts
   const Testbed& bed = TestbedNamed(testbedName);
   if (usesArray && arrayProfile != bed.arrayProfile)
     throw UserError("testbed '" + bed.name + "': its array is '" + bed.arrayProfile +
@@ -413,6 +424,9 @@ std::string PlatformXml(const Testbed& bed, int children, double hostOps, double
   x += host("parent", calibrated ? hostOps : parent.mflops.value * 1e6,
             calibrated ? "" : parent.name, "parent");
   x += host("zephyr", arrayClockHz > 0 ? arrayClockHz : array.clockHz, "", "array");
+  // The array's machine profile, which a render on this platform must run.
+  x.insert(x.rfind("    </host>"),
+           "      <prop id=\"zephyr:array-profile\" value=\"" + bed.arrayProfile + "\"/>\n");
   for (int i = 1; i <= children; ++i)
     x += host("child-" + std::to_string(i), calibrated ? hostOps : child.mflops.value * 1e6,
               calibrated ? "" : child.name, "child");

@@ -46,7 +46,7 @@ struct Testbed {
   std::string arrayLink;               // the host <-> array link's name: "scsi", "memory-bus"
   Sourced arrayLinkBandwidth;          // byte/s, host <-> array
   // s of simulated time each MPI_Test and MPI_Iprobe costs its caller (SimGrid's smpi/test and
-  // smpi/iprobe, written into the platform file); 0: SimGrid's default (1e-4 s), as ufmg1992.
+  // smpi/iprobe, written into the platform file; ufmg1992 keeps SimGrid's default, 1e-4 s).
   Sourced mpiPollSeconds;
   nlohmann::json Json() const;
 };

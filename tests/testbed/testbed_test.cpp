@@ -499,7 +499,11 @@ TEST(TestbedModel, AlsoTestbedPricesTheSameCountsAsARenderOnIt) {
                   "one testbed a run"},
         std::pair{"--method seq --also-testbed today-zephyr", "need a first one"},
         std::pair{"--method simd --testbed ufmg1992 --also-testbed today-pim",
-                  "its array is 'pim-bitsimd-v-bank'"}}) {
+                  "has the array 'pim-bitsimd-v-bank'"},
+        std::pair{"--method seq --testbed ufmg1992 --also-testbed today-zephyr --also-testbed "
+                  "today-zephyr",
+                  "named twice"},
+        std::pair{"--method hetero --testbed today-pim", "tools/testbed/simrun.sh"}}) {
     const auto r = RunZephyrProcess(std::string("render --no-progress ") + flags + " " + scene +
                                     " --out " + (dir / "x.png"));
     EXPECT_NE(r.status, 0) << flags;
@@ -886,6 +890,34 @@ TEST(TestbedSimulated, ThisHostCalibratedModelsItsOwnRender) {
   ASSERT_EQ(r.status, 0) << r.output;
   EXPECT_NEAR(ReadJson(report).at("testbed").at("modelledSeconds").get<double>(), seconds,
               1e-6 * seconds);
+}
+
+// Under SimGrid the platform must be the testbed the render names, and its array the machine
+// profile the pass runs: a mismatch is refused, not priced on the wrong machines.
+TEST(TestbedSimulated, APlatformOfAnotherTestbedOrArrayIsRefused) {
+  if (!std::filesystem::exists(SmpiPath())) GTEST_SKIP() << "no zephyr-smpi (make smpi)";
+  TempDir dir;
+  const std::string scene = WriteScene(dir, 8, "32x32"), report = dir / "r.json";
+  auto r = RunCommand("timeout -k 5 300 bash " + Repo() + "/tools/testbed/simrun.sh --children 2 " +
+                      "--zephyr " + SmpiPath() + " -- render --no-progress --method dist " + scene +
+                      " --frame 16 --testbed today-pim --report " + report);
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.output.find("the simulated platform is testbed 'ufmg1992''s"), std::string::npos)
+      << r.output;
+  const std::string platform = dir / "p.xml";
+  ASSERT_EQ(RunZephyrProcess("testbed platform --testbed today-pim --children 1 --out " + platform)
+                .status,
+            0);
+  r = RunCommand("timeout -k 5 300 bash " + Repo() + "/tools/testbed/simrun.sh --children 0 " +
+                 "--platform " + platform + " --zephyr " + SmpiPath() +
+                 " -- render --no-progress --method simd " + scene + " --testbed " + platform +
+                 " --report " + report);
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.output.find("the simulated platform's array is 'pim-bitsimd-v-bank', but the "
+                          "machine profile is 'wavetracer'"),
+            std::string::npos)
+      << r.output;
+  EXPECT_FALSE(std::filesystem::exists(report));
 }
 
 TEST(TestbedSimulated, TooFewHostsNamesTheFile) {
