@@ -139,10 +139,12 @@ CommandRegistration reg("render", [](CLI::App& program) {
     if (use.farm && !options.alsoTestbeds.empty())
       throw UserError("--also-testbed: --method " + options.method +
                       " is timed by a simulation of one testbed's network: one testbed a run");
-    if (use.farm && !options.testbed.empty() && !testbed::Simulated())
-      throw UserError("--testbed: --method " + options.method +
-                      " is timed on a simulated network: run it under tools/testbed/simrun.sh "
-                      "--testbed NAME (build/bin/zephyr-smpi, `make smpi`; docs/testbed.md)");
+    if (use.farm && !options.testbed.empty() && !testbed::Simulated()) {
+      // Before the farm's own checks (its MPI ranks): an unknown name, then where it runs.
+      testbed::TestbedNamed(options.testbed);
+      testbed::CheckModelledTimeRequest(options.testbed, options.method, true, use.array,
+                                        options.simd.profile);
+    }
     for (const CLI::Option* flag : wavefrontFlags)
       if (!use.wavefront && flag->count() > 0)
         throw UserError(flag->get_name() + ": --method " + options.method +
