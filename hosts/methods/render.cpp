@@ -125,11 +125,11 @@ RenderOutput RunRender(const RenderOptions& given) {
       throw UserError("method '" + options.method +
                       "' is timed by a simulation of one testbed's network: one testbed a run");
     std::vector<std::string> seen = {options.testbed};
+    const auto first = testbed::TestbedArrayProfile(options.testbed);
     for (const std::string& bed : options.alsoTestbeds) {
       if (std::find(seen.begin(), seen.end(), bed) != seen.end())
         throw UserError("testbed '" + bed + "' is named twice: each is priced once");
       seen.push_back(bed);
-      const auto first = testbed::TestbedArrayProfile(options.testbed);
       const auto also = testbed::TestbedArrayProfile(bed);
       if (it->usesArray && first && also && *first != *also)
         throw UserError(

@@ -392,12 +392,16 @@ std::string PlatformXml(const Testbed& bed, int children, double hostOps, double
   const HostProfile& parent = HostProfileNamed(bed.parentProfile);
   const HostProfile& child = HostProfileNamed(bed.childProfile);
   const bitserial::MachineProfile array = bitserial::Profile(bed.arrayProfile);
+  // A host; `arrayProfile`: the machine profile an array host declares, which a render on the
+  // platform must run.
   auto host = [](const std::string& id, double speed, const std::string& profile,
-                 const std::string& role) {
+                 const std::string& role, const std::string& arrayProfile = "") {
     std::string s = "    <host id=\"" + id + "\" speed=\"" + std::to_string(speed) + "f\">\n";
     if (!profile.empty()) s += "      <prop id=\"zephyr:profile\" value=\"" + profile + "\"/>\n";
-    s += "      <prop id=\"zephyr:role\" value=\"" + role + "\"/>\n    </host>\n";
-    return s;
+    s += "      <prop id=\"zephyr:role\" value=\"" + role + "\"/>\n";
+    if (!arrayProfile.empty())
+      s += "      <prop id=\"zephyr:array-profile\" value=\"" + arrayProfile + "\"/>\n";
+    return s + "    </host>\n";
   };
   std::string x =
       "<?xml version='1.0'?>\n"
@@ -423,10 +427,8 @@ std::string PlatformXml(const Testbed& bed, int children, double hostOps, double
   const bool calibrated = hostOps > 0;
   x += host("parent", calibrated ? hostOps : parent.mflops.value * 1e6,
             calibrated ? "" : parent.name, "parent");
-  x += host("zephyr", arrayClockHz > 0 ? arrayClockHz : array.clockHz, "", "array");
-  // The array's machine profile, which a render on this platform must run.
-  x.insert(x.rfind("    </host>"),
-           "      <prop id=\"zephyr:array-profile\" value=\"" + bed.arrayProfile + "\"/>\n");
+  x += host("zephyr", arrayClockHz > 0 ? arrayClockHz : array.clockHz, "", "array",
+            bed.arrayProfile);
   for (int i = 1; i <= children; ++i)
     x += host("child-" + std::to_string(i), calibrated ? hostOps : child.mflops.value * 1e6,
               calibrated ? "" : child.name, "child");

@@ -53,7 +53,7 @@ pick() {
      END { if (!found) print "NaN" }' "$RUNS"
 }
 MODEL=8
-# One row from a report. SECTION is the report's testbed section (.testbed, or
+# One row of runs.csv (on standard output) from a report. SECTION is the report's testbed section (.testbed, or
 # .alsoTestbeds[I] for a testbed priced on the same render). array_s: the array's seconds with
 # its host link (seq/simd/array: SECTION.array; dist/hetero: the parent's array pass); host_s:
 # the host's modelled seconds (seq/simd/array) or the children's mean busy seconds (dist/hetero).
@@ -65,7 +65,7 @@ row() {  # testbed method accel objects children frame bw wall report section
       else ((\$s.array.seconds // 0) + (\$s.array.scsiSeconds // 0)) end),
      (if .distributed then ([\$s.children[] | .busySeconds // 0] | add / length)
       else \$s.host.seconds end),
-     \$w] | @csv" "$9" | tr -d '"' >>"$RUNS"
+     \$w] | @csv" "$9" | tr -d '"'
 }
 array_of() { "$ZEPHYR" testbed show "$1" | jq -r '.arrayProfile'; }
 declare -A ARRAY_OF
@@ -95,8 +95,10 @@ local_run() {  # testbed method accel objects
   fi
   "$ZEPHYR" render --no-progress --method "$m" --accel "$3" "$(scene "$4")" --testbed "$t" \
     "${also[@]}" "${set[@]}" --report "$r" >"$WORK/log" 2>&1 || { say "failed: $*"; tail -n 3 "$WORK/log" >&2; return 0; }
-  row "$t" "$2" "$3" "$4" 0 0 0 "$(( SECONDS - t0 ))" "$r" .testbed
-  for i in "${!peers[@]}"; do row "${peers[$i]}" "$2" "$3" "$4" 0 0 0 0 "$r" ".alsoTestbeds[$i]"; done
+  row "$t" "$2" "$3" "$4" 0 0 0 "$(( SECONDS - t0 ))" "$r" .testbed >>"$RUNS"
+  for i in "${!peers[@]}"; do
+    row "${peers[$i]}" "$2" "$3" "$4" 0 0 0 0 "$r" ".alsoTestbeds[$i]" >>"$RUNS"
+  done
 }
 sim_run() {  # testbed method accel objects [ethernet_bps]
   local r=$WORK/r.json t0=$SECONDS bw=${5:-0}
@@ -110,7 +112,7 @@ sim_run() {  # testbed method accel objects [ethernet_bps]
   bash "$SIMRUN" --children "$K" "${plat[@]}" --zephyr "$ZEPHYR_SMPI" -- render --no-progress \
     --method "$2" --accel "$3" "$(scene "$4")" --frame "$FRAME" --testbed "$1" --report "$r" >"$WORK/log" 2>&1 ||
     { say "failed: $*"; tail -n 3 "$WORK/log" >&2; return 0; }
-  row "$1" "$2" "$3" "$4" "$K" "$FRAME" "$bw" "$(( SECONDS - t0 ))" "$r" .testbed
+  row "$1" "$2" "$3" "$4" "$K" "$FRAME" "$bw" "$(( SECONDS - t0 ))" "$r" .testbed >>"$RUNS"
 }
 
 # The testbed's own Ethernet bandwidth (bit/s); a map point at it is the sweep's (bw 0).
@@ -170,10 +172,7 @@ sens_run() {  # testbed method objects variation factor
   bash "$SIMRUN" --children "$K" --platform "$WORK/p.xml" --hostfile "$WORK/h" --zephyr "$ZEPHYR_SMPI" -- \
     render --no-progress --method "$2" --accel bvh "$(scene "$3")" --frame "$FRAME" --testbed "$1" \
     --report "$r" >"$WORK/log" 2>&1 || { say "failed: $*"; tail -n 3 "$WORK/log" >&2; return 0; }
-  local before; before=$(wc -l <"$RUNS")
-  row "$1" "$2" bvh "$3" "$K" "$FRAME" 0 "$(( SECONDS - t0 ))" "$r" .testbed
-  tail -n +"$((before + 1))" "$RUNS" | sed "s/^/$4,$5,/" >>"$SENS"  # moved from runs.csv
-  sed -i "$((before + 1)),\$d" "$RUNS"
+  row "$1" "$2" bvh "$3" "$K" "$FRAME" 0 "$(( SECONDS - t0 ))" "$r" .testbed | sed "s/^/$4,$5,/" >>"$SENS"
 }
 SENS_TESTBEDS=$(for t in $TESTBEDS; do case $t in today-*) echo "$t" ;; esac; done)
 for t in $SENS_TESTBEDS; do for n in $SENS_COUNTS; do for v in $VARIATIONS; do for f in 0.5 2; do
