@@ -14,7 +14,15 @@ namespace zephyr {
 void RenderArray(const Scene& scene, const RenderOptions& options, RenderOutput& out) {
   const Camera& c = scene.camera;
   const auto tracer = Tracer::Create(scene, options.trace);  // its option errors before the pass
-  simd::PrimaryPass pass = RunTimedPrimaryPass(scene, options, out);
+  // The plan, then whether the bounces fit the machine, before the pass's array time.
+  simd::PrimaryPlan plan;
+  {
+    PhaseTimer timer(out.phases, "primaryPass");
+    plan = simd::PlanPrimaryPass(scene, options.simd);
+  }
+  wavefront::CheckBeforePrimaryPass(scene, plan, options.wavefront, options.trace.depth,
+                                    simd::MachineProfileOf(options.simd));
+  simd::PrimaryPass pass = RunTimedPrimaryPass(scene, options, out, std::move(plan));
   TraceStats stats = tracer->BuildWork();
   out.image = Image(c.width, c.height);
   wavefront::WavefrontResult wave;

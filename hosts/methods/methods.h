@@ -2,6 +2,8 @@
 // hosts/methods/render.cpp (not for other rooms: they go through RunRender).
 #pragma once
 
+#include <optional>
+
 #include "hosts/methods/render.h"
 
 namespace zephyr {
@@ -38,9 +40,12 @@ struct RenderMethodEntry {
 
 // What simd and array share (simd.cpp): the SIMD primary pass timed as the "primaryPass" phase
 // with its cycle report printed; and, once the image is shaded, the pass and the host's work
-// moved into `out` (--dump-primary's hits first, the matrix then emptied).
+// moved into `out` (--dump-primary's hits first, the matrix then emptied). `plan`: one the
+// caller has made (PlanPrimaryPass; its time is the caller's to add to the phase), else the
+// pass plans.
 simd::PrimaryPass RunTimedPrimaryPass(const Scene& scene, const RenderOptions& options,
-                                      RenderOutput& out);
+                                      RenderOutput& out,
+                                      std::optional<simd::PrimaryPlan> plan = std::nullopt);
 void KeepPrimaryPass(simd::PrimaryPass pass, const TraceStats& hostWork,
                      const RenderOptions& options, RenderOutput& out);
 

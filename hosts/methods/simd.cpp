@@ -9,11 +9,12 @@
 namespace zephyr {
 
 simd::PrimaryPass RunTimedPrimaryPass(const Scene& scene, const RenderOptions& options,
-                                      RenderOutput& out) {
+                                      RenderOutput& out, std::optional<simd::PrimaryPlan> plan) {
   simd::PrimaryPass pass;
   {
     PhaseTimer timer(out.phases, "primaryPass");
-    pass = simd::RunPrimaryPass(scene, options.simd);
+    pass = plan ? simd::RunPrimaryPass(scene, options.simd, std::move(*plan))
+                : simd::RunPrimaryPass(scene, options.simd);
   }
   std::fprintf(stdout, "cycle report (SIMD primary pass):\n%s", pass.array.Table().c_str());
   return pass;

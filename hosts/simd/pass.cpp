@@ -217,8 +217,12 @@ void Refine(PrimaryPass& pass, const Scene& scene, const SimdOptions& options,
 }  // namespace
 
 PrimaryPass RunPrimaryPass(const Scene& scene, const SimdOptions& options) {
+  return RunPrimaryPass(scene, options, PlanPrimaryPass(scene, options));
+}
+
+PrimaryPass RunPrimaryPass(const Scene& scene, const SimdOptions& options, PrimaryPlan plan) {
   PrimaryPass pass;
-  pass.plan = PlanPrimaryPass(scene, options);
+  pass.plan = std::move(plan);
   const PrimaryRays rays(scene.camera);
   ArrayRun run = RunArray(pass.plan, options, rays, {});
   pass.array = std::move(run.report);

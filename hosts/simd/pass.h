@@ -109,6 +109,9 @@ inline constexpr int kRefineExtraBits = 8;
 // The array part of the method: every primary ray's first hit, with the uncertain pixels
 // handled by options.uncertain (kFail throws UserError with the counts).
 PrimaryPass RunPrimaryPass(const Scene& scene, const SimdOptions& options);
+// The same on a plan the caller has made with PlanPrimaryPass(scene, options) (to check what
+// follows the pass before running it: the array method's bounce programs).
+PrimaryPass RunPrimaryPass(const Scene& scene, const SimdOptions& options, PrimaryPlan plan);
 
 // Host shading of the w×h rectangle at (x0, y0) from the matrix (linear RGB, row-major).
 void ShadeRegion(const Tracer& tracer, const PrimaryMatrix& matrix, int x0, int y0, int w, int h,

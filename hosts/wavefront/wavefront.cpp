@@ -270,15 +270,43 @@ int LayersPerPass(const bitserial::MachineProfile& profile, int64_t layers,
   return l;
 }
 
+// The secondary rays' fraction bits F: the option's, else the primary plan's, at least
+// kMinSecondaryFracBits.
+int SecondaryFracBits(const WavefrontOptions& options, const simd::PrimaryPlan& primary) {
+  return options.fracBits > 0 ? options.fracBits
+                              : std::max(primary.fracBits, kMinSecondaryFracBits);
+}
+
+void CheckMeshCompaction(const bitserial::MachineProfile& profile, Compaction compaction) {
+  const int pes = profile.physicalPes;
+  if (compaction == Compaction::kMesh && (pes & (pes - 1)) != 0)
+    throw UserError(
+        "the mesh compaction pairs PE p with p xor 2^k: it needs a power-of-two "
+        "number of PEs, and profile " +
+        profile.name + " has " + std::to_string(pes) + " (the local compaction needs none)");
+}
+
 }  // namespace
+
+void CheckBeforePrimaryPass(const Scene& scene, const simd::PrimaryPlan& primary,
+                            const WavefrontOptions& options, int depth,
+                            const bitserial::MachineProfile& profile) {
+  const SecondaryPlan plan =
+      PlanSecondary(scene, SecondaryFracBits(options, primary), primary.tErrorBound);
+  CheckMeshCompaction(profile, options.compaction);
+  if (scene.objects.empty()) return;  // no hit, no bounce
+  LayersPerPass(profile, 1, plan, false);
+  const bool secondary = std::any_of(scene.materials.begin(), scene.materials.end(),
+                                     [](const Material& m) { return m.ks > 0 || m.t > 0; });
+  if (depth > 1 && secondary) LayersPerPass(profile, 1, plan, true);
+}
 
 WavefrontResult RenderWavefront(const Tracer& tracer, const simd::PrimaryPass& pass,
                                 const WavefrontOptions& options, std::vector<Vec3>& pixels,
                                 TraceStats& hostWork) {
   const Scene& scene = tracer.GetScene();
   const int depth = tracer.Options().depth;
-  const int F =
-      options.fracBits > 0 ? options.fracBits : std::max(pass.plan.fracBits, kMinSecondaryFracBits);
+  const int F = SecondaryFracBits(options, pass.plan);
   SecondaryPlan plan = PlanSecondary(scene, F, pass.plan.tErrorBound);
   plan.primaryErrors.assign(scene.objects.size(), pass.plan.tErrorBound);
   for (const simd::ObjectPlan& o : pass.plan.objects) {
@@ -288,11 +316,7 @@ WavefrontResult RenderWavefront(const Tracer& tracer, const simd::PrimaryPass& p
   }
   const bitserial::MachineProfile& profile = pass.array.cycles.Profile();
   const int pes = profile.physicalPes;
-  if (options.compaction == Compaction::kMesh && (pes & (pes - 1)) != 0)
-    throw UserError(
-        "the mesh compaction pairs PE p with p xor 2^k: it needs a power-of-two "
-        "number of PEs, and profile " +
-        profile.name + " has " + std::to_string(pes) + " (the local compaction needs none)");
+  CheckMeshCompaction(profile, options.compaction);
   const size_t lights = scene.lights.size();
   WavefrontResult result;
   result.compaction = options.compaction;

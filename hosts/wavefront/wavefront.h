@@ -130,6 +130,16 @@ struct WavefrontResult {
 // scene the method cannot run (an object that is not an untransformed sphere, naming its
 // file:line; a program PE memory cannot hold; the mesh compaction on a PE count that is not a
 // power of two).
+// Before the primary pass: the UserError RenderWavefront would throw for the PE memory (its
+// first bounce's program, and with depth > 1 and a material that reflects or transmits the
+// later bounces' program, not fitting one virtual-PE layer of `profile`) or the mesh
+// compaction's PE count, from the primary plan alone (the programs' sizes depend on the
+// formats, not on the hits), so the array method refuses before the pass's minutes. It
+// assumes some primary ray hits something (a view of nothing is refused too).
+void CheckBeforePrimaryPass(const Scene& scene, const simd::PrimaryPlan& primary,
+                            const WavefrontOptions& options, int depth,
+                            const bitserial::MachineProfile& profile);
+
 WavefrontResult RenderWavefront(const Tracer& tracer, const simd::PrimaryPass& pass,
                                 const WavefrontOptions& options, std::vector<Vec3>& pixels,
                                 TraceStats& hostWork);

@@ -429,6 +429,33 @@ TEST(Wavefront, NumbersTooWideForTheScenesExtentAreAClearError) {
   }
 }
 
+// A PE memory that cannot hold the bounce program (the PIM bank: 1024 bits a PE, the program
+// needs twice that) is refused before the primary pass runs (no pass's cycle report, no
+// image): the programs' sizes follow from the plan, not from the hits.
+TEST(Wavefront, AMachineTooSmallIsRefusedBeforeThePrimaryPass) {
+  testing::TempDir dir;
+  const std::string scene = dir / "s.nff";
+  std::ofstream(scene) << WriteNff(
+      GenerateRandomSpheres({.count = 8, .seed = 1, .width = 16, .height = 16}));
+  const std::string png = dir / "s.png";
+  auto r = testing::RunZephyrProcess("render " + scene + " --method array --testbed today-pim" +
+                                     " --out " + png);
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.output.find("the wavefront's bounce program does not fit one virtual-PE layer of "
+                          "the pim-bitsimd-v-bank PE memory (768 internal + 256 external bits; "
+                          "it fits 1536 internal + 512 external bits, 2 times these"),
+            std::string::npos)
+      << r.output;
+  EXPECT_EQ(r.output.find("cycle report (SIMD primary pass)"), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(png));
+  // With the memory doubled it runs (what the error says it needs).
+  r = testing::RunZephyrProcess("render " + scene + " --method array --testbed today-pim" +
+                                " --set internalBitsPerPe=1536 --set externalBitsPerPe=512" +
+                                " --out " + png);
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_TRUE(std::filesystem::exists(png));
+}
+
 TEST(Wavefront, ItsFlagsAreRefusedByTheOtherMethods) {
   testing::TempDir dir;
   const std::string scene = dir / "s.nff";
