@@ -25,12 +25,26 @@ void AddRegisteredCommands(CLI::App& program) {
   for (auto& [name, setup] : Registry()) setup(program);
 }
 
+void RefuseEmptyValues(CLI::App& app) {
+  const CLI::Validator nonEmpty(
+      [](std::string& value) {
+        return value.empty() ? std::string("empty value (give one, or leave the flag out)")
+                             : std::string();
+      },
+      "", "non-empty");
+  for (CLI::Option* option :
+       app.get_options([](CLI::Option* o) { return o->get_expected_min() > 0; }))
+    option->check(nonEmpty);
+  for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) RefuseEmptyValues(*sub);
+}
+
 int RunZephyr(int argc, const char* const* argv) {
   CLI::App program{
       "zephyr — an emulated WaveTracer Zephyr (8192 bit-serial PEs) and the paper's four "
       "ray-tracing methods"};
   program.require_subcommand(1);
   AddRegisteredCommands(program);
+  RefuseEmptyValues(program);
   // A command line's mistake is the same on every rank of an mpirun: rank 0 alone says it
   // (the others exit with the same status, silently).
   const bool speak = LauncherRank() == 0;

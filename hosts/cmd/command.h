@@ -24,6 +24,12 @@ struct CommandRegistration {
 // Calls every registered setup, in name order (used by hosts/cmd/main.cpp and the tests).
 void AddRegisteredCommands(CLI::App& program);
 
+// Every option of `app` and its subcommands that takes a value (not a flag) refuses an empty one
+// (`--testbed ''`, `--out ''`, a positional ''): a mistake, never "the default" (CLI11's
+// validation error: "--testbed: empty value (give one, or leave the flag out)", exit non-zero
+// before any work). RunZephyr applies it to the whole program.
+void RefuseEmptyValues(CLI::App& app);
+
 // Runs the program as `zephyr args...` would, returning the exit status; the tests use it
 // to check messages and exit codes without a subprocess.
 int RunZephyr(int argc, const char* const* argv);

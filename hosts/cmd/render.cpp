@@ -66,11 +66,10 @@ CommandRegistration reg("render", [](CLI::App& program) {
   cmd->add_option("--method", o->method, "Method: " + methods)->capture_default_str();
   cmd->add_option("--scene", o->scenePath, "NFF scene file");
   cmd->add_option("scene", *positional, "NFF scene file (same as --scene)");
-  std::vector<CLI::Option*> outputs = {
-      cmd->add_option("--out", o->out, "Output PNG"),
-      cmd->add_option("--report", o->report, "JSON report: time per phase, rays, tests"),
-      cmd->add_option("--dump-primary", o->dumpPrimary,
-                      "CSV of primary hits: x,y,dx,dy,dz,object,t,flags")};
+  cmd->add_option("--out", o->out, "Output PNG");
+  cmd->add_option("--report", o->report, "JSON report: time per phase, rays, tests");
+  cmd->add_option("--dump-primary", o->dumpPrimary,
+                  "CSV of primary hits: x,y,dx,dy,dz,object,t,flags");
   AddInteger(*cmd, "--depth", o->trace.depth, 1, kMaxDepth,
              "Ray-tree depth limit (1 = primary rays only)");
   AddNamed(*cmd, "--precision", o->trace.precision, kPrecisionNames,
@@ -110,12 +109,8 @@ CommandRegistration reg("render", [](CLI::App& program) {
                   "seq, simd, array: also price the same counted work on this testbed (repeat "
                   "for more; each must share the array): the report's \"alsoTestbeds\"")
       ->allow_extra_args(false);  // one name a flag: a scene given after it is the scene
-  cmd->callback([o, positional, noProgress, simdFlags, outputs, farmFlags, wavefrontFlags] {
+  cmd->callback([o, positional, noProgress, simdFlags, farmFlags, wavefrontFlags] {
     RenderOptions options = *o;
-    for (CLI::Option* flag : outputs)  // `--out ''` is a mistake, not "no output"
-      if (flag->count() > 0 && flag->as<std::string>().empty())
-        throw UserError(flag->get_name() +
-                        ": empty path (give a file name, or leave the flag out)");
     if (!positional->empty()) {
       if (!options.scenePath.empty() && options.scenePath != *positional)
         throw UserError("render: give the scene once (either --scene or a positional file)");

@@ -55,7 +55,8 @@ TEST(RenderOutputs, OverwritingTheSceneOrAnotherOutputIsRefused) {
                        "--out and --dump-primary name the same file");
   EXPECT_EQ(ReadFile(scene), sceneText) << "the scene was overwritten";
   for (const char* flag : {"--out", "--report", "--dump-primary"})
-    ExpectRefusedUpFront(RunZephyrProcess(base + " " + flag + " ''"), "empty path");
+    ExpectRefusedUpFront(RunZephyrProcess(base + " " + flag + " ''"),
+                         std::string(flag) + ": empty value");
   EXPECT_FALSE(std::filesystem::exists(dir / "x"));
   EXPECT_FALSE(std::filesystem::exists(dir / "x.png"));
 }

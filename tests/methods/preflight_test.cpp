@@ -11,9 +11,11 @@
 #include <fstream>
 #include <string>
 #include <tuple>
+#include <utility>
 #include <vector>
 
 #include "fixed/check.h"
+#include "hosts/cmd/command.h"
 #include "hosts/cmd/flags.h"
 #include "hosts/methods/memory_budget.h"
 #include "tests/farm/mpi_launch.h"
@@ -203,6 +205,49 @@ TEST(FlagPreflight, EveryBadFlagIsRefusedBeforeTheSceneIsRead) {
             std::string::npos)
       << mismatch.output;
   EXPECT_EQ(mismatch.output.find("cycle report"), std::string::npos) << mismatch.output;
+}
+
+// Every option of every command that takes a value refuses an empty one, naming it: a
+// `--testbed ''` or `--out ''` is a mistake, never "the default" (the whole kind, found as
+// `render --testbed ''` rendering without a testbed). Walks the program's own option tables,
+// so an option added later is covered; a positional '' likewise.
+TEST(FlagPreflight, EveryOptionRefusesAnEmptyValue) {
+  CLI::App program;
+  AddRegisteredCommands(program);
+  int checked = 0;
+  const auto walk = [&](const auto& self, CLI::App& app, std::vector<std::string> path) -> void {
+    bool firstPositional = true;
+    for (CLI::Option* o :
+         app.get_options([](CLI::Option* o) { return o->get_expected_min() > 0; })) {
+      std::vector<std::string> args = path;
+      if (o->nonpositional()) {
+        args.push_back(o->get_name());
+      } else if (!std::exchange(firstPositional, false)) {
+        continue;  // '' fills the first positional only
+      }
+      args.push_back("");
+      std::vector<const char*> argv = {"zephyr"};
+      for (const std::string& a : args) argv.push_back(a.c_str());
+      ::testing::internal::CaptureStderr();
+      const int status = RunZephyr(int(argv.size()), argv.data());
+      const std::string said = ::testing::internal::GetCapturedStderr();
+      std::string line;
+      for (const std::string& a : args) line += " '" + a + "'";
+      EXPECT_NE(status, 0) << line;
+      EXPECT_NE(said.find(o->get_name() + ": empty value (give one, or leave the flag out)"),
+                std::string::npos)
+          << line << "\n"
+          << said;
+      ++checked;
+    }
+    for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
+      std::vector<std::string> deeper = path;
+      deeper.push_back(sub->get_name());
+      self(self, *sub, deeper);
+    }
+  };
+  walk(walk, program, {});
+  EXPECT_GT(checked, 60) << "the walk found too few options";
 }
 
 // A flag the method would ignore is refused, before the scene is read: the SIMD pass's flags

@@ -135,8 +135,7 @@ struct EmbreeSpheres {
 // (-1: none) beyond `tnear`, the build's seconds in *build and the median seconds of
 // `repeats` passes over the rays in *seconds.
 std::vector<int32_t> EmbreeFirstHits(const Scene& scene, const std::vector<PrimaryRay>& rays,
-                                     int repeats, double* build, double* seconds,
-                                     float tnear = 0) {
+                                     int repeats, double* build, double* seconds, float tnear = 0) {
   const EmbreeSpheres es(scene, build);
   std::vector<int32_t> hits(rays.size());
   *seconds = MedianSeconds(repeats, [&] {
@@ -263,21 +262,23 @@ void BvhAgainstEmbree(int count, int size) {
 // Rays per second of one kind, ours (--accel bvh, double, the hierarchy built before the
 // clock) and Embree's (float, one thread), on one scene: medians of 5.
 struct RayRates {
-  double ours = 0, embree = 0;   // rays/s
-  double visits = 0;             // our node visits a ray
-  double agree = 0;              // fraction of rays with the same answer (object; occluded)
+  double ours = 0, embree = 0;  // rays/s
+  double visits = 0;            // our node visits a ray
+  double agree = 0;             // fraction of rays with the same answer (object; occluded)
 };
 
 // Nearest hits of `rays` beyond tMin: ours (FirstHit, whose tMin is the scene's hither) and
 // Embree's rtcIntersect1.
-RayRates NearestRates(const Scene& scene, const Tracer& tracer, const std::vector<PrimaryRay>& rays) {
+RayRates NearestRates(const Scene& scene, const Tracer& tracer,
+                      const std::vector<PrimaryRay>& rays) {
   RayRates r;
   std::vector<int32_t> ours(rays.size());
   TraceStats stats;
   const double n = double(rays.size());
   r.ours = n / MedianSeconds(5, [&] {
              stats = TraceStats();
-             for (size_t i = 0; i < rays.size(); ++i) ours[i] = tracer.FirstHit(rays[i], stats).object;
+             for (size_t i = 0; i < rays.size(); ++i)
+               ours[i] = tracer.FirstHit(rays[i], stats).object;
            });
   r.visits = double(stats.nodeVisits) / n;
   double build, seconds;
