@@ -123,7 +123,7 @@ double ChargeArrayCycles(const bitserial::CycleReport& cycles,
   const ArraySplit a = SplitArrayCycles(cycles, refineCycles);
   // The array computes at its clock (the platform gives its speed in cycles per second).
   simgrid::s4u::this_actor::exec_init(a.arrayCycles)->set_host(arrays[0])->wait();
-  if (a.scsiBytes > 0) simgrid::s4u::Comm::sendto(arrays[0], self, uint64_t(a.scsiBytes));
+  if (a.linkBytes > 0) simgrid::s4u::Comm::sendto(arrays[0], self, uint64_t(a.linkBytes));
   passHost += ChargeHostWork(recomputeWork);
   return SimulatedNow() - start;
 }

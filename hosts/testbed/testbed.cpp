@@ -118,9 +118,9 @@ ArraySplit SplitArrayCycles(const bitserial::CycleReport& first,
     if (pass == refine) a.refineCycles = pass->TotalCycles();
   }
   a.arraySeconds = a.arrayCycles / a.clockHz;
-  a.scsiSeconds = host / a.clockHz;
+  a.linkSeconds = host / a.clockHz;
   const double planeCycles = profile.Cost(bitserial::MicroOp::kHostPlane);
-  a.scsiBytes = planeCycles > 0 ? host / planeCycles * profile.physicalPes / 8 : 0;
+  a.linkBytes = planeCycles > 0 ? host / planeCycles * profile.physicalPes / 8 : 0;
   return a;
 }
 
@@ -268,7 +268,7 @@ std::optional<ModelledTime> ModelTime(const std::string& testbedName, const Coun
                                  : RecomputeWork(work.recomputedPixels, scene));
     t.array =
         ModelledTime::ArrayShare{profile, SplitArrayCycles(*work.arrayCycles, work.refineCycles)};
-    arraySeconds = t.array->split.arraySeconds + t.array->split.scsiSeconds;
+    arraySeconds = t.array->split.arraySeconds + t.array->split.linkSeconds;
   }
   t.host = ModelHostTime(stats, host);
   t.modelledSeconds = arraySeconds + t.host->seconds;
@@ -335,13 +335,15 @@ nlohmann::json ModelledTime::Json() const {
                   {"clockHz", a.clockHz},
                   {"cycles", a.arrayCycles},
                   {"seconds", a.arraySeconds},
-                  {"scsiBytes", a.scsiBytes},
-                  {"scsiSeconds", a.scsiSeconds},
+                  {"linkBytes", a.linkBytes},
+                  {"linkSeconds", a.linkSeconds},
                   {"refineCycles", a.refineCycles},
                   {"cyclesSource",
                    "every array run's cycle report: the first pass, the refine pass if one ran, "
                    "every wavefront bounce (all rays on the array)"},
-                  {"scsiSource", "the cycle reports' host class (hostPlane cycles of the matrix)"}};
+                  {"linkSource",
+                   "the cycle reports' host class (hostPlane cycles of the matrix) over the "
+                   "testbed's arrayLink"}};
   }
   t["host"] = host->Json();
   t["modelledSeconds"] = modelledSeconds;

@@ -84,11 +84,12 @@ nlohmann::json CalibrateThisHost(const nlohmann::json& report, const std::string
 std::string Hostfile(int children);
 
 // The SIMD pass's cycles split into the array's own and the host link's (the cycle reports'
-// "host" class: the matrix moving over SCSI), summed over the array passes that ran: the
+// "host" class: the matrix moving over the testbed's array link, SCSI in 1992, the memory bus
+// on today-pim), summed over the array passes that ran: the
 // first pass's report, and the refine pass's when one ran (null otherwise). Cycles at the
 // profile's clock (Hz); bytes: one hostPlane moves one bit of every physical PE.
 struct ArraySplit {
-  double arraySeconds = 0, scsiSeconds = 0, scsiBytes = 0, clockHz = 0, arrayCycles = 0;
+  double arraySeconds = 0, linkSeconds = 0, linkBytes = 0, clockHz = 0, arrayCycles = 0;
   double refineCycles = 0;  // the refine pass's share of arrayCycles + its host class
 };
 ArraySplit SplitArrayCycles(const bitserial::CycleReport& first,

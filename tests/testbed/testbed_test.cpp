@@ -112,10 +112,10 @@ TEST(TestbedModel, SimdIsArrayPlusItsLinkPlusHostShadingOnEveryTestbed) {
     const nlohmann::json cycles = RenderReportJson(out).at("simd").at("cycles");
     const double clock = cycles.at("clockHz").get<double>();
     EXPECT_EQ(clock, bitserial::Profile(testbed.arrayProfile).clockHz);
-    EXPECT_DOUBLE_EQ(t.at("array").at("scsiSeconds").get<double>(),
+    EXPECT_DOUBLE_EQ(t.at("array").at("linkSeconds").get<double>(),
                      cycles.at("byClass").at("host").get<double>() / clock);
     EXPECT_DOUBLE_EQ(
-        t.at("array").at("seconds").get<double>() + t.at("array").at("scsiSeconds").get<double>(),
+        t.at("array").at("seconds").get<double>() + t.at("array").at("linkSeconds").get<double>(),
         cycles.at("totalCycles").get<double>() / clock);
     EXPECT_DOUBLE_EQ(
         t.at("modelledSeconds").get<double>(),
@@ -125,12 +125,12 @@ TEST(TestbedModel, SimdIsArrayPlusItsLinkPlusHostShadingOnEveryTestbed) {
     EXPECT_DOUBLE_EQ(
         t.at("host").at("seconds").get<double>(),
         testbed::ModelHostTime(hostWork, testbed::HostProfileNamed(testbed.parentProfile)).seconds);
-    EXPECT_GT(t.at("array").at("scsiBytes").get<double>(), 0);
+    EXPECT_GT(t.at("array").at("linkBytes").get<double>(), 0);
     // Two independent sources agree: the bytes the array profile's hostPlane cost moves per
     // second at the array clock are the testbed's link bandwidth (SCSI's 5 MB/s, the memory
     // bus's 25.6 GB/s: docs/testbed.md, docs/present-day.md) — which pins bytes to bits / 8.
     EXPECT_NEAR(
-        t.at("array").at("scsiBytes").get<double>() / t.at("array").at("scsiSeconds").get<double>(),
+        t.at("array").at("linkBytes").get<double>() / t.at("array").at("linkSeconds").get<double>(),
         t.at("testbed").at("arrayLinkBandwidth").at("value").get<double>(),
         1e-6 * testbed.arrayLinkBandwidth.value);
     // "array active X % of elapsed": the array's own seconds over the modelled time.
@@ -355,9 +355,9 @@ TEST(TestbedClosedForm, SimdChargesEveryArrayPassTheScsiLinkAndTheHostRecompute)
     const nlohmann::json& array = t.at("array");
     EXPECT_NEAR(array.at("seconds").get<double>(), (cycles - hostCycles) / kArrayClock, 1e-12)
         << uncertain;
-    EXPECT_NEAR(array.at("scsiSeconds").get<double>(), hostCycles / kArrayClock, 1e-12)
+    EXPECT_NEAR(array.at("linkSeconds").get<double>(), hostCycles / kArrayClock, 1e-12)
         << uncertain;
-    EXPECT_NEAR(array.at("scsiBytes").get<double>(), hostCycles / kPlaneCycles * kPlaneBytes, 1e-6)
+    EXPECT_NEAR(array.at("linkBytes").get<double>(), hostCycles / kPlaneCycles * kPlaneBytes, 1e-6)
         << uncertain;
     double host = 0;
     for (const auto& [event, count] : counts) host += SecondsOf(event.c_str(), count);
@@ -421,7 +421,7 @@ TEST(TestbedClosedForm, TheHostRecomputeCostsOneRayAndOneTestPerObjectPerPixel) 
               << what;
           EXPECT_EQ(t.at("host").at("events").at("hit").at("count").get<double>(), 0)
               << what << ": no hit charged";
-          EXPECT_NEAR(t.at("array").at("scsiBytes").get<double>(), h / kPlaneCycles * kPlaneBytes,
+          EXPECT_NEAR(t.at("array").at("linkBytes").get<double>(), h / kPlaneCycles * kPlaneBytes,
                       1e-9)
               << what;
         }
@@ -793,7 +793,7 @@ TEST(TestbedSimulated, SeqAndSimdOnAPlatformFile) {
     // traffic (docs/testbed.md, "Bytes on the Ethernet"): 1.05 times the SCSI seconds.
     const double named =
         t.at("modelledSeconds").get<double>() +
-        (t.contains("array") ? 0.05 * t.at("array").at("scsiSeconds").get<double>() : 0.0);
+        (t.contains("array") ? 0.05 * t.at("array").at("linkSeconds").get<double>() : 0.0);
     const nlohmann::json j = simulated(method, "");
     EXPECT_NEAR(j.at("testbed").at("modelledSeconds").get<double>(), named, 1e-9 * named) << method;
     EXPECT_EQ(j.at("testbed").at("hostProfile").at("profile"), "sparcstation2")
@@ -836,7 +836,7 @@ TEST(TestbedSimulated, SimdChargesItsRefinePassOnThePlatform) {
   ASSERT_TRUE(named.at("simd").contains("refine"));
   const nlohmann::json& t = named.at("testbed");
   const double expected =
-      t.at("modelledSeconds").get<double>() + 0.05 * t.at("array").at("scsiSeconds").get<double>();
+      t.at("modelledSeconds").get<double>() + 0.05 * t.at("array").at("linkSeconds").get<double>();
   const std::string report = dir / "r.json";
   auto r = RunCommand(
       "timeout -k 5 300 bash " + Repo() + "/tools/testbed/simrun.sh --children 0 --zephyr " +

@@ -62,7 +62,7 @@ row() {  # testbed method accel objects children frame bw wall report section
     ${10} as \$s |
     [\$t, \$m, \$a, \$n, \$k, \$f, \$bw, \$s.modelledSeconds,
      (if .distributed then \$s.parent.arrayPassSeconds
-      else ((\$s.array.seconds // 0) + (\$s.array.scsiSeconds // 0)) end),
+      else ((\$s.array.seconds // 0) + (\$s.array.linkSeconds // 0)) end),
      (if .distributed then ([\$s.children[] | .busySeconds // 0] | add / length)
       else \$s.host.seconds end),
      \$w] | @csv" "$9" | tr -d '"'
