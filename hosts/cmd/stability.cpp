@@ -53,7 +53,7 @@ CommandRegistration reg("stability", [](CLI::App& program) {
 
   struct Args {
     std::string out = "-";
-    std::vector<std::string> formats = {"float32", "float64", "s15.16", "s23.24", "s31.32"};
+    std::string formats = "float32,float64,s15.16,s23.24,s31.32";  // comma-separated
     int rays = 256, maxLog2 = 24, steps = 2, fracBits = 16, maxIntBits = 32, overflowRays = 16;
   };
   auto a = std::make_shared<Args>();
@@ -62,8 +62,8 @@ CommandRegistration reg("stability", [](CLI::App& program) {
       "distance",
       "Error against distance: a radius-1 sphere at D = 2^(k/steps), naive vs Hearn-Baker");
   dist->add_option("--out", a->out, "CSV file ('-' = standard output)")->capture_default_str();
-  dist->add_option("--formats", a->formats, "Formats: float32, float64, sI.F (fixed)")
-      ->delimiter(',')
+  dist->add_option("--formats", a->formats,
+                   "Formats, comma-separated: float32, float64, sI.F (fixed)")
       ->capture_default_str();
   AddInteger(*dist, "--rays", a->rays, 1, stability::kMaxFanRays,
              "Rays in the fan (closest approach 0..1.25 r)");
@@ -71,9 +71,19 @@ CommandRegistration reg("stability", [](CLI::App& program) {
   AddInteger(*dist, "--steps", a->steps, 1, 1024, "Distances per octave");
   dist->callback([a] {
     CheckOutputs({{"--out", a->out}});
+    // One string split here, not CLI11's delimiter: an empty item is named, and a list that
+    // is all commas cannot make the option take the next flag as its value.
     std::vector<stability::StudyFormat> formats;
-    for (const std::string& name : a->formats)
+    for (size_t start = 0;;) {
+      const size_t comma = a->formats.find(',', start);
+      const std::string name = a->formats.substr(start, comma - start);
+      if (name.empty())
+        throw UserError("--formats '" + a->formats +
+                        "': an empty item (a comma-separated list of float32, float64, sI.F)");
       formats.push_back(stability::StudyFormat::Parse(name));
+      if (comma == std::string::npos) break;
+      start = comma + 1;
+    }
     WriteCsv(a->out, [&](std::FILE* f) {
       stability::WriteDistanceStudy(f, formats, a->rays, a->maxLog2, a->steps);
     });

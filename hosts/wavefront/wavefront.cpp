@@ -256,7 +256,9 @@ int LayersPerPass(const bitserial::MachineProfile& profile, int64_t layers,
         if (BounceFits(larger, 1, plan, intersect)) {
           needs = "; it fits " + std::to_string(larger.internalBitsPerPe) + " internal + " +
                   std::to_string(larger.externalBitsPerPe) + " external bits, " +
-                  std::to_string(scale) + " times these";
+                  std::to_string(scale) + " times these: --set internalBitsPerPe=" +
+                  std::to_string(larger.internalBitsPerPe) +
+                  " --set externalBitsPerPe=" + std::to_string(larger.externalBitsPerPe);
           break;
         }
       }

@@ -117,6 +117,16 @@ TEST(StabilityCommand, BadFormatIsAUserError) {
   EXPECT_NE(RunZephyr(7, argv), 0);
   const char* argv2[] = {"zephyr", "stability", "distance", "--out", "-", "--rays", "0"};
   EXPECT_NE(RunZephyr(7, argv2), 0);
+  // An empty item is named, and a list of commas does not take the next flag as a format.
+  for (const char* list : {",", "float32,,s15.16", "float32,"}) {
+    const char* argv3[] = {"zephyr",    "stability", "distance", "--out", "-",
+                           "--formats", list,        "--rays",   "4"};
+    ::testing::internal::CaptureStderr();
+    EXPECT_NE(RunZephyr(9, argv3), 0) << list;
+    const std::string said = ::testing::internal::GetCapturedStderr();
+    EXPECT_NE(said.find("--formats '" + std::string(list) + "': an empty item"), std::string::npos)
+        << said;
+  }
 }
 
 }  // namespace

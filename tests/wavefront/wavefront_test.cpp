@@ -443,7 +443,8 @@ TEST(Wavefront, AMachineTooSmallIsRefusedBeforeThePrimaryPass) {
   EXPECT_NE(r.status, 0);
   EXPECT_NE(r.output.find("the wavefront's bounce program does not fit one virtual-PE layer of "
                           "the pim-bitsimd-v-bank PE memory (768 internal + 256 external bits; "
-                          "it fits 1536 internal + 512 external bits, 2 times these"),
+                          "it fits 1536 internal + 512 external bits, 2 times these: --set "
+                          "internalBitsPerPe=1536 --set externalBitsPerPe=512;"),
             std::string::npos)
       << r.output;
   EXPECT_EQ(r.output.find("cycle report (SIMD primary pass)"), std::string::npos) << r.output;
