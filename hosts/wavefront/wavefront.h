@@ -124,12 +124,6 @@ struct WavefrontResult {
   uint64_t arrayRays[kRayKinds] = {};
 };
 
-// The primary pass's hits shaded by the wavefront: fills `pixels` (linear RGB, row-major,
-// resized to the image) and the host's counted work (`hostWork`: the local shading from
-// records, and the subtrees and shadow products the array could not certify). UserError for a
-// scene the method cannot run (an object that is not an untransformed sphere, naming its
-// file:line; a program PE memory cannot hold; the mesh compaction on a PE count that is not a
-// power of two).
 // Before the primary pass: the UserError RenderWavefront would throw for the PE memory (its
 // first bounce's program, and with depth > 1 and a material that reflects or transmits the
 // later bounces' program, not fitting one virtual-PE layer of `profile`) or the mesh
@@ -140,6 +134,12 @@ void CheckBeforePrimaryPass(const Scene& scene, const simd::PrimaryPlan& primary
                             const WavefrontOptions& options, int depth,
                             const bitserial::MachineProfile& profile);
 
+// The primary pass's hits shaded by the wavefront: fills `pixels` (linear RGB, row-major,
+// resized to the image) and the host's counted work (`hostWork`: the local shading from
+// records, and the subtrees and shadow products the array could not certify). UserError for a
+// scene the method cannot run (an object that is not an untransformed sphere, naming its
+// file:line; a program PE memory cannot hold; the mesh compaction on a PE count that is not a
+// power of two).
 WavefrontResult RenderWavefront(const Tracer& tracer, const simd::PrimaryPass& pass,
                                 const WavefrontOptions& options, std::vector<Vec3>& pixels,
                                 TraceStats& hostWork);

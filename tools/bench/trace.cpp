@@ -103,6 +103,15 @@ void TimeScalarAndKernel(const Scene& scene, const std::vector<PrimaryRay>& rays
   }
 }
 
+// Every primary ray of the scene's view, row by row.
+std::vector<PrimaryRay> ViewRays(const Scene& scene) {
+  const PrimaryRays camera(scene.camera);
+  std::vector<PrimaryRay> rays;
+  for (int y = 0; y < scene.camera.height; ++y)
+    for (int x = 0; x < scene.camera.width; ++x) rays.push_back(camera.At(x, y));
+  return rays;
+}
+
 // Embree 3's scene of `scene`'s spheres (built-in sphere primitive, float; one thread),
 // committed: the commit's (the build's) seconds in *build when given.
 struct EmbreeSpheres {
@@ -163,10 +172,7 @@ std::vector<int32_t> EmbreeFirstHits(const Scene& scene, const std::vector<Prima
 
 void Run(int count, int size) {
   const Scene scene = GenerateRandomSpheres({count, 1, size, size});
-  const PrimaryRays camera(scene.camera);
-  std::vector<PrimaryRay> rays;
-  for (int y = 0; y < size; ++y)
-    for (int x = 0; x < size; ++x) rays.push_back(camera.At(x, y));
+  const std::vector<PrimaryRay> rays = ViewRays(scene);
   const size_t nRays = rays.size();
   const double tests = double(nRays) * count;
   const int repeats = 5;
@@ -226,45 +232,13 @@ Scene GridSpheres(int count, int size) {
   return s;
 }
 
-// Rays per second on one core: the host tracer's FirstHit with --accel bvh (double, the
-// hierarchy built before the clock starts) against Embree's rtcIntersect1 (float) on the
-// primary rays of a size × size image of `count` grid spheres.
-void BvhAgainstEmbree(int count, int size) {
-  const Scene scene = GridSpheres(count, size);
-  const PrimaryRays camera(scene.camera);
-  std::vector<PrimaryRay> rays;
-  for (int y = 0; y < size; ++y)
-    for (int x = 0; x < size; ++x) rays.push_back(camera.At(x, y));
-  const int repeats = 5;
-  TraceOptions options;
-  options.accel = Accel::kBvh;
-  std::unique_ptr<Tracer> tracer;
-  const double build = MedianSeconds(1, [&] { tracer = Tracer::Create(scene, options); });
-  std::vector<int32_t> ours(rays.size());
-  const double bvh = MedianSeconds(repeats, [&] {
-    TraceStats stats;
-    for (size_t i = 0; i < rays.size(); ++i) ours[i] = tracer->FirstHit(rays[i], stats).object;
-  });
-
-  double embreeBuild, embree;
-  const std::vector<int32_t> theirs = EmbreeFirstHits(scene, rays, repeats, &embreeBuild, &embree);
-  size_t agree = 0;
-  for (size_t i = 0; i < rays.size(); ++i) agree += ours[i] == theirs[i];
-  const double n = double(rays.size());
-  std::printf(
-      "%6d grid spheres %4dx%-4d | ours (--accel bvh, double) %7.3f Mrays/s (build %.1f ms) | "
-      "embree (float) %7.3f Mrays/s (build %.1f ms) | embree/ours %.2fx (target <= 4) | "
-      "same object %.4f\n",
-      count, size, size, n / bvh * 1e-6, build * 1e3, n / embree * 1e-6, embreeBuild * 1e3,
-      bvh / embree, double(agree) / n);
-}
-
 // Rays per second of one kind, ours (--accel bvh, double, the hierarchy built before the
 // clock) and Embree's (float, one thread), on one scene: medians of 5.
 struct RayRates {
   double ours = 0, embree = 0;  // rays/s
   double visits = 0;            // our node visits a ray
   double agree = 0;             // fraction of rays with the same answer (object; occluded)
+  double embreeBuild = 0;       // seconds of Embree's build (NearestRates)
 };
 
 // Nearest hits of `rays` beyond tMin: ours (FirstHit, whose tMin is the scene's hither) and
@@ -281,14 +255,32 @@ RayRates NearestRates(const Scene& scene, const Tracer& tracer,
                ours[i] = tracer.FirstHit(rays[i], stats).object;
            });
   r.visits = double(stats.nodeVisits) / n;
-  double build, seconds;
+  double seconds;
   const std::vector<int32_t> theirs =
-      EmbreeFirstHits(scene, rays, 5, &build, &seconds, float(scene.camera.hither));
+      EmbreeFirstHits(scene, rays, 5, &r.embreeBuild, &seconds, float(scene.camera.hither));
   r.embree = n / seconds;
   size_t agree = 0;
   for (size_t i = 0; i < rays.size(); ++i) agree += ours[i] == theirs[i];
   r.agree = double(agree) / n;
   return r;
+}
+
+// Rays per second on one core: the host tracer's FirstHit with --accel bvh (double, the
+// hierarchy built before the clock starts) against Embree's rtcIntersect1 (float) on the
+// primary rays of a size × size image of `count` grid spheres.
+void BvhAgainstEmbree(int count, int size) {
+  const Scene scene = GridSpheres(count, size);
+  TraceOptions options;
+  options.accel = Accel::kBvh;
+  std::unique_ptr<Tracer> tracer;
+  const double build = MedianSeconds(1, [&] { tracer = Tracer::Create(scene, options); });
+  const RayRates r = NearestRates(scene, *tracer, ViewRays(scene));
+  std::printf(
+      "%6d grid spheres %4dx%-4d | ours (--accel bvh, double) %7.3f Mrays/s (build %.1f ms) | "
+      "embree (float) %7.3f Mrays/s (build %.1f ms) | embree/ours %.2fx (target <= 4) | "
+      "same object %.4f\n",
+      count, size, size, r.ours * 1e-6, build * 1e3, r.embree * 1e-6, r.embreeBuild * 1e3,
+      r.embree / r.ours, r.agree);
 }
 
 // Shadow rays from each point to each light beyond tMin: ours (LightThrough: the product of
@@ -350,10 +342,6 @@ SeqRayRates SeqRaysAgainstEmbree(int count, int size, int perSphere) {
   TraceOptions options;
   options.accel = Accel::kBvh;
   const auto tracer = Tracer::Create(scene, options);
-  const PrimaryRays camera(scene.camera);
-  std::vector<PrimaryRay> primary;
-  for (int y = 0; y < size; ++y)
-    for (int x = 0; x < size; ++x) primary.push_back(camera.At(x, y));
   std::mt19937_64 rng(7);
   std::normal_distribution<double> g(0, 1);
   std::vector<PrimaryRay> incoherent;
@@ -367,7 +355,7 @@ SeqRayRates SeqRaysAgainstEmbree(int count, int size, int perSphere) {
     }
   }
   SeqRayRates r;
-  r.primary = NearestRates(scene, *tracer, primary);
+  r.primary = NearestRates(scene, *tracer, ViewRays(scene));
   r.incoherent = NearestRates(scene, *tracer, incoherent);
   r.shadow = ShadowRates(scene, *tracer, points, scene.camera.hither);
   const struct {
