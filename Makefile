@@ -21,8 +21,15 @@ BUILD   ?= build
 JOBS    ?= $(shell nproc)
 BIN     := $(BUILD)/bin
 CXX     ?= g++
+# g++ through ccache when it is installed (tools/setup.sh installs it): an edit of one engine
+# file, a rebase or a second worktree recompiles only what changed. CCACHE= turns it off.
+ifeq ($(origin CCACHE),undefined)
+  CCACHE := $(shell command -v ccache 2>/dev/null)
+endif
+# Paths under the checkout are hashed relative to it: a second worktree reuses the cache.
+export CCACHE_BASEDIR := $(CURDIR)
 ifeq ($(origin CXX),default)
-  CXX := g++
+  CXX := $(if $(CCACHE),ccache )g++
 endif
 OPT     ?= -O2
 # Run-time dispatch (Highway), no host-specific -march: the binary must run on any x86-64.
@@ -118,48 +125,62 @@ validate: setup ## Write docs/validation.md and docs/results/validation.png (FRE
 	$(Q)$(MAKE) --no-print-directory -j$(JOBS) $(ZEPHYR) $(ZEPHYR_SMPI_BIN)
 	$(Q)FRESH='$(FRESH)' bash tools/validate.sh
 
-# The NFF reader under libFuzzer with AddressSanitizer and UBSan (Debian's clang-14).
-# `make fuzz` runs FUZZ_RUNS inputs; `make test` runs a few seconds of it (fuzz-smoke).
-# One object per source under $(BUILD)/fuzz/obj/ (built -j, again only when a source or a
-# header it includes changes); ccache is used for clang too when CXX names it.
-FUZZ_CXX  ?= $(if $(filter ccache,$(firstword $(CXX))),ccache )clang++-14
+# The readers under libFuzzer with AddressSanitizer and UBSan (Debian's clang-14), one binary
+# per target tests/fuzz/NAME_fuzz.cpp: `nff` (the NFF reader, the host tracer, the SIMD planner,
+# the output pre-flight) and `readers` (the machine profile and --set, the ledger's CSVs, the
+# calibrate report). `make fuzz` runs FUZZ_RUNS inputs of each (FUZZ_TARGET=NAME: one);
+# `make test` runs a few seconds of each (fuzz-smoke). A target's sources are derived from
+# its includes (tools/fuzz_sources.sh, not a hand-kept list), computed only when a fuzz target
+# is built, and linked as an archive (a file the target never calls costs its compile only);
+# the OpenMP layer blocks are left out (the planner never calls them). One object per source
+# under $(BUILD)/fuzz/obj/, shared by the targets; ccache is used for clang too when present.
+FUZZ_CXX  ?= $(if $(CCACHE),ccache )clang++-14
 FUZZ_RUNS ?= 1000000
-FUZZ_BIN  := $(BUILD)/fuzz/nff_fuzz
-# The reader, the host tracer and the SIMD planner (with the arithmetic, the array and the
-# program it measures on one virtual PE); not the pass itself, which runs the program on
-# every pixel and is far too slow per input, nor the OpenMP layer blocks (bitserial/blocks.cpp)
-# the planner never calls.
-FUZZ_SRCS := tests/fuzz/nff_fuzz.cpp hosts/scene/nff.cpp hosts/scene/scene.cpp hosts/io/output_file.cpp hosts/io/test_seam.cpp \
-             hosts/scene/geometry.cpp hosts/trace/tracer.cpp hosts/trace/bvh.cpp hosts/trace/sphere_kernels.cpp \
-             $(filter-out $(OPENMP_SRCS),$(wildcard fixed/*.cpp bitserial/*.cpp)) \
-             hosts/trace/exact.cpp \
-             $(addprefix hosts/simd/,options.cpp plan.cpp program.cpp audit.cpp bounds.cpp ops.cpp sphere.cpp sphere_float.cpp ellipsoid.cpp polygon.cpp cone.cpp)
-FUZZ_OBJS := $(FUZZ_SRCS:%.cpp=$(BUILD)/fuzz/obj/%.o)
+FUZZ_TARGETS := $(patsubst tests/fuzz/%_fuzz.cpp,%,$(wildcard tests/fuzz/*_fuzz.cpp))
+FUZZ_TARGET ?= $(FUZZ_TARGETS)
+FUZZ_BINS := $(FUZZ_TARGETS:%=$(BUILD)/fuzz/%_fuzz)
 FUZZ_SAN  := -fno-sanitize-recover=all
+# Each target's seeds: tests/fuzz/corpus (NFF scenes) for nff, tests/fuzz/NAME_corpus otherwise.
+fuzz_seeds = $(if $(filter nff,$(1)),tests/fuzz/corpus,tests/fuzz/$(1)_corpus)
 # A crash, timeout or slow input is written under $(BUILD)/fuzz/ (never into the tree).
-FUZZ_RUN   = mkdir -p $(BUILD)/fuzz/corpus && $(FUZZ_BIN) -max_len=4096 -timeout=10 -artifact_prefix=$(BUILD)/fuzz/ \
-             $(BUILD)/fuzz/corpus tests/fuzz/corpus
+FUZZ_RUN   = mkdir -p $(BUILD)/fuzz/corpus-$(1) && $(BUILD)/fuzz/$(1)_fuzz -max_len=$(if $(filter nff,$(1)),4096,65536) -timeout=10 \
+             -artifact_prefix=$(BUILD)/fuzz/$(1)- $(BUILD)/fuzz/corpus-$(1) $(call fuzz_seeds,$(1))
 $(BUILD)/fuzz/obj/%.o: %.cpp
 	$(call say,FUZZCXX,$@)
 	@mkdir -p $(@D)
 	$(Q)$(FUZZ_CXX) -std=c++20 -O1 -g -I. -fsanitize=fuzzer-no-link,address,undefined $(FUZZ_SAN) \
 	  -MMD -MP $$(pkg-config --cflags libhwy fmt) -c $< -o $@
-$(FUZZ_BIN): $(FUZZ_OBJS)
-	$(call say,FUZZLD,$@)
-	$(Q)$(FUZZ_CXX) -fsanitize=fuzzer,address,undefined $(FUZZ_SAN) $^ -o $@ \
-	  $$(pkg-config --libs libhwy fmt)
--include $(FUZZ_OBJS:.o=.d)
+# The rules that need the derived lists exist only in the sub-make `fuzz-binaries` runs
+# (FUZZ_LISTS=1, the lists passed in as FUZZ_SRCS_NAME).
+ifeq ($(FUZZ_LISTS),1)
+define fuzz_target
+$(BUILD)/fuzz/lib$(1).a: $$(FUZZ_SRCS_$(1):%.cpp=$(BUILD)/fuzz/obj/%.o)
+	$$(call say,AR,$$@)
+	$$(Q)rm -f $$@ && ar rcs $$@ $$^
+$(BUILD)/fuzz/$(1)_fuzz: $(BUILD)/fuzz/obj/tests/fuzz/$(1)_fuzz.o $(BUILD)/fuzz/lib$(1).a
+	$$(call say,FUZZLD,$$@)
+	$$(Q)$$(FUZZ_CXX) -fsanitize=fuzzer,address,undefined $$(FUZZ_SAN) $$^ -o $$@ \
+	  $$$$(pkg-config --libs libhwy fmt)
+-include $$(FUZZ_SRCS_$(1):%.cpp=$(BUILD)/fuzz/obj/%.d) $(BUILD)/fuzz/obj/tests/fuzz/$(1)_fuzz.d
+endef
+$(foreach t,$(FUZZ_TARGETS),$(eval $(call fuzz_target,$(t))))
+endif
+fuzz_list = $(filter-out $(OPENMP_SRCS) tests/fuzz/$(1)_fuzz.cpp,$(shell bash tools/fuzz_sources.sh tests/fuzz/$(1)_fuzz.cpp))
+.PHONY: fuzz-binaries
+fuzz-binaries: # the fuzz targets, built in a sub-make given their derived source lists
+	$(Q)$(MAKE) --no-print-directory -j$(JOBS) FUZZ_LISTS=1 \
+	  $(foreach t,$(FUZZ_TARGETS),FUZZ_SRCS_$(t)='$(call fuzz_list,$(t))') $(FUZZ_BINS)
 
 # FUZZ_FLAGS passes libFuzzer flags: -fork=N fuzzes in N processes at once (N cores), the
 # runs counted over all of them; the run stops at the first crash either way.
-fuzz: ## Fuzz the NFF reader, tracer, SIMD planner and output pre-flight: FUZZ_RUNS inputs (default 10^6; FUZZ_FLAGS=-fork=2 for 2 cores) under ASan+UBSan
-	$(Q)$(MAKE) --no-print-directory -j$(JOBS) $(FUZZ_BIN)
-	$(Q)$(FUZZ_RUN) -runs=$(FUZZ_RUNS) $(FUZZ_FLAGS)
+fuzz: ## Fuzz every reader (FUZZ_TARGET=nff|readers: one): FUZZ_RUNS inputs each (default 10^6; FUZZ_FLAGS=-fork=2 for 2 cores) under ASan+UBSan
+	$(Q)$(MAKE) --no-print-directory fuzz-binaries
+	$(Q)$(foreach t,$(FUZZ_TARGET),echo "fuzz: $(t)" && $(call FUZZ_RUN,$(t)) -runs=$(FUZZ_RUNS) $(FUZZ_FLAGS) &&) true
 
-fuzz-smoke: # a few seconds of fuzzing, part of `make test` (skipped without clang)
+fuzz-smoke: # a few seconds of each fuzz target, part of `make test` (skipped without clang)
 	$(Q)if command -v $(lastword $(FUZZ_CXX)) >/dev/null; then \
-	  $(MAKE) --no-print-directory -j$(JOBS) $(FUZZ_BIN) && \
-	  $(FUZZ_RUN) -max_total_time=5 2>&1 | tail -n 3; test $${PIPESTATUS[0]} -eq 0; \
+	  $(MAKE) --no-print-directory fuzz-binaries && \
+	  $(foreach t,$(FUZZ_TARGETS),{ $(call FUZZ_RUN,$(t)) -max_total_time=4 2>&1 | tail -n 2; test $${PIPESTATUS[0]} -eq 0; } &&) true; \
 	  else echo "fuzz-smoke: $(FUZZ_CXX) not found, skipped"; fi
 
 # Mutation testing (tools/mutants.sh): each mutant of tools/mutants.json in a scratch copy of
@@ -173,7 +194,10 @@ clean: ## Remove build/ and out/
 # ---------------------------------------------------------------------------
 # Rebuild everything when the compiler or flags change.
 FLAGS_FILE := $(BUILD)/flags.txt
-FLAGS_NOW   = $(CXX) $(ALL_CXXFLAGS) $(LDLIBS_ALL)
+# Not ALL_CXXFLAGS: a target-specific `+= -fopenmp` (the OpenMP files) would be inherited by
+# this file when one of those objects is the first to need it, and the next make would see
+# other flags and rebuild everything.
+FLAGS_NOW   = $(CXX) $(COMMON_CXXFLAGS) $(DEPCFLAGS) $(CXXFLAGS) $(LDLIBS_ALL) openmp: $(OPENMP_SRCS)
 $(FLAGS_FILE): FORCE | $(BUILD)
 	@echo '$(FLAGS_NOW)' | cmp -s - $@ || echo '$(FLAGS_NOW)' > $@
 FORCE:
@@ -226,7 +250,7 @@ SMPICXX    ?= smpicxx
 HAVE_SMPI  := $(shell command -v $(SMPICXX) 2>/dev/null)
 # smpicxx calls the compiler itself; ccache in front of it still caches (rebuilds after a
 # rebase are the slow part on a shared machine).
-SMPI_CC    := $(if $(shell command -v ccache 2>/dev/null),ccache )$(SMPICXX)
+SMPI_CC    := $(if $(CCACHE),ccache )$(SMPICXX)
 SMPI_BUILD := $(BUILD)/smpi
 SMPI_OPT   ?= $(OPT)
 ZEPHYR_SMPI_BIN := $(BIN)/zephyr-smpi
@@ -276,7 +300,12 @@ $(ZEPHYR_SMPI_BIN): $(SMPI_OBJS) | $(BIN)
 # only: a shared library would need every engine file compiled a second time with -fPIC.
 .PHONY: lib install uninstall kernels
 PREFIX   ?= /usr/local
-PREFIX_ABS = $(abspath $(PREFIX))
+# PREFIX and DESTDIR reach tools/install.sh through the environment, as typed: a path with
+# spaces or quotes is never split or re-parsed by a shell (the script refuses an empty or
+# relative one).
+export PREFIX DESTDIR
+# More files `make install` puts under the prefix, "SOURCE=DEST" (DEST relative to it).
+EXTRA_INSTALL ?=
 LIB_NAME := zephyr-bitserial
 LIB_A    := $(BUILD)/lib/lib$(LIB_NAME).a
 LIB_A_OBJS = $(filter $(BUILD)/obj/fixed/% $(BUILD)/obj/bitserial/%,$(LIB_OBJS))
@@ -293,8 +322,6 @@ PUBLIC_HEADERS := fixed/format.h fixed/float.h fixed/check.h fixed/named.h fixed
 # libgomp for the layer blocks (bitserial/blocks.cpp); Boost's headers need no flag.
 PC_REQUIRES = libhwy fmt $(if $(shell pkg-config --exists nlohmann_json 2>/dev/null && echo y),nlohmann_json)
 LIB_VERSION = 0.0.0-git$(shell git rev-parse --short HEAD 2>/dev/null || echo unknown)
-INSTALL_ROOT = $(DESTDIR)$(PREFIX_ABS)
-INSTALLED_LIST = $(INSTALL_ROOT)/share/zephyr/installed-files
 
 lib: ## Build the static library build/lib/libzephyr-bitserial.a (fixed/ and bitserial/)
 	$(Q)$(MAKE) --no-print-directory -j$(JOBS) $(LIB_A)
@@ -305,33 +332,12 @@ $(LIB_A): $(LIB_A_OBJS)
 	$(Q)rm -f $@ && ar rcs $@ $^
 
 install: lib ## Install the library, headers, profiles and zephyr-bitserial.pc under PREFIX (default /usr/local)
-	$(Q)set -e; root='$(INSTALL_ROOT)'; list=$$(mktemp); \
-	  for h in $(PUBLIC_HEADERS); do \
-	    install -D -m 644 $$h "$$root/include/zephyr/$$h"; echo "include/zephyr/$$h" >> $$list; done; \
-	  install -D -m 644 $(LIB_A) "$$root/lib/lib$(LIB_NAME).a"; echo "lib/lib$(LIB_NAME).a" >> $$list; \
-	  for p in $(PROFILE_FILES); do \
-	    install -D -m 644 $$p "$$root/share/zephyr/profiles/$$(basename $$p)"; \
-	    echo "share/zephyr/profiles/$$(basename $$p)" >> $$list; done; \
-	  mkdir -p "$$root/lib/pkgconfig"; \
-	  printf '%s\n' 'prefix=$(PREFIX_ABS)' 'includedir=$${prefix}/include/zephyr' \
-	    'libdir=$${prefix}/lib' 'profilesdir=$${prefix}/share/zephyr/profiles' '' \
-	    'Name: $(LIB_NAME)' \
-	    'Description: The emulated WaveTracer Zephyr bit-serial SIMD array and its MultiC-like API' \
-	    'Version: $(LIB_VERSION)' 'Requires: $(PC_REQUIRES)' \
-	    'Libs: -L$${libdir} -l$(LIB_NAME) -lgomp -lpthread' 'Cflags: -I$${includedir}' \
-	    > "$$root/lib/pkgconfig/$(LIB_NAME).pc"; \
-	  echo "lib/pkgconfig/$(LIB_NAME).pc" >> $$list; \
-	  mkdir -p "$$(dirname '$(INSTALLED_LIST)')"; mv $$list '$(INSTALLED_LIST)'; chmod 644 '$(INSTALLED_LIST)'; \
-	  echo "installed $$(wc -l < '$(INSTALLED_LIST)') files under $$root (list: $(INSTALLED_LIST))"
+	$(Q)LIB_A='$(LIB_A)' LIB_NAME='$(LIB_NAME)' PUBLIC_HEADERS='$(PUBLIC_HEADERS)' \
+	  PROFILE_FILES='$(PROFILE_FILES)' PC_REQUIRES='$(PC_REQUIRES)' LIB_VERSION='$(LIB_VERSION)' \
+	  EXTRA_INSTALL='$(EXTRA_INSTALL)' bash tools/install.sh install
 
 uninstall: ## Remove what `make install PREFIX=...` installed (its share/zephyr/installed-files)
-	$(Q)set -e; root='$(INSTALL_ROOT)'; \
-	  if [ ! -f '$(INSTALLED_LIST)' ]; then echo "uninstall: nothing installed under $$root ($(INSTALLED_LIST) not found)" >&2; exit 1; fi; \
-	  while read -r f; do rm -f "$$root/$$f"; done < '$(INSTALLED_LIST)'; rm -f '$(INSTALLED_LIST)'; \
-	  for d in include/zephyr/fixed include/zephyr/bitserial include/zephyr share/zephyr/profiles share/zephyr lib/pkgconfig; do \
-	    rmdir "$$root/$$d" 2>/dev/null || true; done; \
-	  echo "removed the installed files under $$root"
-
+	$(Q)bash tools/install.sh uninstall
 
 # The kernel suite: each kernel of tools/kernels/kernels.h on every built-in profile, checked
 # against plain C++ on every Highway target, timed against it; writes docs/kernels.md.

@@ -85,7 +85,17 @@ Word* Machine::AcquirePlanes(int planes) {
     list.pop_back();
     return p;
   }
-  blocks_.push_back(hwy::AllocateAligned<Word>(static_cast<size_t>(planes) * PlaneStride()));
+  const size_t words = static_cast<size_t>(planes) * PlaneStride();
+  auto block = hwy::AllocateAligned<Word>(words);
+  // Host memory for the emulated PEs' bit-planes ran out (a 2^24-PE machine under a small
+  // `ulimit -v`): a clear error, not a null plane (docs/errors.md, "Memory").
+  if (!block)
+    throw UserError(fmt::format(
+        "the emulated array cannot get {:.3f} MiB of host memory for {} bit-plane(s) of {} "
+        "PEs: the machine or the program is too large for this process's memory limit "
+        "(ulimit -v)",
+        double(words * sizeof(Word)) / (1 << 20), planes, int64_t(words_) * 64));
+  blocks_.push_back(std::move(block));
   return blocks_.back().get();
 }
 

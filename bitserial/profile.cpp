@@ -7,11 +7,13 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "fixed/check.h"
+#include "fixed/input_file.h"
 
 namespace zephyr::bitserial {
 
@@ -56,6 +58,10 @@ struct Position {
 };
 struct Positions {
   std::map<std::string, Position> key, value;
+  // The first key that appears twice in one object (nlohmann would keep the last silently),
+  // and where it appears the second time.
+  std::string duplicate;
+  Position duplicateAt;
 };
 Positions KeyPositions(const std::string& text) {
   Positions at;
@@ -100,7 +106,10 @@ Positions KeyPositions(const std::string& text) {
       if (!stack.empty() && stack.back().object && stack.back().expectKey) {
         stack.back().key = s;
         stack.back().expectKey = false;
-        at.key.emplace(current(), start);
+        if (!at.key.emplace(current(), start).second && at.duplicate.empty()) {
+          at.duplicate = current();
+          at.duplicateAt = start;
+        }
       } else {
         at.value.emplace(current(), start);
       }
@@ -141,9 +150,14 @@ Position PositionOf(const std::string& text, size_t byte) {
 }
 
 double ParseNumber(const std::string& text, const std::string& what) {
+  // A plain decimal number as a profile file writes one: strtod alone would also take a
+  // leading space, hexadecimal ("0x10"), "inf" and "nan".
+  const bool decimal = !text.empty() && text.size() <= 64 &&
+                       (std::isdigit(static_cast<unsigned char>(text[0])) || text[0] == '.') &&
+                       text.find_first_not_of("0123456789.eE+-") == std::string::npos;
   char* end = nullptr;
-  double v = std::strtod(text.c_str(), &end);
-  if (text.empty() || end != text.c_str() + text.size() || !(v >= 0) || !std::isfinite(v))
+  double v = decimal ? std::strtod(text.c_str(), &end) : 0;
+  if (!decimal || end != text.c_str() + text.size() || !(v >= 0) || !std::isfinite(v))
     throw UserError(fmt::format("{}: expected a finite non-negative number, got '{}'", what, text));
   return v;
 }
@@ -204,7 +218,8 @@ constexpr int kGeometryEntries = 6;
 // rule for a file's entries and for --set.
 std::string RangeError(const std::string& key, double v) {
   if (!std::isfinite(v)) return "expected a finite number";
-  if (key == "clockHz") return v > 0 && v <= 1e12 ? "" : "expected a clock above 0 Hz, up to 1e12";
+  // At least 1 Hz: a clock of 1e-320 Hz would make every modelled time infinite.
+  if (key == "clockHz") return v >= 1 && v <= 1e12 ? "" : "expected a clock from 1 Hz to 1e12 Hz";
   if (key == "physicalPes")
     return v == std::floor(v) && v >= 512 && v <= 0x1p24 && std::fmod(v, 512) == 0
                ? ""
@@ -220,9 +235,11 @@ std::string RangeError(const std::string& key, double v) {
   return v >= 0 && v <= 1e9 ? "" : "expected a cost from 0 to 1e9 cycles";
 }
 
-// "64x128" -> {64, 128}; empty on a malformed shape.
+// "64x128" -> {64, 128}; empty on a malformed shape or one of more than 2^24 PEs (the most a
+// profile may have: the product is taken in 64 bits, so "8192x524289" cannot wrap around).
 std::vector<int> ParseShape(const std::string& text) {
   std::vector<int> extent;
+  int64_t pes = 1;
   size_t at = 0;
   while (at <= text.size()) {
     size_t x = text.find('x', at);
@@ -233,6 +250,8 @@ std::vector<int> ParseShape(const std::string& text) {
       return {};
     extent.push_back(std::stoi(part));
     if (extent.back() <= 0) return {};
+    pes *= extent.back();
+    if (pes > (int64_t{1} << 24)) return {};
     at = x + 1;
   }
   return extent.size() <= 4 ? extent : std::vector<int>{};
@@ -250,6 +269,32 @@ class ProfileReader {
   ProfileReader(const std::string& text, const std::string& file) : text_(text), file_(file) {}
 
   MachineProfile Read() {
+    // Bounded before nlohmann sees it: the size, and the nesting (a profile nests four deep;
+    // 40 KB of '[' cost the parser and the position scan seconds and a gigabyte).
+    if (text_.size() > kMaxProfileBytes)
+      throw UserError(fmt::format("{}: the machine profile has {} bytes, more than the {} KiB a "
+                                  "profile may have",
+                                  file_, text_.size(), kMaxProfileBytes >> 10));
+    {
+      int depth = 0;
+      bool inString = false;
+      Position p;
+      for (size_t i = 0; i < text_.size(); ++i) {
+        const char c = text_[i];
+        if (inString) {
+          if (c == '\\') ++i;
+          else if (c == '"') inString = false;
+        } else if (c == '"') {
+          inString = true;
+        } else if ((c == '{' || c == '[') && ++depth > kMaxProfileNesting) {
+          p = PositionOf(text_, i);
+          throw UserError(fmt::format("{}:{}:{}: not a machine profile: nested more than {} deep",
+                                      file_, p.line, p.column, kMaxProfileNesting));
+        } else if (c == '}' || c == ']') {
+          --depth;
+        }
+      }
+    }
     nlohmann::json j;
     try {
       j = nlohmann::json::parse(text_);
@@ -259,8 +304,16 @@ class ProfileReader {
       if (auto colon = what.find("syntax error"); colon != std::string::npos)
         what = what.substr(colon);
       throw UserError(fmt::format("{}:{}:{}: not valid JSON: {}", file_, p.line, p.column, what));
+    } catch (const nlohmann::json::exception& e) {
+      // A number too large for a double ("1e999", a megabyte of digits): nlohmann's
+      // out_of_range, which carries no position.
+      std::string what = e.what();
+      if (auto bracket = what.find("] "); bracket != std::string::npos)
+        what = what.substr(bracket + 2);
+      throw UserError(fmt::format("{}: not valid JSON: {}", file_, what));
     }
     at_ = KeyPositions(text_);
+    if (!at_.duplicate.empty()) Throw(at_.duplicateAt, at_.duplicate, "this key appears twice");
     MachineProfile p;
     p.file = file_;
     Keys(j, "", {"name", "description", "source", "entries"});
@@ -302,7 +355,8 @@ class ProfileReader {
         const std::string shape = e["value"][k].get<std::string>();
         MeshShape m{ParseShape(shape)};
         if (m.extent.empty())
-          Fail(at, "expected a shape of 1 to 4 positive extents such as \"64x128\", got \"" +
+          Fail(at, "expected a shape of 1 to 4 positive extents such as \"64x128\", of at most "
+                   "2^24 PEs, got \"" +
                        shape + "\"");
         if (static_cast<int64_t>(m.Size()) != p.physicalPes)
           Fail(at, fmt::format("the shape {} has {} PEs, but physicalPes is {}", shape, m.Size(),
@@ -384,6 +438,9 @@ class ProfileReader {
 }  // namespace
 
 MachineProfile ProfileFromJson(const std::string& text, const std::string& file) {
+  // A UTF-8 byte-order mark, as some editors write one, is not part of the JSON (nlohmann
+  // skips it; the position scan would take it for a value and lose the nesting).
+  if (text.rfind("\xEF\xBB\xBF", 0) == 0) return ProfileReader(text.substr(3), file).Read();
   return ProfileReader(text, file).Read();
 }
 
@@ -402,18 +459,17 @@ MachineProfile Profile(const std::string& nameOrFile) {
   if (BuiltIns().count(nameOrFile))
     return ProfileFromJson(BuiltIns().at(nameOrFile),
                            "built-in bitserial/profiles/" + nameOrFile + ".json");
-  std::ifstream in(nameOrFile, std::ios::binary);
-  if (!in) {
-    // Not a built-in name and no file: the name is the likelier mistake unless it looks like a
-    // path.
-    if (nameOrFile.find('/') == std::string::npos && nameOrFile.find(".json") == std::string::npos)
-      BuiltInProfileText(nameOrFile);  // throws "unknown machine profile", listing them
-    throw UserError(fmt::format("machine profile file '{}': {}", nameOrFile, std::strerror(errno)));
-  }
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) throw UserError(fmt::format("machine profile file '{}': read error", nameOrFile));
-  return ProfileFromJson(text.str(), nameOrFile);
+  // Not a built-in name and no file: the name is the likelier mistake unless it looks like a
+  // path.
+  std::error_code ec;
+  if (!std::filesystem::exists(std::filesystem::symlink_status(nameOrFile, ec)) &&
+      nameOrFile.find('/') == std::string::npos && nameOrFile.find(".json") == std::string::npos)
+    BuiltInProfileText(nameOrFile);  // throws "unknown machine profile", listing them
+  // Only a regular file (fixed/input_file.h): a FIFO would block, a directory is no profile.
+  return ProfileFromJson(ReadInputFile(nameOrFile, {"the machine profile file",
+                                                    "a machine profile file (JSON)"},
+                                       kMaxProfileBytes),
+                         nameOrFile);
 }
 
 std::vector<std::string> ProfileNames() {

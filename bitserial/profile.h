@@ -116,7 +116,13 @@ std::vector<std::string> ProfileNames();  // the built-in profiles, sorted
 // UserError for an unknown name.
 const std::string& BuiltInProfileText(const std::string& name);
 
-// Reads a profile file's text. `file` names it in errors, which are UserErrors of the form
+// The largest profile file read (a built-in one has ~4 KiB) and the deepest nesting of its
+// objects and lists (a profile nests three deep); past either, a UserError before parsing.
+inline constexpr size_t kMaxProfileBytes = size_t(1) << 20;
+inline constexpr int kMaxProfileNesting = 16;
+
+// Reads a profile file's text (a leading UTF-8 byte-order mark is skipped). `file` names it in
+// errors, which are UserErrors of the form
 // "FILE:LINE:COLUMN: PATH: what is wrong" for invalid JSON, an unknown or missing key, a value
 // of the wrong type, unit or range (PATH as "entries.readInternal.value").
 MachineProfile ProfileFromJson(const std::string& text, const std::string& file);

@@ -61,6 +61,9 @@ bool CycleReport::SameCharges(const CycleReport& other) const {
 }
 
 void CycleReport::Add(const CycleReport& other) {
+  // A report of no run (a pass that ran no program: --method array on a view where no primary
+  // ray hits, so no bounce runs) adds nothing, whatever profile it was made without.
+  if (other.runs_.empty()) return;
   if (runs_.empty()) {
     *this = other;
     return;

@@ -38,7 +38,7 @@ class CycleReport {
   // This report plus `other`'s runs after its own: a program run several times (the SIMD
   // pass's array passes) reported as one. Totals, classes and ops are summed run by run;
   // the layers are listed run after run. The profiles must be the same (ZEPHYR_CHECK),
-  // unless this report is empty (default-constructed).
+  // unless either report is empty (default-constructed: an empty `other` adds nothing).
   void Add(const CycleReport& other);
   int Runs() const { return int(runs_.size()); }  // runs summed (1 unless Add was called)
   CycleReport Run(int k) const;                   // the k-th run's own report, 0 <= k < Runs()

@@ -5,7 +5,7 @@
 set -euo pipefail
 
 PACKAGES=(
-  g++ make pkg-config
+  g++ make pkg-config ccache   # ccache: a rebuild after an edit or a rebase (issue 41)
   libhwy-dev libboost-dev libpng-dev libgtest-dev
   libopenmpi-dev openmpi-bin
   libcli11-dev nlohmann-json3-dev libfmt-dev

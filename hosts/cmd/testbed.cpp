@@ -12,6 +12,7 @@
 
 #include "bitserial/profile.h"
 #include "fixed/check.h"
+#include "fixed/input_file.h"
 #include "hosts/cmd/command.h"
 #include "hosts/cmd/flags.h"
 #include "hosts/io/output_file.h"
@@ -105,13 +106,11 @@ CommandRegistration testbedCommand("testbed", [](CLI::App& program) {
   calibrate->add_option("--report", *report, "JSON report of a seq render measured on this host")
       ->required();
   calibrate->callback([report] {
-    std::ifstream in(*report);
-    if (!in) throw UserError(*report + ": cannot read the report");
-    std::stringstream text;
-    text << in.rdbuf();
+    const std::string text =
+        ReadInputFile(*report, {"the report", "a JSON render report"}, std::uintmax_t(64) << 20);
     nlohmann::json r;
     try {
-      r = nlohmann::json::parse(text.str());
+      r = nlohmann::json::parse(text);
     } catch (const nlohmann::json::exception& e) {
       throw UserError(*report + ": not a JSON report: " + e.what());
     }

@@ -14,6 +14,7 @@
 #include <string>
 
 #include "fixed/check.h"
+#include "fixed/input_file.h"
 #include "hosts/cmd/command.h"
 #include "hosts/io/output_file.h"
 #include "hosts/methods/ledger.h"
@@ -28,20 +29,12 @@ struct ValidateOptions {
 // The recorded errors (tools/validation_recorded.csv: machine,operation,error_pct): a row whose
 // error grew past its record, or a recorded row the ledger lacks, fails.
 int CheckRecorded(const std::vector<LedgerRow>& rows, const std::string& file) {
-  std::ifstream in(file);
-  if (!in) throw UserError(file + ": cannot read the recorded errors");
-  std::string line;
-  std::getline(in, line);
-  int failed = 0, number = 1;
-  while (std::getline(in, line)) {
-    ++number;
-    if (line.empty()) continue;
-    const size_t a = line.find(','), b = line.rfind(',');
-    if (a == std::string::npos || a == b)
-      throw UserError(file + ":" + std::to_string(number) +
-                      ": expected machine,operation,error_pct");
-    const std::string machine = line.substr(0, a), op = line.substr(a + 1, b - a - 1);
-    const double recorded = std::stod(line.substr(b + 1));
+  int failed = 0;
+  const std::vector<RecordedRow> recordedRows = ReadRecorded(file);
+  for (const RecordedRow& rec : recordedRows) {
+    const int number = rec.line;
+    const std::string &machine = rec.machine, &op = rec.operation;
+    const double recorded = rec.errorPct;
     const LedgerRow* row = nullptr;
     for (const LedgerRow& r : rows)
       if (r.machine == machine && r.operation == op) row = &r;
@@ -55,7 +48,8 @@ int CheckRecorded(const std::vector<LedgerRow>& rows, const std::string& file) {
       ++failed;
     }
   }
-  std::printf("validate: %d rows checked against %s, %d worse\n", number - 1, file.c_str(), failed);
+  std::printf("validate: %zu rows checked against %s, %d worse\n", recordedRows.size(),
+              file.c_str(), failed);
   return failed;
 }
 
@@ -70,8 +64,10 @@ CommandRegistration validateCommand("validate", [](CLI::App& program) {
   cmd->add_option("--check", o->check,
                   "Fail if a row's error grew past this file's (tools/validation_recorded.csv)");
   cmd->callback([o] {
-    if (!o->out.empty()) CheckOutputPath("--out", o->out);
-    if (!o->csv.empty()) CheckOutputPath("--csv", o->csv);
+    // The output pre-flight every command has: neither output may be an input of the run
+    // (--csv naming the --check file would overwrite the record it is checked against).
+    CheckOutputs({{"--out", o->out}, {"--csv", o->csv}},
+                 {{"the sweep's runs (--runs)", o->runs}, {"the recorded errors (--check)", o->check}});
     std::vector<LedgerRow> rows = MachineRows();
     if (!o->runs.empty())
       for (LedgerRow& r : PaperRows(ReadRuns(o->runs))) rows.push_back(r);

@@ -78,6 +78,8 @@ void ServeFrames(const FrameWorkFactory& factory, const std::optional<TestFault>
       return fail("malformed work message: frame " + std::to_string(frame.id) + " carries " +
                   std::to_string(m.payload.size() - kRectBytes) + " matrix bytes, expected " +
                   std::to_string(sliceBytes));
+    if (fault && fault->StrikeFails(mpi.Rank(), frames))
+      return fail("injected failure (ZEPHYR_TEST_FAULT)");
     if (fault && fault->StrikeSendsGarbage(mpi.Rank(), frames)) {
       std::byte junk[3] = {};
       mpi.Send(0, {.kind = MessageKind::kResult, .frameId = frame.id}, junk, sent);

@@ -19,7 +19,8 @@ std::optional<TestFault> TestFault::FromEnvironment() {
   if (std::sscanf(spec, "%15[a-z]:%d:%d", what, &fault.rank_, &fault.afterFrames_) != 3)
     throw UserError(std::string("ZEPHYR_TEST_FAULT: expected what:rank:frames, got ") + spec);
   fault.what_ = what;
-  if (fault.what_ != "kill" && fault.what_ != "hang" && fault.what_ != "garbage")
+  if (fault.what_ != "kill" && fault.what_ != "hang" && fault.what_ != "garbage" &&
+      fault.what_ != "fail")
     throw UserError("ZEPHYR_TEST_FAULT: unknown fault '" + fault.what_ + "'");
   return fault;
 }

@@ -4,7 +4,11 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <csignal>
+#include <atomic>
 #include <cerrno>
+#include <chrono>
+#include <mutex>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -33,6 +37,82 @@ int MakeTemporary(const std::string& path, std::string& name) {
   const int fd = ::mkostemp(buffer.data(), O_CLOEXEC);
   name = buffer.data();
   return fd;
+}
+
+// ---- Temporaries removed on SIGINT, SIGTERM and SIGHUP ---------------------------------------
+// The live temporaries' names in fixed slots (a signal handler may not allocate or lock): the
+// handler unlinks each, restores the default action and raises the signal again, so the
+// process ends as it would have, minus the temporary.
+constexpr int kSlots = 64;
+constexpr size_t kSlotBytes = 4096;
+char g_slotPath[kSlots][kSlotBytes];
+std::atomic<bool> g_slotUsed[kSlots];
+
+extern "C" void RemoveTemporariesAndReraise(int sig) {
+  for (int i = 0; i < kSlots; ++i)
+    if (g_slotUsed[i].load(std::memory_order_acquire)) ::unlink(g_slotPath[i]);
+  ::signal(sig, SIG_DFL);
+  ::raise(sig);
+}
+
+void InstallSignalCleanup() {
+  static const bool installed = [] {
+    for (int sig : {SIGINT, SIGTERM, SIGHUP}) {
+      struct sigaction old {};
+      ::sigaction(sig, nullptr, &old);
+      // A signal the process ignores (nohup's SIGHUP) stays ignored.
+      if (old.sa_handler == SIG_IGN) continue;
+      struct sigaction a {};
+      a.sa_handler = RemoveTemporariesAndReraise;
+      sigemptyset(&a.sa_mask);
+      ::sigaction(sig, &a, nullptr);
+    }
+    return true;
+  }();
+  (void)installed;
+}
+
+// The slot that now holds `name` (-1 when every slot is taken or the name is too long: the
+// temporary is then only removed by the next writer of that output, below).
+int Register(const std::string& name) {
+  InstallSignalCleanup();
+  if (name.size() >= kSlotBytes) return -1;
+  static std::mutex lock;
+  std::lock_guard<std::mutex> guard(lock);
+  for (int i = 0; i < kSlots; ++i)
+    if (!g_slotUsed[i].load(std::memory_order_relaxed)) {
+      std::memcpy(g_slotPath[i], name.c_str(), name.size() + 1);
+      g_slotUsed[i].store(true, std::memory_order_release);
+      return i;
+    }
+  return -1;
+}
+void Unregister(int slot) {
+  if (slot >= 0) g_slotUsed[slot].store(false, std::memory_order_release);
+}
+
+// A writer's own stale temporaries: `.NAME.tmp-XXXXXX` beside `path` (mkstemp's six
+// characters), left by a process killed outright (SIGKILL, a power cut) and unchanged for a
+// minute — a live writer of the same name changes its file as it writes. Only that pattern,
+// only in the output's own folder.
+void RemoveStaleTemporaries(const std::string& path) {
+  namespace fs = std::filesystem;
+  const std::string prefix = "." + fs::path(path).filename().string() + ".tmp-";
+  std::error_code ec;
+  const auto now = fs::file_time_type::clock::now();
+  for (fs::directory_iterator it(DirectoryOf(path), ec), end; !ec && it != end;
+       it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name.size() != prefix.size() + 6 || name.compare(0, prefix.size(), prefix) != 0) continue;
+    if (name.find_first_not_of(
+            "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789", prefix.size()) !=
+        std::string::npos)
+      continue;
+    std::error_code e;
+    if (!it->is_regular_file(e) || e) continue;
+    const auto modified = fs::last_write_time(it->path(), e);
+    if (!e && now - modified > std::chrono::minutes(1)) fs::remove(it->path(), e);
+  }
 }
 
 mode_t CreateMode() {  // what open(…, 0666) would give under the current umask
@@ -65,15 +145,18 @@ OutputFile::OutputFile(std::string path, std::string what)
   if (path_.empty()) throw UserError("cannot write the " + what_ + ": empty path");
   if (const std::string why = Unreplaceable(path_); !why.empty())
     throw UserError(path_ + ": cannot write the " + what_ + ": " + why);
+  RemoveStaleTemporaries(path_);
   const int fd = MakeTemporary(path_, temporary_);
   if (fd < 0)
     throw UserError(path_ + ": cannot create the " + what_ + " (in " + DirectoryOf(path_) +
                     "): " + std::strerror(errno));
+  slot_ = Register(temporary_);
   file_ = ::fdopen(fd, "wb");
   if (!file_) {
     const int e = errno;
     ::close(fd);
     ::unlink(temporary_.c_str());
+    Unregister(slot_);
     throw UserError(path_ + ": cannot create the " + what_ + ": " + std::strerror(e));
   }
 }
@@ -81,6 +164,7 @@ OutputFile::OutputFile(std::string path, std::string what)
 OutputFile::~OutputFile() {
   if (file_) std::fclose(file_);
   if (!committed_ && !temporary_.empty()) ::unlink(temporary_.c_str());
+  Unregister(slot_);
 }
 
 void OutputFile::Commit() {
@@ -101,10 +185,14 @@ void OutputFile::Commit() {
   if (!error && sys.rename(temporary_.c_str(), path_.c_str()) != 0) error = errno;
   if (error) {
     ::unlink(temporary_.c_str());
+    Unregister(slot_);
+    slot_ = -1;
     throw UserError(path_ + ": cannot write the " + what_ + ": " + std::strerror(error) +
                     " (nothing was written under that name)");
   }
   committed_ = true;
+  Unregister(slot_);  // the name is the output's now: a signal from here on must leave it
+  slot_ = -1;
   // The rename itself is made durable by syncing the directory; a failure here loses
   // nothing that a crash right now would not.
   const int dir = sys.openDirectory(DirectoryOf(path_).c_str());

@@ -8,8 +8,10 @@
 //
 // Until Commit succeeds `path` is untouched: an old file of that name stays as it was, and
 // no partial file ever carries the name. A failed or abandoned OutputFile removes its
-// temporary file. Only a process killed between creating and committing leaves one behind,
-// named `.NAME.tmp-XXXXXX` in the same directory.
+// temporary file, and so does SIGINT, SIGTERM or SIGHUP (a handler installed with the first
+// OutputFile removes the live temporaries, then the signal ends the process as before). Only a
+// process killed outright (SIGKILL) leaves one behind, named `.NAME.tmp-XXXXXX` in the same
+// directory; the next writer of NAME removes such files once they are a minute old.
 #pragma once
 
 #include <cstdio>
@@ -41,6 +43,7 @@ class OutputFile {
   std::string path_, what_, temporary_;
   std::FILE* file_ = nullptr;
   bool committed_ = false;
+  int slot_ = -1;  // its place among the temporaries a signal removes (-1: none)
 };
 
 // Writes `bytes` to `path` atomically (one OutputFile).

@@ -14,6 +14,7 @@
 #include "bitserial/multi.h"
 #include "bitserial/profile.h"
 #include "fixed/check.h"
+#include "fixed/input_file.h"
 
 namespace zephyr::methods {
 namespace {
@@ -86,9 +87,11 @@ std::vector<LedgerRow> MachineRows() {
   return rows;
 }
 
-std::vector<SweepRun> ReadRuns(const std::string& file) {
-  std::ifstream in(file);
-  if (!in) throw UserError(file + ": cannot read the sweep's runs (make charts TESTBED=ufmg1992)");
+std::vector<SweepRun> ReadRuns(const std::string& fileName) {
+  std::istringstream in(ReadInputFile(
+      fileName, {"the sweep's runs", "the sweep's runs.csv (make charts TESTBED=ufmg1992)"},
+      std::uintmax_t(64) << 20));
+  const std::string file = PrintablePath(fileName);
   std::string line;
   std::getline(in, line);
   std::vector<std::string> header;
@@ -110,26 +113,65 @@ std::vector<SweepRun> ReadRuns(const std::string& file) {
     std::vector<std::string> f;
     std::stringstream s(line);
     for (std::string c; std::getline(s, c, ',');) f.push_back(c);
-    auto num = [&](size_t c) {
-      if (c >= f.size()) throw UserError(fmt::format("{}:{}: too few columns", file, number));
+    if (f.size() < header.size())
+      throw UserError(fmt::format("{}:{}: {} columns, the header has {}", file, number, f.size(),
+                                  header.size()));
+    // A count must be a whole number from `low`; a time, rate or size finite and above `low`
+    // (a model time of 0 would make every finding hold by an infinite margin).
+    auto num = [&](size_t c, double low, bool whole, bool strictly) {
       char* end = nullptr;
-      const double v = std::strtod(f[c].c_str(), &end);
-      if (f[c].empty() || *end != '\0' || !std::isfinite(v))
-        throw UserError(fmt::format("{}:{}: '{}' is not a number", file, number, f[c]));
+      const double v = f[c].empty() || std::isspace(static_cast<unsigned char>(f[c][0]))
+                           ? std::nan("")
+                           : std::strtod(f[c].c_str(), &end);
+      if (!std::isfinite(v) || *end != '\0')
+        throw UserError(fmt::format("{}:{}: {} '{}' is not a finite number", file, number,
+                                    header[c], f[c]));
+      if ((whole && (v != std::floor(v) || v > 1e9)) || v < low || (strictly && v == low))
+        throw UserError(fmt::format("{}:{}: {} {} is out of range (expected {}{} {})", file,
+                                    number, header[c], f[c], whole ? "a whole number " : "",
+                                    strictly ? "above" : "from", low));
       return v;
     };
     SweepRun r;
-    r.method = f.at(cm);
-    r.objects = static_cast<int>(num(cn));
-    r.children = static_cast<int>(num(ck));
-    r.frame = static_cast<int>(num(cf));
-    r.ethernetBps = num(cb);
-    r.modelSeconds = num(cs);
-    r.bytes = num(cy);
-    r.pixels = num(cp);
+    r.method = f[cm];
+    r.objects = static_cast<int>(num(cn, 1, true, false));
+    r.children = static_cast<int>(num(ck, 0, true, false));
+    r.frame = static_cast<int>(num(cf, 0, true, false));
+    r.ethernetBps = num(cb, 0, false, false);
+    r.modelSeconds = num(cs, 0, false, true);
+    r.bytes = num(cy, 0, false, false);
+    r.pixels = num(cp, 0, false, false);
     runs.push_back(r);
   }
+  if (runs.empty()) throw UserError(file + ": holds no runs (only a header)");
   return runs;
+}
+
+std::vector<RecordedRow> ReadRecorded(const std::string& file) {
+  std::istringstream in(ReadInputFile(file, {"the recorded errors", "a CSV of recorded errors"},
+                                      std::uintmax_t(16) << 20));
+  const std::string shown = PrintablePath(file);
+  std::string line;
+  if (!std::getline(in, line) || line != "machine,operation,error_pct")
+    throw UserError(shown + ":1: expected the header machine,operation,error_pct");
+  std::vector<RecordedRow> recorded;
+  for (int number = 2; std::getline(in, line); ++number) {
+    if (line.empty()) continue;
+    const size_t a = line.find(','), b = line.rfind(',');
+    if (a == std::string::npos || a == b)
+      throw UserError(shown + ":" + std::to_string(number) +
+                      ": expected machine,operation,error_pct");
+    const std::string error = line.substr(b + 1);
+    char* end = nullptr;
+    const double v = error.empty() ? 0 : std::strtod(error.c_str(), &end);
+    if (error.empty() || end != error.c_str() + error.size() || !std::isfinite(v) ||
+        std::isspace(static_cast<unsigned char>(error[0])))
+      throw UserError(shown + ":" + std::to_string(number) + ": error_pct '" + error +
+                      "' is not a finite number");
+    recorded.push_back({number, line.substr(0, a), line.substr(a + 1, b - a - 1), v});
+  }
+  if (recorded.empty()) throw UserError(shown + ": holds no recorded rows");
+  return recorded;
 }
 
 namespace {

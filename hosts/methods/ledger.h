@@ -43,8 +43,22 @@ struct SweepRun {
   int objects = 0, children = 0, frame = 0;
   double ethernetBps = 0, modelSeconds = 0, bytes = 0, pixels = 0;
 };
-// Reads runs.csv; UserError "FILE:LINE: ..." for a missing file, header column or bad number.
+// Reads runs.csv; UserError "FILE:LINE: ..." for a file that is no regular file
+// (fixed/input_file.h), a missing header column, a short row, a count that is no whole number,
+// a time or rate that is not finite and above 0 (sizes from 0), or no row at all.
 std::vector<SweepRun> ReadRuns(const std::string& file);
+
+// One row of a recorded-errors file (tools/validation_recorded.csv: machine,operation,error_pct)
+// and its line in the file.
+struct RecordedRow {
+  int line = 0;
+  std::string machine, operation;
+  double errorPct = 0;  // percent, signed
+};
+// Reads the whole file first: UserError "FILE:LINE: ..." for a file that is no regular file, a
+// header other than machine,operation,error_pct, a row without three fields, an error that is
+// not a finite number, or no row (a record that cannot be read is never "0 worse").
+std::vector<RecordedRow> ReadRecorded(const std::string& file);
 // The paper's findings on a sweep; a check whose points the sweep lacks is left out.
 std::vector<LedgerRow> PaperRows(const std::vector<SweepRun>& runs);
 

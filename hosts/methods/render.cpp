@@ -151,6 +151,16 @@ RenderOutput RunRender(const RenderOptions& given) {
     scene = ReadNffFile(options.scenePath);
   }
   for (const std::string& w : scene.warnings) std::fprintf(stderr, "zephyr: %s\n", w.c_str());
+  // What a deep ray tree costs (issue 39: `--depth 64` through glass ran past a minute): a
+  // surface that both reflects and transmits may double the rays at every level.
+  if (options.trace.depth > kDeepTreeWarningDepth &&
+      std::any_of(scene.materials.begin(), scene.materials.end(),
+                  [](const Material& m) { return m.ks > 0 && m.t > 0; }))
+    std::fprintf(stderr,
+                 "zephyr: warning: --depth %d with a surface that both reflects and transmits: "
+                 "each level may double a pixel's rays, up to 2^%d - 1 at worst (docs/shading.md, "
+                 "\"Depth\"); the default is 5\n",
+                 options.trace.depth, options.trace.depth);
   const Camera& c = scene.camera;
   CheckMemoryFits(
       "render --method " + options.method + " at " + std::to_string(c.width) + "x" +

@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "fixed/check.h"
+#include "fixed/input_file.h"
 
 namespace zephyr {
 
@@ -107,7 +108,6 @@ std::string Printable(std::string_view s, size_t kShown = 40) {
   return out;
 }
 
-std::string PrintablePath(std::string_view path) { return Printable(path, path.size()); }
 
 bool LooksNumeric(std::string_view s) {
   if (s.empty()) return false;
@@ -518,36 +518,10 @@ Scene ParseNffOrThrow(std::string_view text, const std::string& fileName) {
 }
 
 Scene ReadNffFile(const std::string& path) {
-  // Only a regular file is read: a directory would read as empty, and a device or a pipe
-  // (/dev/zero) may never end. Its size is checked before any byte is read.
-  const std::string shown = PrintablePath(path);
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  const fs::file_status status = fs::status(path, ec);
-  // The system's own reason: a symbolic-link loop (ELOOP) or a directory that may not be
-  // searched (EACCES) is not "no such file".
-  if (ec && ec != std::errc::no_such_file_or_directory && ec != std::errc::not_a_directory)
-    throw UserError(shown + ": cannot open the scene file (" + ec.message() + ")");
-  if (ec || !fs::exists(status))
-    throw UserError(shown + ": cannot open the scene file (no such file)");
-  if (fs::is_directory(status))
-    throw UserError(shown + ": is a directory, expected an NFF scene file");
-  if (!fs::is_regular_file(status))
-    throw UserError(
-        shown + ": is not a regular file (a device, pipe or socket), expected an NFF scene file");
-  const std::uintmax_t size = fs::file_size(path, ec);
-  if (ec) throw UserError(shown + ": cannot read the scene file's size");
-  if (size > kMaxSceneBytes)
-    throw UserError(shown + ": the scene file has " + std::to_string(size) +
-                    " bytes, more than the " + std::to_string(kMaxSceneBytes >> 20) +
-                    " MiB a scene may have");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw UserError(shown + ": cannot open the scene file");
-  std::string text(size, '\0');
-  in.read(text.data(), std::streamsize(size));
-  if (in.gcount() != std::streamsize(size) || in.bad())
-    throw UserError(shown + ": cannot read the scene file");
-  return ParseNffOrThrow(text, path);
+  // Only a regular file is read (fixed/input_file.h): a directory would read as empty, and a
+  // device or a pipe (/dev/zero) may never end. Its size is checked before any byte is read.
+  return ParseNffOrThrow(
+      ReadInputFile(path, {"the scene file", "an NFF scene file"}, kMaxSceneBytes), path);
 }
 
 namespace {

@@ -2,8 +2,12 @@
 // (hosts/simd/bounds.h, docs/simd.md "Error bounds").
 #include "hosts/simd/bounds.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <cmath>
+
+#include "fixed/check.h"
 
 namespace zephyr::simd {
 
@@ -17,8 +21,15 @@ int CeilLog2(double x) { return x <= 1 ? 0 : int(std::ceil(std::log2(x))); }
 int IntBitsFor(double bound) { return std::max(1, CeilLog2(bound + 1)); }
 
 fixed::Fixed Tight(double x, int frac) {
-  return fixed::FromDouble(x, Format::Signed(IntBitsFor(std::abs(x)), frac),
-                           {fixed::Rounding::kNearest, fixed::OverflowPolicy::kSaturate});
+  const Format f = Format::Signed(IntBitsFor(std::abs(x)), frac);
+  // A value no format of the engine holds (1/r of a sphere of radius 1e-30: 101 integer bits
+  // beside 40 fraction bits) is the scene's, not a bug: a UserError, never an abort.
+  if (!f.IsValid())
+    throw UserError(fmt::format(
+        "the value {:.6g} needs {} integer and {} fraction bits, more than the engine's widest "
+        "number ({} bits)",
+        x, f.intBits, f.fracBits, fixed::kMaxWidth));
+  return fixed::FromDouble(x, f, {fixed::Rounding::kNearest, fixed::OverflowPolicy::kSaturate});
 }
 
 double MulErr(double mx, double ex, double my, double ey, double u) {

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <map>
@@ -359,9 +360,16 @@ std::string Comment(std::string text) {
 }  // namespace
 
 nlohmann::json CalibrateThisHost(const nlohmann::json& r, const std::string& file) {
-  if (r.value("method", "") != "seq")
+  if (!r.is_object())
+    throw UserError(file + ": expected a render report (a JSON object), got " +
+                    std::string(r.type_name()));
+  const auto method = r.find("method");
+  const std::string name = method != r.end() && method->is_string() ? method->get<std::string>()
+                           : method != r.end()                       ? method->dump()
+                                                                     : "?";
+  if (name != "seq")
     throw UserError(file + ": calibrate from a report of `zephyr render --method seq` (this is '" +
-                    r.value("method", std::string("?")) + "')");
+                    name + "')");
   TraceStats stats;
   double seconds = 0;
   try {
@@ -370,7 +378,10 @@ nlohmann::json CalibrateThisHost(const nlohmann::json& r, const std::string& fil
   } catch (const nlohmann::json::exception&) {
     throw UserError(file + ": the report has no counted work or no phases.render time");
   }
-  if (!(seconds > 0)) throw UserError(file + ": phases.render is not a positive time");
+  // At least a microsecond: a render of 1e-300 s would make this host infinitely fast.
+  if (!(seconds >= 1e-6) || !std::isfinite(seconds))
+    throw UserError(file + ": phases.render must be a time from 1e-6 s, got " +
+                    nlohmann::json(seconds).dump());
   const HostTime h = ModelHostTime(stats, HostProfileNamed("sparcstation2"));  // counts only
   const double ops = h.flops + h.instructions;
   return {

@@ -30,8 +30,16 @@ uint8_t ToByte(double channel);
 // stays intact unless the whole new one is on disk). Errors (cannot create the file, a
 // full disk, libpng failure) are UserErrors.
 void WritePng(const std::string& path, const Image& image);
-// Reads an 8-bit (or 16-bit) RGB/RGBA/grey PNG into channels in [0, 1].
+// Reads an 8-bit (or 16-bit) RGB/RGBA/grey PNG into channels in [0, 1]. UserError for a path
+// that is no regular file (fixed/input_file.h), a file that is no PNG, or an image whose
+// pixels cannot be allocated (with its size).
 Image ReadPng(const std::string& path);
+// A PNG's width and height from its header alone (the same errors): a program checks the
+// image's memory against its budget before it reads the pixels.
+struct PngSize {
+  int64_t width = 0, height = 0;
+};
+PngSize ReadPngSize(const std::string& path);
 
 // Peak signal-to-noise ratio in dB over the 8-bit values of two same-size images
 // (infinity when they are identical).

@@ -49,19 +49,28 @@ void TraceStats::Add(const TraceStats& o) {
 }
 
 TraceStats TraceStats::FromJson(const nlohmann::json& j) {
+  // A count is a whole number from 0 (nlohmann would wrap -5 to 2^64 - 5 and truncate 2.5);
+  // a missing key is nlohmann's out_of_range, as before.
+  auto count = [](const nlohmann::json& v, const std::string& key) {
+    if (!v.is_number_unsigned())
+      throw UserError("counted work: " + key + " must be a whole number from 0, got " + v.dump());
+    return v.get<uint64_t>();
+  };
   TraceStats s;
-  for (int i = 0; i < kRayKinds; ++i) s.rays[i] = j.at("rays").at(kRayKindNames[i]).get<uint64_t>();
+  for (int i = 0; i < kRayKinds; ++i)
+    s.rays[i] = count(j.at("rays").at(kRayKindNames[i]), std::string("rays.") + kRayKindNames[i]);
   for (int i = 0; i < kShapeKinds; ++i)
-    s.tests[i] = j.at("tests").at(ShapeKindName(ShapeKind(i))).get<uint64_t>();
-  s.hits = j.at("hits").get<uint64_t>();
-  s.shades = j.at("shades").get<uint64_t>();
-  s.lightSamples = j.at("lightSamples").get<uint64_t>();
-  s.pixels = j.at("pixels").get<uint64_t>();
+    s.tests[i] = count(j.at("tests").at(ShapeKindName(ShapeKind(i))),
+                       std::string("tests.") + ShapeKindName(ShapeKind(i)));
+  s.hits = count(j.at("hits"), "hits");
+  s.shades = count(j.at("shades"), "shades");
+  s.lightSamples = count(j.at("lightSamples"), "lightSamples");
+  s.pixels = count(j.at("pixels"), "pixels");
   const nlohmann::json& bvh = j.at("bvh");
-  s.nodeVisits = bvh.at("nodeVisits").get<uint64_t>();
-  s.boxTests = bvh.at("boxTests").get<uint64_t>();
-  s.bvhBinned = bvh.at("binned").get<uint64_t>();
-  s.bvhNodes = bvh.at("nodesBuilt").get<uint64_t>();
+  s.nodeVisits = count(bvh.at("nodeVisits"), "bvh.nodeVisits");
+  s.boxTests = count(bvh.at("boxTests"), "bvh.boxTests");
+  s.bvhBinned = count(bvh.at("binned"), "bvh.binned");
+  s.bvhNodes = count(bvh.at("nodesBuilt"), "bvh.nodesBuilt");
   return s;
 }
 

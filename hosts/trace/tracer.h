@@ -39,6 +39,10 @@ enum class Accel { kNone, kBvh };
 // The deepest ray tree a render may ask for (--depth): past any scene's useful bounces
 // (POV-Ray's max_trace_level default is 5; each level doubles the rays at worst).
 inline constexpr int kMaxDepth = 64;
+// Past this depth a render whose scene has a surface that both reflects and transmits warns
+// what the tree may cost (2^depth − 1 rays a pixel at worst; POV-Ray's max_trace_level is 5 by
+// default, and the SPD README times its scenes at depth 5).
+inline constexpr int kDeepTreeWarningDepth = 16;
 
 struct TraceOptions {
   int depth = 5;  // 1 = primary rays only (local light); each bounce adds one level; 1..kMaxDepth

@@ -439,6 +439,13 @@ SecondaryPlan PlanSecondary(const Scene& scene, int fracBits, double primaryTErr
       continue;
     }
     SphereTerms t;
+    // 1/r (the normal's scale) must fit the engine's widest number beside F fraction bits.
+    if (IntBitsFor(1 / s.radius) + 1 + F > fixed::kMaxWidth)
+      throw UserError(fmt::format(
+          "{}: a sphere of radius {:.3g} is too small for the array's secondary rays at {} "
+          "fraction bits (1/r needs {} integer bits; docs/wavefront.md, \"Formats\"): render it "
+          "with --method seq, simd or hetero",
+          o.where.ToString(), s.radius, F, IntBitsFor(1 / s.radius)));
     for (int k = 0; k < 3; ++k) t.centre[k] = Tight(s.centre[k], F);
     t.r2 = Tight(s.radius * s.radius, F);
     t.inverseRadius = Tight(1 / s.radius, F);

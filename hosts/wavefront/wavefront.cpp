@@ -3,6 +3,8 @@
 // slots and the compaction between bounces (docs/wavefront.md).
 #include "hosts/wavefront/wavefront.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -272,11 +274,49 @@ int LayersPerPass(const bitserial::MachineProfile& profile, int64_t layers,
   return l;
 }
 
-// The secondary rays' fraction bits F: the option's, else the primary plan's, at least
-// kMinSecondaryFracBits.
-int SecondaryFracBits(const WavefrontOptions& options, const simd::PrimaryPlan& primary) {
-  return options.fracBits > 0 ? options.fracBits
-                              : std::max(primary.fracBits, kMinSecondaryFracBits);
+// The secondary rays' plan at fraction bits F resolving the scene's smallest object
+// (ResolvedSize): the option's F, refused naming --array-frac-bits when it does not resolve;
+// else the primary plan's F (at least kMinSecondaryFracBits), raised one bit at a time until it
+// does, refused when no F that fits the scene's extent does.
+SecondaryPlan PlanResolvingSecondary(const Scene& scene, const WavefrontOptions& options,
+                                     const simd::PrimaryPlan& primary) {
+  const SmallestObject smallest = SmallestObjectOf(scene);
+  auto resolves = [&](const SecondaryPlan& p) {
+    return smallest.object < 0 || std::max(p.tError, p.epsilon) <= kResolvedFraction * smallest.size;
+  };
+  auto describe = [&](const SecondaryPlan& p) {
+    return fmt::format(
+        "at {} fraction bits the array's secondary rays have t error <= {:.3g} and ignore hits "
+        "within {:.3g}, more than 1/{:g} of the scene's smallest object ({}: size {:.3g}; "
+        "docs/wavefront.md, \"Formats\")",
+        p.fracBits, p.tError, p.epsilon, 1 / kResolvedFraction,
+        scene.objects[size_t(smallest.object)].where.ToString(), smallest.size);
+  };
+  const int start = options.fracBits > 0 ? options.fracBits
+                                         : std::max(primary.fracBits, kMinSecondaryFracBits);
+  SecondaryPlan first = PlanSecondary(scene, start, primary.tErrorBound);
+  if (resolves(first)) return first;
+  // The least F that resolves it, if any fits the extent (PlanSecondary refuses past that).
+  int needed = -1;
+  SecondaryPlan found;
+  for (int F = start + 1; F <= kMaxSecondaryFracBits && needed < 0; ++F) {
+    try {
+      found = PlanSecondary(scene, F, primary.tErrorBound);
+    } catch (const UserError&) {
+      break;
+    }
+    if (resolves(found)) needed = F;
+  }
+  if (needed < 0)
+    throw UserError(describe(first) + "; no width up to " +
+                    std::to_string(kMaxSecondaryFracBits) +
+                    " fraction bits that fits the scene's extent resolves it: render it with "
+                    "--method seq, simd or hetero");
+  if (options.fracBits > 0)
+    throw UserError("--array-frac-bits " + std::to_string(options.fracBits) + ": " +
+                    describe(first) + "; give --array-frac-bits " + std::to_string(needed) +
+                    " or more, or leave the flag out");
+  return found;
 }
 
 void CheckMeshCompaction(const bitserial::MachineProfile& profile, Compaction compaction) {
@@ -293,8 +333,7 @@ void CheckMeshCompaction(const bitserial::MachineProfile& profile, Compaction co
 void CheckBeforePrimaryPass(const Scene& scene, const simd::PrimaryPlan& primary,
                             const WavefrontOptions& options, int depth,
                             const bitserial::MachineProfile& profile) {
-  const SecondaryPlan plan =
-      PlanSecondary(scene, SecondaryFracBits(options, primary), primary.tErrorBound);
+  const SecondaryPlan plan = PlanResolvingSecondary(scene, options, primary);
   CheckMeshCompaction(profile, options.compaction);
   if (scene.objects.empty()) return;  // no hit, no bounce
   LayersPerPass(profile, 1, plan, false);
@@ -303,13 +342,33 @@ void CheckBeforePrimaryPass(const Scene& scene, const simd::PrimaryPlan& primary
   if (depth > 1 && secondary) LayersPerPass(profile, 1, plan, true);
 }
 
+SmallestObject SmallestObjectOf(const Scene& scene) {
+  SmallestObject smallest;
+  for (size_t j = 0; j < scene.objects.size(); ++j) {
+    const Primitive& o = scene.objects[j];
+    double size = 0;
+    if (const auto* s = std::get_if<Sphere>(&o.shape)) {
+      size = s->radius;
+    } else if (const auto* c = std::get_if<Cone>(&o.shape)) {
+      size = std::min(std::max(c->baseRadius, c->apexRadius), Length(c->apex - c->base));
+    } else {
+      const auto& v = std::get<Polygon>(o.shape).vertices;
+      for (size_t a = 0; a < v.size(); ++a)
+        for (size_t b = a + 1; b < v.size(); ++b) size = std::max(size, Length(v[a] - v[b]));
+    }
+    if (o.transform) size /= std::sqrt(3.0) * o.transform->Inverse().LinearNormInf();
+    if (smallest.object < 0 || size < smallest.size) smallest = {int(j), size};
+  }
+  return smallest;
+}
+
 WavefrontResult RenderWavefront(const Tracer& tracer, const simd::PrimaryPass& pass,
                                 const WavefrontOptions& options, std::vector<Vec3>& pixels,
                                 TraceStats& hostWork) {
   const Scene& scene = tracer.GetScene();
   const int depth = tracer.Options().depth;
-  const int F = SecondaryFracBits(options, pass.plan);
-  SecondaryPlan plan = PlanSecondary(scene, F, pass.plan.tErrorBound);
+  SecondaryPlan plan = PlanResolvingSecondary(scene, options, pass.plan);
+  const int F = plan.fracBits;
   plan.primaryErrors.assign(scene.objects.size(), pass.plan.tErrorBound);
   for (const simd::ObjectPlan& o : pass.plan.objects) {
     const double e = std::isfinite(o.bounds.tError) ? o.bounds.tError : 0;

@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
+
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -299,6 +301,77 @@ TEST(MachineProfiles, EveryKindOfMalformedFileIsAClearError) {
   }
 }
 
+// The reader's second round of faults (issue 39): what crashed, hung, took a gigabyte or was
+// silently read, each refused with a message (or, for a byte-order mark, read).
+TEST(MachineProfiles, HostileFilesAreRefusedQuicklyAndNeverCrash) {
+  const std::string base = BuiltInProfileText("mpp");
+  // A UTF-8 byte-order mark before the JSON (some editors write one) reads as the file without.
+  EXPECT_EQ(ProfileFromJson("\xEF\xBB\xBF" + base, "bom.json").FileText(),
+            ProfileFromJson(base, "bom.json").FileText());
+  // A number past a double, and a megabyte-scale run of digits: a clear error, not nlohmann's.
+  EXPECT_NE(ReadError(Replace(base, "\"value\": 16384", "\"value\": 1e999"))
+                .find("my.json: not valid JSON: number overflow"),
+            std::string::npos);
+  EXPECT_NE(ReadError(Replace(base, "\"value\": 16384", "\"value\": " + std::string(900000, '9')))
+                .find("my.json: not valid JSON"),
+            std::string::npos);
+  // Deep nesting is refused before parsing, at the bracket past the bound; a file past the
+  // size bound before anything is read.
+  const std::string deep = std::string(40000, '[');
+  EXPECT_EQ(ReadError(deep).find("my.json:1:" + std::to_string(kMaxProfileNesting + 1) +
+                                 ": not a machine profile: nested more than"),
+            0u)
+      << ReadError(deep);
+  EXPECT_NE(ReadError(std::string(kMaxProfileBytes + 1, ' ')).find("more than the 1024 KiB"),
+            std::string::npos);
+  // A key given twice is refused at its second place (nlohmann alone keeps the last).
+  {
+    const std::string t = Replace(base, "\"flagOp\": {\"value\": 1", "\"flagOp\": {\"value\": 1, \"value\": 7");
+    EXPECT_EQ(ReadError(t).find(At(t, "\"value\": 7") + "entries.flagOp.value: this key appears twice"), 0u)
+        << ReadError(t);
+  }
+  // A clock so slow every modelled time is infinite.
+  EXPECT_NE(ReadError(Replace(base, "\"value\": 10000000", "\"value\": 1e-320")).find("entries.clockHz.value: expected a clock from 1 Hz"),
+            std::string::npos)
+      << Replace(base, "\"value\": 10000000", "\"value\": 1e-320").substr(0, 400);
+  // A mesh shape whose product wraps a 32-bit int (8192 x 524289 = 2^32 + 8192).
+  {
+    const std::string t = Replace(Replace(base, "[\"128x128\"]", "[\"8192x524289\"]"),
+                                  "\"value\": 16384", "\"value\": 8192");
+    EXPECT_NE(ReadError(t).find("entries.meshShapes.value.0: expected a shape of 1 to 4 positive "
+                                "extents such as \"64x128\", of at most 2^24 PEs"),
+              std::string::npos)
+        << ReadError(t);
+  }
+  // --set takes a plain decimal number only.
+  MachineProfile p = Profile("wavetracer");
+  for (const char* bad : {"clockHz=0x10", "clockHz= 5", "clockHz=inf", "clockHz=nan", "clockHz=",
+                          "aluStep=1e999", "clockHz=5 "})
+    EXPECT_THROW(p.Override(bad), UserError) << bad;
+  EXPECT_NO_THROW(p.Override("clockHz=2.5e7"));
+  EXPECT_EQ(p.clockHz, 2.5e7);
+}
+
+// A profile path that is no regular file is refused before it is opened: a FIFO would block.
+TEST(MachineProfiles, APathThatIsNoRegularFileIsRefusedWithoutOpeningIt) {
+  TempDir dir;
+  const std::string fifo = dir / "p.json";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  auto error = [](const std::string& path) {
+    try {
+      Profile(path);
+    } catch (const UserError& e) {
+      return std::string(e.what());
+    }
+    return std::string("read");
+  };
+  EXPECT_EQ(error(fifo), fifo + ": is not a regular file (a device, pipe or socket), expected a "
+                                "machine profile file (JSON)");
+  const std::string folder = std::filesystem::path(dir / "x").parent_path().string();
+  EXPECT_EQ(error(folder), folder + ": is a directory, expected a machine profile file (JSON)");
+  EXPECT_NE(error("/dev/zero").find("is not a regular file"), std::string::npos);
+}
+
 TEST(MachineProfiles, AnUnknownNameOrAMissingFileIsAClearError) {
   const auto name = RunZephyrProcess("cycles --machine cray --op add");
   EXPECT_NE(name.status, 0);
@@ -309,7 +382,8 @@ TEST(MachineProfiles, AnUnknownNameOrAMissingFileIsAClearError) {
       << name.output;
   const auto file = RunZephyrProcess("cycles --machine /nonexistent/my.json --op add");
   EXPECT_NE(file.status, 0);
-  EXPECT_NE(file.output.find("machine profile file '/nonexistent/my.json': No such file"),
+  EXPECT_NE(file.output.find(
+                "/nonexistent/my.json: cannot open the machine profile file (no such file)"),
             std::string::npos)
       << file.output;
   // --set may not change the geometry a profile file fixes with its mesh shapes.

@@ -181,6 +181,21 @@ TEST(MpiCheck, AMalformedResultIsRejectedNotTrusted) {
   EXPECT_FALSE(std::filesystem::exists(dir / "g.pfm"));
 }
 
+// A child's own failure (the protocol's failed message: a frame that raised a UserError) is
+// reported to the user as that child's error with its cause, not as a protocol error, and no
+// image is written (issue 40).
+TEST(MpiCheck, AChildsOwnFailureReachesTheUserWithItsCause) {
+  TempDir dir;
+  auto r = RunMpi(3, "mpi-check " + kPattern + " --frame 8 --out " + (dir / "f.pfm"),
+                  "-x ZEPHYR_TEST_FAULT=fail:2:1");
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.output.find("rank 2 failed: injected failure (ZEPHYR_TEST_FAULT)"),
+            std::string::npos)
+      << r.output;
+  EXPECT_EQ(r.output.find("unexpected"), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "f.pfm"));
+}
+
 // The only child is killed (SIGKILL) after 5 frames: the job fails, the checkpoint holds
 // exactly the finished frames, and --resume renders only the rest into the same image.
 TEST(MpiCheck, KillAChildThenResumeGivesTheCleanImage) {

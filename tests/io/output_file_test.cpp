@@ -9,9 +9,11 @@
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cerrno>
+#include <chrono>
 #include <csignal>
 #include <cstring>
 #include <filesystem>
@@ -323,6 +325,49 @@ TEST(OutputFile, AProcessKilledBeforeEveryStepLeavesTheOldFileOrTheWholeNewOne) 
       testing::RunCommand("ZEPHYR_TEST_IO_KILL=fsink " + testing::ZephyrPath() + " " + gen + path);
   EXPECT_NE(bad.status, 0);
   EXPECT_NE(bad.output.find("ZEPHYR_TEST_IO_KILL"), std::string::npos) << bad.output;
+}
+
+// SIGINT, SIGTERM or SIGHUP while an output is being written removes its temporary and still
+// ends the process by that signal (issue 39: `.NAME.tmp-XXXXXX` was left beside the output).
+TEST(OutputFile, ASignalDuringAWriteLeavesNoTemporary) {
+  for (int sig : {SIGINT, SIGTERM, SIGHUP}) {
+    testing::TempDir dir;
+    const std::string path = dir / "image.png";
+    std::ofstream(path) << "old";
+    const pid_t child = ::fork();
+    ASSERT_GE(child, 0);
+    if (child == 0) {
+      OutputFile f(path, "PNG file");
+      std::fputs("partial", f.Stream());
+      std::fflush(f.Stream());
+      ::raise(sig);
+      ::_exit(0);  // not reached: the signal ends the process
+    }
+    int status = 0;
+    ASSERT_EQ(::waitpid(child, &status, 0), child);
+    EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == sig) << sig << " " << status;
+    EXPECT_EQ(Temporaries(path).size(), 0u) << "signal " << sig;
+    EXPECT_EQ(testing::ReadFile(path), "old");
+  }
+}
+
+// A temporary a killed writer left (SIGKILL: no handler runs) is removed by the next writer of
+// the same output once it is a minute old; a fresh one (a live writer's) and other files of
+// that pattern's neighbours stay.
+TEST(OutputFile, TheNextWriterRemovesItsOwnStaleTemporaries) {
+  testing::TempDir dir;
+  const std::string path = dir / "a.png";
+  const std::string stale = dir / ".a.png.tmp-AbC123", fresh = dir / ".a.png.tmp-XyZ789",
+                    other = dir / ".b.png.tmp-AbC123", longer = dir / ".a.png.tmp-AbC1234";
+  for (const std::string& f : {stale, fresh, other, longer}) std::ofstream(f) << "x";
+  const auto old = std::filesystem::file_time_type::clock::now() - std::chrono::minutes(5);
+  for (const std::string& f : {stale, other, longer}) std::filesystem::last_write_time(f, old);
+  WriteOutputFile(path, "PNG file", "new");
+  EXPECT_FALSE(std::filesystem::exists(stale));
+  EXPECT_TRUE(std::filesystem::exists(fresh));
+  EXPECT_TRUE(std::filesystem::exists(other));
+  EXPECT_TRUE(std::filesystem::exists(longer));
+  EXPECT_EQ(testing::ReadFile(path), "new");
 }
 
 }  // namespace

@@ -84,10 +84,100 @@ TEST(FidelityLedger, AMalformedSweepIsRefusedAtItsLine) {
     ReadRuns(file);
     FAIL() << "accepted";
   } catch (const UserError& e) {
-    EXPECT_NE(std::string(e.what()).find(file + ":3: 'fast' is not a number"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find(file + ":3: model_s 'fast' is not a finite number"),
+              std::string::npos)
         << e.what();
   }
   EXPECT_THROW(ReadRuns(dir / "none.csv"), UserError);
+}
+
+// Every other kind of malformed sweep (issue 39): a short row aborted; nan, inf, empty,
+// negative and all-zero times and a header-only file passed as findings that hold.
+TEST(FidelityLedger, EveryKindOfMalformedSweepIsRefused) {
+  testing::TempDir dir;
+  const std::string header = "method,objects,children,frame,ethernet_bps,model_s,bytes,pixels\n";
+  const std::string good = "seq,8,0,0,0,1.5,0,100\n";
+  struct Case {
+    std::string row, want;
+  };
+  const std::vector<Case> cases = {
+      {"simd,8,0,0\n", ":3: 4 columns, the header has 8"},
+      {"simd,8,0,0,0,nan,0,100\n", ":3: model_s 'nan' is not a finite number"},
+      {"simd,8,0,0,0,inf,0,100\n", ":3: model_s 'inf' is not a finite number"},
+      {"simd,8,0,0,0,,0,100\n", ":3: model_s '' is not a finite number"},
+      {"simd,8,0,0,0,-2,0,100\n", ":3: model_s -2 is out of range (expected above 0)"},
+      {"simd,8,0,0,0,0,0,100\n", ":3: model_s 0 is out of range (expected above 0)"},
+      {"simd,8.5,0,0,0,1,0,100\n", ":3: objects 8.5 is out of range (expected a whole number from 1)"},
+      {"simd,8,-1,0,0,1,0,100\n", ":3: children -1 is out of range"},
+      {"simd,8,0,0,0,1,-5,100\n", ":3: bytes -5 is out of range"},
+  };
+  for (const Case& c : cases) {
+    const std::string file = dir / "runs.csv";
+    std::ofstream(file) << header << good << c.row;
+    try {
+      ReadRuns(file);
+      ADD_FAILURE() << "accepted: " << c.row;
+    } catch (const UserError& e) {
+      EXPECT_NE(std::string(e.what()).find(file + c.want), std::string::npos)
+          << c.row << " -> " << e.what();
+    }
+  }
+  const std::string only = dir / "header.csv";
+  std::ofstream(only) << header;
+  EXPECT_THROW(ReadRuns(only), UserError);
+  const std::string folder = std::filesystem::path(only).parent_path().string();
+  try {
+    ReadRuns(folder);
+    ADD_FAILURE() << "a directory was read";
+  } catch (const UserError& e) {
+    EXPECT_NE(std::string(e.what()).find("is a directory"), std::string::npos) << e.what();
+  }
+}
+
+// `zephyr validate --check`: a record that cannot be read is refused whole (a non-number or
+// empty error aborted; an empty, header-only, nan or directory file passed with "0 worse"),
+// and no output may overwrite an input of the run.
+TEST(FidelityLedger, AMalformedRecordIsRefusedAndNoInputIsOverwritten) {
+  testing::TempDir dir;
+  const std::string recorded = (Repo() / "tools/validation_recorded.csv").string();
+  const std::string h = "machine,operation,error_pct\n";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {h + "mpp,add 8-bit,abc\n", ":2: error_pct 'abc' is not a finite number"},
+      {h + "mpp,add 8-bit,\n", ":2: error_pct '' is not a finite number"},
+      {h + "mpp,add 8-bit,nan\n", ":2: error_pct 'nan' is not a finite number"},
+      {h + "mpp\n", ":2: expected machine,operation,error_pct"},
+      {h, ": holds no recorded rows"},
+      {"", ":1: expected the header machine,operation,error_pct"},
+  };
+  for (const auto& [text, want] : cases) {
+    const std::string file = dir / "rec.csv";
+    std::ofstream(file) << text;
+    const auto r = testing::RunZephyrProcess("validate --check " + file);
+    EXPECT_NE(r.status, 0) << text;
+    EXPECT_NE(r.output.find(file + want), std::string::npos) << text << "\n" << r.output;
+  }
+  const auto folder = testing::RunZephyrProcess("validate --check " + std::filesystem::path(dir / "x").parent_path().string());
+  EXPECT_NE(folder.status, 0);
+  EXPECT_NE(folder.output.find("is a directory"), std::string::npos) << folder.output;
+  // --csv naming the --check file, --out naming --runs: refused before anything is written.
+  const std::string copy = dir / "copy.csv";
+  std::filesystem::copy_file(recorded, copy);
+  const std::string before = [&] {
+    std::ifstream in(copy);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  }();
+  auto r = testing::RunZephyrProcess("validate --check " + copy + " --csv " + copy);
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.output.find("--csv"), std::string::npos) << r.output;
+  std::ifstream in(copy);
+  EXPECT_EQ(std::string(std::istreambuf_iterator<char>(in), {}), before);
+  const std::string runs = dir / "runs.csv";
+  std::filesystem::copy_file(Repo() / "docs/results/testbed-ufmg1992/runs.csv", runs);
+  r = testing::RunZephyrProcess("validate --runs " + runs + " --out " + runs);
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.output.find("--out"), std::string::npos) << r.output;
+  EXPECT_EQ(std::filesystem::file_size(runs),
+            std::filesystem::file_size(Repo() / "docs/results/testbed-ufmg1992/runs.csv"));
 }
 
 // The quick ledger: every row recomputed (paper rows on the committed sweep) is no worse than

@@ -147,6 +147,25 @@ TEST(MemoryPreflight, TheLimitIsInclusiveAndTheLargestSquareLeavesTheFixedBytes)
   }
 }
 
+// The fixed part of every run's estimate (the program, its libraries' heaps, per-thread
+// arenas) is the 64 MiB docs/errors.md "Memory" states: below it no image fits, at it a
+// zero-pixel need fits, and a render's estimate at a limit between two images' needs says
+// so (issue 40: the constant off by 1024 was unseen).
+TEST(MemoryPreflight, TheFixedPartOfEveryEstimateIsTheDocumented64MiB) {
+  const MemoryNeed none{.perPixel = 104, .pixels = 0};
+  EXPECT_EQ(none.Bytes(), uint64_t(64) << 20);
+  EXPECT_NO_THROW(CheckMemoryFits("t", none, {uint64_t(64) << 20, "test"}));
+  EXPECT_THROW(CheckMemoryFits("t", none, {(uint64_t(64) << 20) - 1, "test"}), UserError);
+  const MemoryNeed image{.perPixel = 104, .pixels = 1000 * 1000};
+  EXPECT_EQ(image.Bytes(), (uint64_t(64) << 20) + uint64_t(104) * 1000 * 1000);
+  try {
+    CheckMemoryFits("render", image, {(uint64_t(64) << 20) + uint64_t(104) * 500 * 500, "test"});
+    ADD_FAILURE() << "accepted";
+  } catch (const UserError& e) {
+    EXPECT_NE(std::string(e.what()).find("fits is about 500x500"), std::string::npos) << e.what();
+  }
+}
+
 // Every flag of every method is checked before any work: with a scene path that does not
 // exist, a bad flag is what the message names (the scene would be read first otherwise).
 TEST(FlagPreflight, EveryBadFlagIsRefusedBeforeTheSceneIsRead) {

@@ -849,6 +849,40 @@ TEST(TestbedSimulated, SimdChargesItsRefinePassOnThePlatform) {
       << j.at("testbed").dump(2);
 }
 
+// `testbed calibrate` reads only a report it can trust (issue 39): `[]` aborted; negative
+// counts (nlohmann wrapped them to 2^64 - n) and a render of 1e-300 s were calibrated from.
+TEST(TestbedSimulated, CalibrateRefusesAReportItCannotTrust) {
+  TempDir dir;
+  const std::string scene = WriteScene(dir, 8, "32x32");
+  const std::string measured = dir / "m.json";
+  ASSERT_EQ(
+      RunZephyrProcess("render --no-progress --method seq " + scene + " --report " + measured)
+          .status,
+      0);
+  const nlohmann::json good = ReadJson(measured);
+  auto refused = [&](const nlohmann::json& report, const std::string& want) {
+    const std::string file = dir / "bad.json";
+    std::ofstream(file) << report.dump();
+    const auto r = RunZephyrProcess("testbed calibrate --report " + file);
+    EXPECT_NE(r.status, 0) << report.dump().substr(0, 200);
+    EXPECT_NE(r.output.find(want), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("internal check"), std::string::npos) << r.output;
+  };
+  refused(nlohmann::json::array(), "expected a render report (a JSON object), got array");
+  nlohmann::json negative = good;
+  negative["tests"]["sphere"] = -5;
+  refused(negative, "counted work: tests.sphere must be a whole number from 0, got -5");
+  nlohmann::json fraction = good;
+  fraction["hits"] = 2.5;
+  refused(fraction, "counted work: hits must be a whole number from 0, got 2.5");
+  nlohmann::json instant = good;
+  instant["phases"]["render"] = 1e-300;
+  refused(instant, "phases.render must be a time from 1e-6 s");
+  const auto fifo = RunZephyrProcess("testbed calibrate --report /dev/null");
+  EXPECT_NE(fifo.status, 0);
+  EXPECT_NE(fifo.output.find("/dev/null: is not a regular file"), std::string::npos) << fifo.output;
+}
+
 // this-host: `zephyr testbed calibrate` turns a measured seq render into operations per
 // second; a platform of that speed (`testbed platform --host-ops`) models the same render in
 // the seconds it was measured in. Reports of another method, or not JSON, are refused by name.

@@ -6,9 +6,11 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 #include <random>
 
 #include "tests/bitserial/testing.h"
+#include "tests/farm/mpi_launch.h"
 
 namespace zephyr::examples {
 namespace {
@@ -49,6 +51,54 @@ TEST(ToolsBlur, BlursAPngFile) {
   EXPECT_THROW(BlurPng((dir / "missing.png").string(), (dir / "o.png").string(), "wavetracer"),
                UserError);
   std::filesystem::remove_all(dir);
+}
+
+// A PNG's header is checked against the memory budget before its pixels are read: a small
+// file claiming 20000x20000 pixels is a clear refusal with the sizes (issue 39: an uncaught
+// std::bad_alloc), and so is an input that is no regular file.
+TEST(ToolsBlur, APngClaimingMorePixelsThanMemoryIsRefusedFromItsHeader) {
+  testing::TempDir dir;
+  auto crc = [](const std::string& bytes) {
+    uint32_t c = 0xffffffffu;
+    for (unsigned char b : bytes) {
+      c ^= b;
+      for (int k = 0; k < 8; ++k) c = (c >> 1) ^ (0xedb88320u & (0u - (c & 1u)));
+    }
+    return c ^ 0xffffffffu;
+  };
+  auto be32 = [](uint32_t v) {
+    return std::string{char(v >> 24), char(v >> 16), char(v >> 8), char(v)};
+  };
+  auto chunk = [&](const std::string& type, const std::string& data) {
+    return be32(uint32_t(data.size())) + type + data + be32(crc(type + data));
+  };
+  // The signature, an IHDR of 20000x20000 8-bit RGB, and IEND: a header and no pixels.
+  const std::string ihdr = be32(20000) + be32(20000) + std::string{8, 2, 0, 0, 0};
+  // An IDAT of an empty zlib stream: libpng reads the header up to the first IDAT.
+  const std::string png = std::string("\x89PNG\r\n\x1a\n", 8) + chunk("IHDR", ihdr) +
+                          chunk("IDAT", std::string("\x78\x9c\x03\x00\x00\x00\x00\x01", 8)) +
+                          chunk("IEND", "");
+  const std::string in = dir / "huge.png";
+  std::ofstream(in, std::ios::binary) << png;
+  const PngSize size = ReadPngSize(in);
+  EXPECT_EQ(size.width, 20000);
+  EXPECT_EQ(size.height, 20000);
+  try {
+    BlurPng(in, dir / "out.png", "wavetracer");
+    ADD_FAILURE() << "read";
+  } catch (const UserError& e) {
+    EXPECT_NE(std::string(e.what()).find("example_blur of a 20000x20000 PNG needs about"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "out.png"));
+  try {
+    ReadPng("/dev/zero");
+    ADD_FAILURE() << "read";
+  } catch (const UserError& e) {
+    EXPECT_NE(std::string(e.what()).find("/dev/zero: is not a regular file"), std::string::npos)
+        << e.what();
+  }
 }
 
 }  // namespace

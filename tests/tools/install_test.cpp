@@ -115,5 +115,75 @@ TEST(ToolsInstall, LifeBuiltOutOfTreeWithPkgConfigPrintsWhatTheInTreeBuildPrints
   fs::remove_all(tmp);
 }
 
+// What a packager and a careless user do (issues 39 and 40): a staged install (DESTDIR) names the
+// final prefix in the pkg-config file; a prefix with spaces or a quote installs into exactly
+// that folder and nothing outside it; an empty, relative or root prefix is refused; uninstall
+// removes only files under the prefix, whatever its list says.
+TEST(ToolsInstall, StagedQuotedAndHostilePrefixesInstallExactlyWhereTheySay) {
+  const fs::path root = RepoRoot(), build = BuildDir();
+  ASSERT_TRUE(fs::exists(build / "lib" / "libzephyr-bitserial.a"));
+  char pattern[] = "/tmp/zephyr_install_test_XXXXXX";
+  ASSERT_NE(::mkdtemp(pattern), nullptr);
+  const fs::path tmp = pattern;
+  auto make = [&](const std::string& target, const std::string& vars) {
+    return RunShell("make --no-print-directory -s -C " + Quote(root) + " " + target + " " + vars +
+                    " BUILD=" + Quote(build) + " -o lib");
+  };
+  // A staged install: every file under DESTDIR/usr, the .pc file saying prefix=/usr.
+  const fs::path stage = tmp / "stage";
+  Shell r = make("install", "DESTDIR=" + Quote(stage) + " PREFIX=/usr");
+  ASSERT_EQ(r.status, 0) << r.output;
+  std::ifstream pc(stage / "usr/lib/pkgconfig/zephyr-bitserial.pc");
+  std::string first;
+  std::getline(pc, first);
+  EXPECT_EQ(first, "prefix=/usr");
+  EXPECT_TRUE(fs::exists(stage / "usr/lib/libzephyr-bitserial.a"));
+  r = make("uninstall", "DESTDIR=" + Quote(stage) + " PREFIX=/usr");
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_FALSE(fs::exists(stage / "usr/lib/libzephyr-bitserial.a"));
+
+  // Spaces and a quote: one folder of exactly that name, and nothing else created under tmp.
+  for (const std::string name : {"my prefix", "it's here", "a\"b"}) {
+    const fs::path prefix = tmp / name;
+    // The value quoted for the shell that runs make: ' as '\''.
+    std::string quoted = "'";
+    for (char c : prefix.string()) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    quoted += "'";
+    r = make("install", "PREFIX=" + quoted);
+    ASSERT_EQ(r.status, 0) << name << "\n" << r.output;
+    EXPECT_TRUE(fs::exists(prefix / "lib/libzephyr-bitserial.a")) << name << "\n" << r.output;
+    EXPECT_TRUE(fs::exists(prefix / "share/zephyr/installed-files")) << name;
+    r = make("uninstall", "PREFIX=" + quoted);
+    EXPECT_EQ(r.status, 0) << name << "\n" << r.output;
+    EXPECT_FALSE(fs::exists(prefix / "lib/libzephyr-bitserial.a")) << name;
+  }
+  int entries = 0;
+  for ([[maybe_unused]] const auto& e : fs::directory_iterator(tmp)) ++entries;
+  EXPECT_EQ(entries, 4) << "stage and the three prefixes, nothing beside them";
+
+  // Refused before anything is written.
+  for (const std::string& bad : {std::string("PREFIX="), std::string("PREFIX=relative/dir"),
+                                 std::string("PREFIX=/")}) {
+    r = make("install", bad);
+    EXPECT_NE(r.status, 0) << bad << "\n" << r.output;
+    EXPECT_NE(r.output.find("PREFIX"), std::string::npos) << r.output;
+  }
+  EXPECT_FALSE(fs::exists(root / "relative"));
+
+  // An installed-files list with a line outside the prefix: that file is left alone.
+  const fs::path prefix = tmp / "p", outside = tmp / "keep.txt";
+  r = make("install", "PREFIX=" + Quote(prefix));
+  ASSERT_EQ(r.status, 0) << r.output;
+  std::ofstream(outside) << "mine";
+  std::ofstream(prefix / "share/zephyr/installed-files", std::ios::app)
+      << "../keep.txt\n" << outside.string() << "\n";
+  r = make("uninstall", "PREFIX=" + Quote(prefix));
+  EXPECT_NE(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("is not a path under the prefix"), std::string::npos) << r.output;
+  EXPECT_TRUE(fs::exists(outside));
+  EXPECT_FALSE(fs::exists(prefix / "lib/libzephyr-bitserial.a"));
+  fs::remove_all(tmp);
+}
+
 }  // namespace
 }  // namespace zephyr

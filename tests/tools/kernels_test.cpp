@@ -99,6 +99,13 @@ TEST(ToolsKernels, TheProgramRefusesBadArgumentsAndRunsASmallCase) {
   EXPECT_EQ(run("--max-elements 12288 --profiles wavetracer", &out), 2);
   EXPECT_NE(out.find("power-of-two multiple"), std::string::npos) << out;
   EXPECT_EQ(run("--max-elements 0", &out), 2);
+  // An empty list or item is named, never an empty table or "all" (issue 39).
+  EXPECT_EQ(run("--profiles ,", &out), 2);
+  EXPECT_NE(out.find("--profiles ',': an empty item"), std::string::npos) << out;
+  EXPECT_EQ(run("--kernels vadd,,dot", &out), 2);
+  EXPECT_NE(out.find("--kernels 'vadd,,dot': an empty item"), std::string::npos) << out;
+  EXPECT_EQ(run("--kernels ''", &out), 2);
+  EXPECT_NE(out.find("empty value"), std::string::npos) << out;
   EXPECT_EQ(run("--kernels dot --profiles mpp --max-elements 32768", &out), 0) << out;
   EXPECT_NE(out.find("dot product"), std::string::npos) << out;
   EXPECT_NE(out.find("mpp"), std::string::npos) << out;

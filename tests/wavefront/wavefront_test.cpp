@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <nlohmann/json.hpp>
 #include <random>
 #include <sstream>
 
@@ -455,6 +456,101 @@ TEST(Wavefront, AMachineTooSmallIsRefusedBeforeThePrimaryPass) {
                                 " --out " + png);
   EXPECT_EQ(r.status, 0) << r.output;
   EXPECT_TRUE(std::filesystem::exists(png));
+}
+
+// A view where no primary ray hits anything runs no bounce: the array method renders the
+// background (it aborted adding the bounces' empty cycle report); a sphere too small for any
+// fixed-point format is a clear refusal or a render, never an abort (issue 39).
+TEST(Wavefront, AViewWithNoHitRendersTheBackground) {
+  testing::TempDir dir;
+  const std::string behind = dir / "behind.nff";
+  std::ofstream(behind) << "b 0.2 0.3 0.4\nv\nfrom 0 0 0\nat 0 0 1\nup 0 1 0\nangle 40\n"
+                           "hither 0.01\nresolution 16 16\nl 0 5 0\nf 1 0 0 1 0 0 0 1\n"
+                           "s 0 0 -5 1\n";
+  for (const std::string testbed : {"", " --testbed ufmg1992"}) {
+    const std::string png = dir / "a.png", report = dir / "a.json";
+    const auto r = testing::RunZephyrProcess("render --no-progress --method array " + behind +
+                                             " --out " + png + " --report " + report + testbed);
+    ASSERT_EQ(r.status, 0) << r.output;
+    const Image image = ReadPng(png);
+    for (const Vec3& p : image.pixels) {
+      EXPECT_EQ(ToByte(p.x), ToByte(0.2));
+      EXPECT_EQ(ToByte(p.z), ToByte(0.4));
+    }
+  }
+  const std::string tiny = dir / "tiny.nff";
+  std::ofstream(tiny) << "b 0.2 0.3 0.4\nv\nfrom 0 0 0\nat 0 0 1\nup 0 1 0\nangle 40\n"
+                         "hither 0.01\nresolution 16 16\nl 0 5 0\nf 1 0 0 1 0 0 0 1\n"
+                         "s 0 0 5 1e-30\n";
+  for (const char* method : {"seq", "simd", "array"}) {
+    const auto r = testing::RunZephyrProcess(std::string("render --no-progress --method ") +
+                                             method + " " + tiny + " --out " + (dir / "t.png"));
+    EXPECT_TRUE(r.status == 0 || r.output.find("zephyr: error:") != std::string::npos)
+        << method << "\n" << r.output;
+    EXPECT_EQ(r.output.find("internal check failed"), std::string::npos) << method << r.output;
+    EXPECT_LT(r.status, 128) << method << " died of a signal\n" << r.output;
+  }
+}
+
+// The secondary rays' bounds stay within 1/16 of the scene's smallest object (issue 39: a
+// t error of 4.49 among small, close objects rendered 30 % of the pixels wrong with rc 0):
+// --array-frac-bits too narrow is refused naming the flag and the least width that resolves
+// the object; that width renders, its bounds within the fraction.
+TEST(Wavefront, BoundsLargerThanTheSmallestObjectAreRefusedNamingTheFlag) {
+  testing::TempDir dir;
+  const std::string scene = dir / "far.nff";
+  std::ofstream(scene) << "b 0.1 0.1 0.2\nv\nfrom 0 1 8\nat 0 0 0\nup 0 1 0\nangle 40\n"
+                          "hither 0.001\nresolution 16 16\nl 4 8 6 1 1 1\n"
+                          "f 0.9 0.9 0.9 0.1 0.9 40 0 1\ns -0.3 0 0 0.25\ns 0.3 0 0 0.25\n"
+                          "f 0.9 0.2 0.2 0.8 0.1 20 0 1\ns 0 -0.2 0.6 0.1\ns 20000 0 -30000 5\n";
+  const auto narrow = testing::RunZephyrProcess("render --no-progress --method array " + scene +
+                                                " --array-frac-bits 12 --out " + (dir / "n.png"));
+  EXPECT_NE(narrow.status, 0);
+  const std::string want = "--array-frac-bits 12: at 12 fraction bits the array's secondary rays";
+  ASSERT_NE(narrow.output.find(want), std::string::npos) << narrow.output;
+  EXPECT_NE(narrow.output.find("of the scene's smallest object (" + scene + ":14:1: size 0.1"),
+            std::string::npos)
+      << narrow.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "n.png"));
+  const size_t give = narrow.output.find("give --array-frac-bits ");
+  ASSERT_NE(give, std::string::npos) << narrow.output;
+  const int least = std::stoi(narrow.output.substr(give + 23));
+  EXPECT_GT(least, 12);
+  const std::string report = dir / "r.json";
+  const auto fits = testing::RunZephyrProcess(
+      "render --no-progress --method array " + scene + " --array-frac-bits " +
+      std::to_string(least) + " --out " + (dir / "f.png") + " --report " + report);
+  ASSERT_EQ(fits.status, 0) << fits.output;
+  const nlohmann::json j = testing::ReadJson(report);
+  EXPECT_EQ(j.at("wavefront").at("format").at("fracBits").get<int>(), least);
+  EXPECT_LE(j.at("wavefront").at("epsilon").get<double>(), 0.1 / 16);
+  EXPECT_LE(j.at("wavefront").at("tErrorBound").get<double>(), 0.1 / 16);
+  const auto below = testing::RunZephyrProcess(
+      "render --no-progress --method array " + scene + " --array-frac-bits " +
+      std::to_string(least - 1) + " --out " + (dir / "b.png"));
+  EXPECT_NE(below.status, 0) << "the least width is the least: " << least;
+}
+
+// The size the smallest-object rule reads: a sphere's radius, a polygon's diameter, a cone's
+// larger radius or its length, times a transform's smallest stretch (bounded below).
+TEST(Wavefront, TheSmallestObjectIsMeasuredByItsKind) {
+  EXPECT_EQ(SmallestObjectOf(SceneOf("f 1 1 1 1 0 1 0 1\ns 0 0 0 2\ns 1 0 0 0.5\n")).object, 1);
+  EXPECT_DOUBLE_EQ(SmallestObjectOf(SceneOf("f 1 1 1 1 0 1 0 1\ns 0 0 0 2\ns 1 0 0 0.5\n")).size,
+                   0.5);
+  const SmallestObject polygon =
+      SmallestObjectOf(SceneOf("f 1 1 1 1 0 1 0 1\ns 0 0 0 2\np 3\n0 0 0\n0.3 0 0\n0 0.4 0\n"));
+  EXPECT_EQ(polygon.object, 1);
+  EXPECT_DOUBLE_EQ(polygon.size, 0.5);
+  const SmallestObject cone =
+      SmallestObjectOf(SceneOf("f 1 1 1 1 0 1 0 1\ns 0 0 0 2\nc\n0 0 0 0.2\n0 0.1 0 0.6\n"));
+  EXPECT_EQ(cone.object, 1);
+  EXPECT_DOUBLE_EQ(cone.size, 0.1);  // shorter than its radii
+  // An ellipsoid squashed tenfold along one axis: a tenth of its radius, divided by sqrt(3).
+  const SmallestObject squashed = SmallestObjectOf(
+      SceneOf("f 1 1 1 1 0 1 0 1\ntransform 1 0 0 0 0 0.1 0 0 0 0 1 0\ns 0 0 0 1\n"));
+  EXPECT_EQ(squashed.object, 0);
+  EXPECT_NEAR(squashed.size, 0.1 / std::sqrt(3.0), 1e-12);
+  EXPECT_EQ(SmallestObjectOf(SceneOf("")).object, -1);
 }
 
 TEST(Wavefront, ItsFlagsAreRefusedByTheOtherMethods) {

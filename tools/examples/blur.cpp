@@ -14,6 +14,7 @@
 #include <CLI/CLI.hpp>
 
 #include "fixed/check.h"
+#include "hosts/cmd/command.h"
 
 int main(int argc, char** argv) {
   using namespace zephyr;
@@ -25,6 +26,7 @@ int main(int argc, char** argv) {
                  "Machine profile: a built-in name (wavetracer, mpp, blitzen) or a profile file");
   std::vector<std::string> overrides;
   app.add_option("--set", overrides, "Override a profile entry, NAME=VALUE (docs/bitserial.md)");
+  RefuseEmptyValues(app);  // as every zephyr command: `example_blur '' out.png` is a mistake
   CLI11_PARSE(app, argc, argv);
   try {
     const examples::BlurResult r = examples::BlurPng(in, out, profile, overrides);

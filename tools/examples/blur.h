@@ -13,6 +13,7 @@
 
 #include "bitserial/multi.h"
 #include "fixed/check.h"
+#include "hosts/methods/memory_budget.h"
 #include "hosts/trace/image.h"
 
 namespace zephyr::examples {
@@ -59,6 +60,12 @@ struct BlurResult {
 // `overrides` are --set's "name=value" entries (bitserial::MachineProfile::Override).
 inline BlurResult BlurPng(const std::string& in, const std::string& out, const std::string& profile,
                           const std::vector<std::string>& overrides = {}) {
+  // The header first, against the memory budget (docs/errors.md, "Memory"): a small file may
+  // claim 20000x20000 pixels. Per pixel: the image and the result (24 bytes each), the host's
+  // 64-bit copies of a channel and its plain blur (16), the array's planes (~14), with margin.
+  const PngSize size = ReadPngSize(in);
+  CheckMemoryFits(fmt::format("example_blur of a {}x{} PNG", size.width, size.height),
+                  {.perPixel = 128, .pixels = uint64_t(size.width) * uint64_t(size.height)});
   const Image image = ReadPng(in);
   bitserial::MachineProfile prof = bitserial::Profile(profile);
   for (const std::string& s : overrides) prof.Override(s);

@@ -23,6 +23,7 @@
 #include <sstream>
 #include <thread>
 
+#include "hosts/cmd/command.h"
 #include "tools/kernels/suite.h"
 
 namespace {
@@ -30,12 +31,21 @@ namespace {
 using namespace zephyr;
 using kernels::KernelRun;
 
-std::vector<std::string> SplitList(const std::string& s) {
+// A comma-separated list of `flag`; an empty item (",", "a,,b", "a,") is named, never skipped:
+// `--profiles ,` would otherwise be an empty table.
+std::vector<std::string> SplitList(const std::string& s, const std::string& flag) {
   std::vector<std::string> out;
-  std::stringstream in(s);
-  for (std::string item; std::getline(in, item, ',');)
-    if (!item.empty()) out.push_back(item);
-  return out;
+  size_t at = 0;
+  while (true) {
+    const size_t comma = s.find(',', at);
+    const std::string item = s.substr(at, comma == std::string::npos ? comma : comma - at);
+    if (item.empty())
+      throw UserError(fmt::format("{} '{}': an empty item (a comma-separated list of names)",
+                                  flag, s));
+    out.push_back(item);
+    if (comma == std::string::npos) return out;
+    at = comma + 1;
+  }
 }
 
 std::string FirstLine(const std::string& path, const std::string& key) {
@@ -133,6 +143,8 @@ int main(int argc, char** argv) {
   app.add_flag("--one-layer", oneLayer, "Only the one-layer size (the profile's PEs)");
   app.add_option("--seed", seed, "Seed of the random inputs");
   app.add_option("--markdown", markdown, "Also write the tables to this file (docs/kernels.md)");
+  // An empty value is refused as by every zephyr command (`--kernels ''` ran all).
+  RefuseEmptyValues(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -143,9 +155,10 @@ int main(int argc, char** argv) {
   std::vector<kernels::Kernel*> chosen;
   std::vector<std::string> profiles;
   try {
-    profiles = profileList.empty() ? kernels::GridProfiles() : SplitList(profileList);
+    profiles = profileList.empty() ? kernels::GridProfiles() : SplitList(profileList, "--profiles");
     for (const auto& p : profiles) bitserial::Profile(p);  // an unknown name fails here
-    const std::vector<std::string> names = SplitList(kernelList);
+    const std::vector<std::string> names =
+        kernelList.empty() ? std::vector<std::string>{} : SplitList(kernelList, "--kernels");
     for (auto& k : suite)
       if (names.empty() || std::find(names.begin(), names.end(), k->Name()) != names.end())
         chosen.push_back(k.get());
