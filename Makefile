@@ -323,6 +323,7 @@ install: lib ## Install the library, headers, profiles and zephyr-bitserial.pc u
 	  echo "lib/pkgconfig/$(LIB_NAME).pc" >> $$list; \
 	  mkdir -p "$$(dirname '$(INSTALLED_LIST)')"; mv $$list '$(INSTALLED_LIST)'; chmod 644 '$(INSTALLED_LIST)'; \
 	  echo "installed $$(wc -l < '$(INSTALLED_LIST)') files under $$root (list: $(INSTALLED_LIST))"
+	$(Q)bash tools/pimeval/install.sh '$(INSTALL_ROOT)' '$(PREFIX_ABS)' '$(INSTALLED_LIST)' $(PIMEVAL_A)
 
 uninstall: ## Remove what `make install PREFIX=...` installed (its share/zephyr/installed-files)
 	$(Q)set -e; root='$(INSTALL_ROOT)'; \
@@ -352,3 +353,23 @@ $(TESTS): | $(LIB_A) $(BIN)/example_life $(KERNELS_BIN)
 kernels: setup ## Run the kernel suite on every profile (bit-exact on every target, timed); print it and write docs/kernels.md
 	$(Q)$(MAKE) --no-print-directory -j$(JOBS) $(KERNELS_BIN)
 	$(Q)$(KERNELS_BIN) --markdown docs/kernels.md $(KERNELS_FLAGS)
+
+# ---------------------------------------------------------------------------
+# PIMeval's host API on the engine (docs/pim.md): tools/pimeval/*.cpp, a client of the public
+# headers. `make install` also installs include/libpimeval.h and lib/libpimeval.a (a GNU ld
+# script naming lib/libzephyr-pimeval.a — the API with the engine's objects — and the shared
+# libraries it needs), so PIMbench's own Makefiles link with `-L$(PREFIX)/lib -lpimeval`
+# (tools/pimeval/install.sh). The test binary links the API's objects too (tests/pimeval/).
+PIMEVAL_SRCS := $(sort $(wildcard tools/pimeval/*.cpp))
+PIMEVAL_OBJS := $(PIMEVAL_SRCS:%.cpp=$(BUILD)/obj/%.o)
+PIMEVAL_A    := $(BUILD)/lib/libzephyr-pimeval.a
+.PHONY: pimeval-lib
+pimeval-lib: ## Build build/lib/libzephyr-pimeval.a (PIMeval's API with the engine)
+	$(Q)$(MAKE) --no-print-directory -j$(JOBS) $(PIMEVAL_A)
+$(PIMEVAL_A): $(PIMEVAL_OBJS) $(LIB_A_OBJS)
+	$(call say,AR,$@)
+	@mkdir -p $(@D)
+	$(Q)rm -f $@ && ar rcs $@ $^
+$(TESTS): $(PIMEVAL_OBJS)
+$(TESTS): | $(PIMEVAL_A)
+install: pimeval-lib
