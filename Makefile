@@ -372,4 +372,14 @@ $(PIMEVAL_A): $(PIMEVAL_OBJS) $(LIB_A_OBJS)
 	$(Q)rm -f $@ && ar rcs $@ $^
 $(TESTS): $(PIMEVAL_OBJS)
 $(TESTS): | $(PIMEVAL_A)
-install: pimeval-lib
+lib: pimeval-lib
+
+# PIMbench side by side (docs/pim.md): every program under PIMBENCH/PIMbench/*/PIM built with
+# its own Makefile against our install (into $(BUILD)/pimbench-prefix) and, with PIMEVAL=DIR (a
+# PIMeval tree whose libpimeval/ is built), against PIMeval; each run at its default and a large
+# size with -v t; the measured table into docs/pim.md (tools/pimeval/pimbench.sh).
+.PHONY: pimbench
+pimbench: ## Run PIMbench's programs on our install (PIMBENCH=DIR, PIMEVAL=DIR for PIMeval beside); table into docs/pim.md
+	$(Q)test -n '$(PIMBENCH)' || { echo "make pimbench: give PIMBENCH=DIR (a PIMbench tree)" >&2; exit 1; }
+	$(Q)$(MAKE) --no-print-directory install PREFIX=$(abspath $(BUILD))/pimbench-prefix
+	$(Q)bash tools/pimeval/pimbench.sh $(BUILD)/pimbench-prefix '$(PIMBENCH)' '$(PIMEVAL)'

@@ -6,7 +6,7 @@
 // Objects: each pimAlloc opens a group (its associated objects share it): one engine Machine of
 // exactly the group's elements as virtual PEs, each object a Multi on it (format s(b-1).0 or
 // ub.0, wrap-around). On the BitSIMD-V devices the machine's physical PEs are the columns the
-// group occupies (rounded up to 64), at most the device's ranks x banks x subarrays x columns,
+// group occupies (rounded up to 512), at most the device's ranks x banks x subarrays x columns,
 // so a 2,048-element vector costs 2,048 PEs of host work while the modelled time is the
 // device's: every column works at once, and more elements than columns run as layers, each
 // with rows/layers bits of memory (PIMeval's regions per core).
@@ -215,8 +215,10 @@ PimStatus Refuse(const char* api, const std::string& why) {
 MachineProfile GroupProfile(const Device& d, uint64_t n) {
   MachineProfile p = d.profile;
   if (d.custom) return p;
-  const uint64_t columns = d.geometry.Pes() / 64 * 64;
-  const uint64_t pes = std::min((n + 63) / 64 * 64, columns);
+  // The engine's planes are whole vectors of 512 PEs (a profile's physicalPes is a multiple
+  // of 512, bitserial/profile.cpp): the columns used are rounded up to one.
+  const uint64_t columns = d.geometry.Pes() / 512 * 512;
+  const uint64_t pes = std::min((n + 511) / 512 * 512, columns);
   if (pes > (uint64_t{1} << 30))
     throw UserError(fmt::format("{} elements: more than 2^30 PEs in one layer are not emulated", n));
   const double bytesPerSecond =
@@ -227,7 +229,7 @@ MachineProfile GroupProfile(const Device& d, uint64_t n) {
   p.externalBitsPerPe = 0;
   p.geometryNote[1] = fmt::format(
       "the {} columns this group's {} elements occupy (of the device's {} = {} ranks x {} banks "
-      "x {} subarrays x {} columns), rounded up to 64; more elements than columns run as layers",
+      "x {} subarrays x {} columns), rounded up to 512; more elements than columns run as layers",
       pes, n, d.geometry.Pes(), d.geometry.ranks, d.geometry.banks, d.geometry.subarrays,
       d.geometry.cols);
   p.geometryNote[2] = fmt::format("the device's {} rows per subarray", d.geometry.rows);
@@ -263,6 +265,13 @@ Object& NewObject(Device& d, PimDataType type, std::shared_ptr<Group> g, PimObjI
 
 // ---- helpers on the array -------------------------------------------------------------------
 BigInt Mask(int bits) { return (BigInt(1) << bits) - 1; }
+// v modulo 2^bits, in [0, 2^bits): the low bits of v's two's-complement pattern.
+uint64_t LowBits(const BigInt& v, int bits) {
+  const BigInt m = BigInt(1) << bits;
+  BigInt r = v % m;
+  if (r < 0) r += m;
+  return r.convert_to<uint64_t>();
+}
 
 // The scalar's low `bits` as a value of the element's format (C++'s wrap to the type).
 fixed::Fixed Wrapped(const TypeInfo& t, uint64_t scalar) {
@@ -354,6 +363,12 @@ std::pair<uint64_t, uint64_t> CopyRange(uint64_t n, uint64_t b, uint64_t e, PimO
 Multi ShiftElements(const Multi& a, int d, uint64_t n) {
   Machine& m = a.GetMachine();
   if (m.Layers() == 1 && m.Shape().extent.size() == 1) return MeshShift(a, 0, d);
+  const int64_t pes = m.Profile().physicalPes;
+  if (static_cast<int64_t>(n) % pes != 0)
+    throw UserError(fmt::format(
+        "moving {} elements along their chain takes whole layers of the machine's {} PEs on "
+        "machine '{}' ({} layer(s), mesh {}): allocate a multiple of {} elements",
+        n, pes, m.Profile().name, m.Layers(), m.Shape().Name(), pes));
   return MeshShift(a, bitserial::MeshShape{{static_cast<int>(n)}}, 0, d);
 }
 
@@ -375,8 +390,9 @@ void CreateDevice(PimDeviceEnum type, PimDeviceEnum target, Geometry g, const st
     throw UserError(fmt::format("every dimension must be at least 1: {} ranks, {} banks, {} "
                                 "subarrays, {} rows, {} columns",
                                 g.ranks, g.banks, g.subarrays, g.rows, g.cols));
-  if (g.Pes() < 64)
-    throw UserError(fmt::format("{} PEs: a device needs at least 64 columns in all", g.Pes()));
+  if (g.Pes() < 512)
+    throw UserError(fmt::format("{} PEs: a device needs at least 512 columns in all (the "
+                                "engine's vector of PEs)", g.Pes()));
   auto d = std::make_unique<Device>();
   d->type = type;
   d->target = target;
@@ -971,8 +987,7 @@ PimStatus Reduce(const char* api, Red op, PimObjId src, void* out, uint64_t b0, 
     if (op == Red::kSum) {
       const BigInt sum = ReduceSum(a.value).raw;
       // Into the accumulator as PIMeval adds: modulo 2^64.
-      const BigInt m = sum & Mask(64);
-      const uint64_t v = m.convert_to<uint64_t>();
+      const uint64_t v = LowBits(sum, 64);
       if (a.info.isSigned) {
         int64_t acc;
         std::memcpy(&acc, out, 8);
@@ -990,10 +1005,10 @@ PimStatus Reduce(const char* api, Red op, PimObjId src, void* out, uint64_t b0, 
       // The value at *out, as the object's C type.
       uint64_t bits = 0;
       std::memcpy(&bits, out, a.info.bytes);
-      BigInt cur = BigInt(bits) & Mask(a.info.bits);
+      BigInt cur = BigInt(LowBits(BigInt(bits), a.info.bits));
       if (a.info.isSigned && cur > a.info.Fmt().MaxRaw()) cur -= BigInt(1) << a.info.bits;
       const BigInt best = op == Red::kMin ? (r < cur ? r : cur) : (r > cur ? r : cur);
-      const uint64_t w = (best & Mask(a.info.bits)).convert_to<uint64_t>();
+      const uint64_t w = LowBits(best, a.info.bits);
       std::memcpy(out, &w, a.info.bytes);
     }
     return std::string(a.info.name);
