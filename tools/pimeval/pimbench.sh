@@ -46,7 +46,9 @@ run() {
   dir=$(dirname "$(ls "$scratch/$lib"/PIMbench/"$prog"/PIM/*.out)")
   start=$(date +%s.%N)
   set +e
-  out=$(cd "$dir" && ./"$(basename "$(ls "$dir"/*.out)")" -v t $args 2>&1)
+  # PIMeval models its default target (BANK_LEVEL, bit-parallel) unless told: BitSIMD-V here.
+  out=$(cd "$dir" && PIMEVAL_SIM_TARGET=PIM_DEVICE_BITSIMD_V \
+        ./"$(basename "$(ls "$dir"/*.out)")" -v t $args 2>&1)
   status=$?
   set -e
   end=$(date +%s.%N)
