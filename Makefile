@@ -334,7 +334,7 @@ $(LIB_A): $(LIB_A_OBJS)
 install: lib ## Install the library, headers, profiles and zephyr-bitserial.pc under PREFIX (default /usr/local)
 	$(Q)LIB_A='$(LIB_A)' LIB_NAME='$(LIB_NAME)' PUBLIC_HEADERS='$(PUBLIC_HEADERS)' \
 	  PROFILE_FILES='$(PROFILE_FILES)' PC_REQUIRES='$(PC_REQUIRES)' LIB_VERSION='$(LIB_VERSION)' \
-	  EXTRA_INSTALL='$(EXTRA_INSTALL)' bash tools/install.sh install
+	  EXTRA_INSTALL='$(EXTRA_INSTALL)' PIMEVAL_A='$(PIMEVAL_A)' bash tools/install.sh install
 
 uninstall: ## Remove what `make install PREFIX=...` installed (its share/zephyr/installed-files)
 	$(Q)bash tools/install.sh uninstall
@@ -358,3 +358,33 @@ $(TESTS): | $(LIB_A) $(BIN)/example_life $(KERNELS_BIN)
 kernels: setup ## Run the kernel suite on every profile (bit-exact on every target, timed); print it and write docs/kernels.md
 	$(Q)$(MAKE) --no-print-directory -j$(JOBS) $(KERNELS_BIN)
 	$(Q)$(KERNELS_BIN) --markdown docs/kernels.md $(KERNELS_FLAGS)
+
+# ---------------------------------------------------------------------------
+# PIMeval's host API on the engine (docs/pim.md): tools/pimeval/*.cpp, a client of the public
+# headers. `make install` also installs include/libpimeval.h and lib/libpimeval.a (a GNU ld
+# script naming lib/libzephyr-pimeval.a — the API with the engine's objects — and the shared
+# libraries it needs), so PIMbench's own Makefiles link with `-L$(PREFIX)/lib -lpimeval`
+# (tools/install.sh, PIMEVAL_A). The test binary links the API's objects too (tests/pimeval/).
+PIMEVAL_SRCS := $(sort $(wildcard tools/pimeval/*.cpp))
+PIMEVAL_OBJS := $(PIMEVAL_SRCS:%.cpp=$(BUILD)/obj/%.o)
+PIMEVAL_A    := $(BUILD)/lib/libzephyr-pimeval.a
+.PHONY: pimeval-lib
+pimeval-lib: ## Build build/lib/libzephyr-pimeval.a (PIMeval's API with the engine)
+	$(Q)$(MAKE) --no-print-directory -j$(JOBS) $(PIMEVAL_A)
+$(PIMEVAL_A): $(PIMEVAL_OBJS) $(LIB_A_OBJS)
+	$(call say,AR,$@)
+	@mkdir -p $(@D)
+	$(Q)rm -f $@ && ar rcs $@ $^
+$(TESTS): $(PIMEVAL_OBJS)
+$(TESTS): | $(PIMEVAL_A)
+lib: pimeval-lib
+
+# PIMbench side by side (docs/pim.md): every program under PIMBENCH/PIMbench/*/PIM built with
+# its own Makefile against our install (into $(BUILD)/pimbench-prefix) and, with PIMEVAL=DIR (a
+# PIMeval tree whose libpimeval/ is built), against PIMeval; each run at its default and a large
+# size with -v t; the measured table into docs/pim.md (tools/pimeval/pimbench.sh).
+.PHONY: pimbench
+pimbench: ## Run PIMbench's programs on our install (PIMBENCH=DIR, PIMEVAL=DIR for PIMeval beside); table into docs/pim.md
+	$(Q)test -n '$(PIMBENCH)' || { echo "make pimbench: give PIMBENCH=DIR (a PIMbench tree)" >&2; exit 1; }
+	$(Q)$(MAKE) --no-print-directory install PREFIX=$(abspath $(BUILD))/pimbench-prefix
+	$(Q)bash tools/pimeval/pimbench.sh $(BUILD)/pimbench-prefix '$(PIMBENCH)' '$(PIMEVAL)'

@@ -83,6 +83,20 @@ for h in $PUBLIC_HEADERS; do put "$h" "include/zephyr/$h"; done
 put "$LIB_A" "lib/lib$LIB_NAME.a"
 for p in ${PROFILE_FILES:-}; do put "$p" "share/zephyr/profiles/$(basename -- "$p")"; done
 for pair in ${EXTRA_INSTALL:-}; do put "${pair%%=*}" "${pair#*=}"; done
+# PIMeval's host API on the engine (docs/pim.md): its header, the archive of the API and the
+# engine's objects, and lib/libpimeval.a, a GNU ld script naming that archive by its final path
+# and the shared libraries the engine needs (Debian ships Highway as a shared library only), so
+# that PIMbench's link line `g++ prog.cpp -std=c++17 -I… -L… -lpimeval` links as it stands.
+if [[ -n "${PIMEVAL_A:-}" ]]; then
+  [[ -f "$PIMEVAL_A" ]] || { echo "install: $PIMEVAL_A not found (make pimeval-lib)" >&2; exit 2; }
+  put tools/pimeval/libpimeval.h include/libpimeval.h
+  put "$PIMEVAL_A" lib/libzephyr-pimeval.a
+  ld_prefix="${prefix//\\/\\\\}"
+  ld_prefix="${ld_prefix//\"/\\\"}"
+  printf '/* GNU ld script: PIMeval%s host API on the emulated Zephyr (docs/pim.md). */\nINPUT("%s/lib/libzephyr-pimeval.a" %s -lgomp -lpthread)\n' \
+    "'s" "$ld_prefix" "$(pkg-config --libs libhwy fmt)" > "$stage/lib/libpimeval.a"
+  files+=("lib/libpimeval.a")
+fi
 # pkg-config's own escaping: a space in a variable's value is written '\ '.
 pc_prefix="${prefix// /\\ }"
 mkdir -p -- "$stage/lib/pkgconfig"

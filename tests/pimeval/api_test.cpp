@@ -1,0 +1,513 @@
+// PIMeval's host API on the engine (tools/pimeval/, docs/pim.md): every call on every supported
+// type against plain C++ computing PIMeval's semantics (the element widened to int64_t or
+// uint64_t, the C++ operation, the result wrapped to the type), edge values, ranges at the
+// object's ends and empty ones, errors for what is refused, the modelled time's parallelism.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <bit>
+#include <cstdint>
+#include <cstdlib>
+#include <fstream>
+#include <limits>
+#include <random>
+#include <sstream>
+#include <string>
+#include <type_traits>
+#include <unistd.h>
+#include <vector>
+
+#include "tools/pimeval/libpimeval.h"
+
+namespace {
+
+template <typename T> constexpr PimDataType kType = PIM_INT8;
+template <> constexpr PimDataType kType<int8_t> = PIM_INT8;
+template <> constexpr PimDataType kType<int16_t> = PIM_INT16;
+template <> constexpr PimDataType kType<int32_t> = PIM_INT32;
+template <> constexpr PimDataType kType<int64_t> = PIM_INT64;
+template <> constexpr PimDataType kType<uint8_t> = PIM_UINT8;
+template <> constexpr PimDataType kType<uint16_t> = PIM_UINT16;
+template <> constexpr PimDataType kType<uint32_t> = PIM_UINT32;
+template <> constexpr PimDataType kType<uint64_t> = PIM_UINT64;
+
+// PIMeval's widening: int64_t for signed types, uint64_t for unsigned.
+template <typename T> using Wide = std::conditional_t<std::is_signed_v<T>, int64_t, uint64_t>;
+template <typename T> T Wrap(uint64_t bits) { return static_cast<T>(bits); }
+template <typename T> uint64_t U(T v) { return static_cast<uint64_t>(static_cast<Wide<T>>(v)); }
+
+// Edge values first (min, max, 0, 1, -1 / all ones, min+1, max-1), then random bits.
+template <typename T> std::vector<T> Values(size_t n, uint32_t seed) {
+  const T lo = std::numeric_limits<T>::min(), hi = std::numeric_limits<T>::max();
+  std::vector<T> v = {lo, hi, T(0), T(1), T(-1), T(lo + 1), T(hi - 1), T(2), T(hi / 2)};
+  std::mt19937_64 rng(seed);
+  while (v.size() < n) v.push_back(Wrap<T>(rng()));
+  v.resize(n);
+  if (seed % 2) std::rotate(v.begin(), v.begin() + 3, v.end());  // other edge pairs
+  return v;
+}
+
+class Pim : public ::testing::Test {
+ protected:
+  // 1 rank x 2 banks x 2 subarrays x 512 columns = 2048 PEs, 1024 rows.
+  void SetUp() override {
+    ::unsetenv("ZEPHYR_MACHINE");
+    ASSERT_EQ(pimCreateDevice(PIM_FUNCTIONAL, 1, 2, 2, 1024, 512), PIM_OK);
+  }
+  void TearDown() override { pimDeleteDevice(); }
+};
+
+template <typename T> std::vector<T> Read(PimObjId o, size_t n) {
+  std::vector<T> v(n);
+  EXPECT_EQ(pimCopyDeviceToHost(o, v.data()), PIM_OK);
+  return v;
+}
+
+template <typename T> void CheckEveryOperation(size_t n) {
+  SCOPED_TRACE(testing::Message() << "type of " << sizeof(T) << " bytes, "
+                                  << (std::is_signed_v<T> ? "signed" : "unsigned") << ", " << n
+                                  << " elements");
+  using W = Wide<T>;
+  const PimDataType t = kType<T>;
+  const std::vector<T> a = Values<T>(n, 1), b = Values<T>(n, 2);
+  const PimObjId oa = pimAlloc(PIM_ALLOC_AUTO, n, t);
+  ASSERT_GE(oa, 0);
+  const PimObjId ob = pimAllocAssociated(oa, t), od = pimAllocAssociated(oa, t);
+  const PimObjId oc = pimAllocAssociated(oa, PIM_BOOL);
+  ASSERT_GE(ob, 0);
+  ASSERT_GE(od, 0);
+  ASSERT_GE(oc, 0);
+  ASSERT_EQ(pimCopyHostToDevice((void*)a.data(), oa), PIM_OK);
+  ASSERT_EQ(pimCopyHostToDevice((void*)b.data(), ob), PIM_OK);
+  EXPECT_EQ(Read<T>(oa, n), a);
+
+  auto two = [&](const char* name, PimStatus (*api)(PimObjId, PimObjId, PimObjId), auto ref) {
+    ASSERT_EQ(api(oa, ob, od), PIM_OK) << name;
+    const std::vector<T> got = Read<T>(od, n);
+    for (size_t i = 0; i < n; ++i)
+      ASSERT_EQ(got[i], ref(a[i], b[i])) << name << " at " << i << ": " << +a[i] << ", " << +b[i];
+  };
+  two("pimAdd", pimAdd, [](T x, T y) { return Wrap<T>(U(x) + U(y)); });
+  two("pimSub", pimSub, [](T x, T y) { return Wrap<T>(U(x) - U(y)); });
+  two("pimMul", pimMul, [](T x, T y) { return Wrap<T>(U(x) * U(y)); });
+  two("pimMin", pimMin, [](T x, T y) { return std::min(x, y); });
+  two("pimMax", pimMax, [](T x, T y) { return std::max(x, y); });
+  two("pimAnd", pimAnd, [](T x, T y) { return T(x & y); });
+  two("pimOr", pimOr, [](T x, T y) { return T(x | y); });
+  two("pimXor", pimXor, [](T x, T y) { return T(x ^ y); });
+  two("pimXnor", pimXnor, [](T x, T y) { return T(~(x ^ y)); });
+
+  auto compare = [&](const char* name, PimStatus (*api)(PimObjId, PimObjId, PimObjId), auto ref) {
+    ASSERT_EQ(api(oa, ob, oc), PIM_OK) << name;
+    const std::vector<uint8_t> got = Read<uint8_t>(oc, n);
+    for (size_t i = 0; i < n; ++i)
+      ASSERT_EQ(got[i], ref(W(a[i]), W(b[i])) ? 1 : 0) << name << " at " << i;
+  };
+  compare("pimGT", pimGT, [](W x, W y) { return x > y; });
+  compare("pimLT", pimLT, [](W x, W y) { return x < y; });
+  compare("pimEQ", pimEQ, [](W x, W y) { return x == y; });
+  compare("pimNE", pimNE, [](W x, W y) { return x != y; });
+  // Equal elements too (the vectors above hardly ever are).
+  ASSERT_EQ(pimEQ(oa, oa, oc), PIM_OK);
+  EXPECT_EQ(Read<uint8_t>(oc, n), std::vector<uint8_t>(n, 1));
+
+  // Division: truncation toward zero; INT64_MIN / -1 wraps to INT64_MIN (C++ leaves it
+  // undefined; every narrower type wraps so in int64_t).
+  {
+    std::vector<T> nz = b;
+    for (T& x : nz) if (x == 0) x = T(3);
+    nz[5] = T(-1);
+    ASSERT_EQ(pimCopyHostToDevice((void*)nz.data(), ob), PIM_OK);
+    ASSERT_EQ(pimDiv(oa, ob, od), PIM_OK);
+    const std::vector<T> got = Read<T>(od, n);
+    for (size_t i = 0; i < n; ++i) {
+      T want;
+      if (std::is_signed_v<T> && sizeof(T) == 8 && W(a[i]) == std::numeric_limits<W>::min() &&
+          W(nz[i]) == W(-1))
+        want = a[i];
+      else
+        want = Wrap<T>(static_cast<uint64_t>(W(a[i]) / W(nz[i])));
+      ASSERT_EQ(got[i], want) << "pimDiv at " << i << ": " << +a[i] << " / " << +nz[i];
+    }
+    ASSERT_EQ(pimCopyHostToDevice((void*)b.data(), ob), PIM_OK);
+  }
+
+  auto one = [&](const char* name, PimStatus (*api)(PimObjId, PimObjId), auto ref) {
+    ASSERT_EQ(api(oa, od), PIM_OK) << name;
+    const std::vector<T> got = Read<T>(od, n);
+    for (size_t i = 0; i < n; ++i) ASSERT_EQ(got[i], ref(a[i])) << name << " at " << i;
+  };
+  one("pimAbs", pimAbs, [](T x) { return x < 0 ? Wrap<T>(0 - U(x)) : x; });
+  one("pimNot", pimNot, [](T x) { return T(~x); });
+  one("pimPopCount", pimPopCount,
+      [](T x) { return T(std::popcount(static_cast<std::make_unsigned_t<T>>(x))); });
+
+  const uint64_t scalars[] = {0,   1,      3,         ~uint64_t{0}, 200,         300,
+                              70000, uint64_t{1} << 63, uint64_t(std::numeric_limits<T>::max())};
+  for (const uint64_t s : scalars) {
+    SCOPED_TRACE(testing::Message() << "scalar 0x" << std::hex << s);
+    const W ws = static_cast<W>(s);
+    auto scalar = [&](const char* name, PimStatus (*api)(PimObjId, PimObjId, uint64_t), auto ref) {
+      ASSERT_EQ(api(oa, od, s), PIM_OK) << name;
+      const std::vector<T> got = Read<T>(od, n);
+      for (size_t i = 0; i < n; ++i) ASSERT_EQ(got[i], ref(a[i])) << name << " at " << i;
+    };
+    scalar("pimAddScalar", pimAddScalar, [&](T x) { return Wrap<T>(U(x) + s); });
+    scalar("pimSubScalar", pimSubScalar, [&](T x) { return Wrap<T>(U(x) - s); });
+    scalar("pimMulScalar", pimMulScalar, [&](T x) { return Wrap<T>(U(x) * s); });
+    scalar("pimAndScalar", pimAndScalar, [&](T x) { return Wrap<T>(U(x) & s); });
+    scalar("pimOrScalar", pimOrScalar, [&](T x) { return Wrap<T>(U(x) | s); });
+    scalar("pimXorScalar", pimXorScalar, [&](T x) { return Wrap<T>(U(x) ^ s); });
+    scalar("pimXnorScalar", pimXnorScalar, [&](T x) { return Wrap<T>(~(U(x) ^ s)); });
+    scalar("pimMinScalar", pimMinScalar,
+           [&](T x) { return Wrap<T>(static_cast<uint64_t>(std::min(W(x), ws))); });
+    scalar("pimMaxScalar", pimMaxScalar,
+           [&](T x) { return Wrap<T>(static_cast<uint64_t>(std::max(W(x), ws))); });
+    if (s != 0)
+      scalar("pimDivScalar", pimDivScalar, [&](T x) {
+        if constexpr (std::is_signed_v<T>)
+          if (W(x) == std::numeric_limits<int64_t>::min() && ws == W(-1)) return x;
+        return Wrap<T>(static_cast<uint64_t>(W(x) / ws));
+      });
+    auto cmp = [&](const char* name, PimStatus (*api)(PimObjId, PimObjId, uint64_t), auto ref) {
+      ASSERT_EQ(api(oa, oc, s), PIM_OK) << name;
+      const std::vector<uint8_t> got = Read<uint8_t>(oc, n);
+      for (size_t i = 0; i < n; ++i) ASSERT_EQ(got[i], ref(W(a[i])) ? 1 : 0) << name << " at " << i;
+    };
+    cmp("pimGTScalar", pimGTScalar, [&](W x) { return x > ws; });
+    cmp("pimLTScalar", pimLTScalar, [&](W x) { return x < ws; });
+    cmp("pimEQScalar", pimEQScalar, [&](W x) { return x == ws; });
+    cmp("pimNEScalar", pimNEScalar, [&](W x) { return x != ws; });
+    ASSERT_EQ(pimScaledAdd(oa, ob, od, s), PIM_OK);
+    {
+      const std::vector<T> got = Read<T>(od, n);
+      for (size_t i = 0; i < n; ++i) ASSERT_EQ(got[i], Wrap<T>(U(a[i]) * s + U(b[i]))) << i;
+    }
+    ASSERT_EQ(pimBroadcastInt(od, static_cast<int64_t>(s)), PIM_OK);
+    EXPECT_EQ(Read<T>(od, n), std::vector<T>(n, Wrap<T>(s)));
+    ASSERT_EQ(pimBroadcastUInt(od, s), PIM_OK);
+    EXPECT_EQ(Read<T>(od, n), std::vector<T>(n, Wrap<T>(s)));
+  }
+
+  // Bit shifts: arithmetic right for signed types; past the width, 0 or the sign.
+  constexpr int bits = 8 * sizeof(T);
+  for (unsigned k : {0u, 1u, 3u, unsigned(bits - 1), unsigned(bits), unsigned(bits + 5), 100u}) {
+    ASSERT_EQ(pimShiftBitsLeft(oa, od, k), PIM_OK);
+    std::vector<T> got = Read<T>(od, n);
+    for (size_t i = 0; i < n; ++i)
+      ASSERT_EQ(got[i], k >= 64 ? T(0) : Wrap<T>(U(a[i]) << k)) << "left " << k << " at " << i;
+    ASSERT_EQ(pimShiftBitsRight(oa, od, k), PIM_OK);
+    got = Read<T>(od, n);
+    for (size_t i = 0; i < n; ++i) {
+      const unsigned kk = std::min(k, 63u);
+      const T want = std::is_signed_v<T> ? Wrap<T>(static_cast<uint64_t>(int64_t(W(a[i])) >> kk))
+                                         : (k >= 64 ? T(0) : Wrap<T>(U(a[i]) >> k));
+      ASSERT_EQ(got[i], want) << "right " << k << " at " << i;
+    }
+  }
+
+  // Bit slices and conditionals.
+  for (unsigned bit : {0u, unsigned(bits / 2), unsigned(bits - 1)}) {
+    ASSERT_EQ(pimBitSliceExtract(oa, oc, bit), PIM_OK);
+    const std::vector<uint8_t> slice = Read<uint8_t>(oc, n);
+    for (size_t i = 0; i < n; ++i) ASSERT_EQ(slice[i], (U(a[i]) >> bit) & 1) << bit << " " << i;
+    ASSERT_EQ(pimCopyObjectToObject(ob, od), PIM_OK);
+    ASSERT_EQ(pimBitSliceInsert(oc, od, bit), PIM_OK);
+    const std::vector<T> got = Read<T>(od, n);
+    for (size_t i = 0; i < n; ++i)
+      ASSERT_EQ(got[i], Wrap<T>((U(b[i]) & ~(uint64_t{1} << bit)) | (uint64_t(slice[i]) << bit)));
+  }
+  EXPECT_NE(pimBitSliceExtract(oa, oc, bits), PIM_OK);
+  std::vector<uint8_t> cond(n);
+  for (size_t i = 0; i < n; ++i) cond[i] = (i * 7 + 3) % 5 < 2;
+  ASSERT_EQ(pimCopyHostToDevice(cond.data(), oc), PIM_OK);
+  ASSERT_EQ(pimCopyObjectToObject(ob, od), PIM_OK);
+  ASSERT_EQ(pimCondCopy(oc, oa, od), PIM_OK);
+  std::vector<T> got = Read<T>(od, n);
+  for (size_t i = 0; i < n; ++i) ASSERT_EQ(got[i], cond[i] ? a[i] : b[i]) << i;
+  ASSERT_EQ(pimCondBroadcast(oc, 0x1234567890abcdefull, od), PIM_OK);
+  got = Read<T>(od, n);
+  for (size_t i = 0; i < n; ++i)
+    ASSERT_EQ(got[i], cond[i] ? Wrap<T>(0x1234567890abcdefull) : b[i]) << i;
+  ASSERT_EQ(pimCondSelect(oc, ob, oa, od), PIM_OK);
+  got = Read<T>(od, n);
+  for (size_t i = 0; i < n; ++i) ASSERT_EQ(got[i], cond[i] ? b[i] : a[i]) << i;
+  ASSERT_EQ(pimCondSelectScalar(oc, oa, 77, od), PIM_OK);
+  got = Read<T>(od, n);
+  for (size_t i = 0; i < n; ++i) ASSERT_EQ(got[i], cond[i] ? a[i] : T(77)) << i;
+
+  // Reductions fold into what the result holds, over ranges at the ends and empty ones.
+  struct Range { uint64_t b, e; };
+  for (const Range r : {Range{0, 0}, Range{0, n}, Range{n - 1, n}, Range{10, 0}, Range{7, 7},
+                        Range{n - 3, n + 10}, Range{0, 1}}) {
+    SCOPED_TRACE(testing::Message() << "range [" << r.b << ", " << r.e << ")");
+    const uint64_t e = r.e == 0 ? n : std::min<uint64_t>(r.e, n);
+    W sum = 5, lo = std::numeric_limits<T>::max(), hi = std::numeric_limits<T>::min();
+    for (uint64_t i = r.b; i < e; ++i) {
+      sum = static_cast<W>(static_cast<uint64_t>(sum) + U(a[i]));
+      lo = std::min<W>(lo, a[i]);
+      hi = std::max<W>(hi, a[i]);
+    }
+    W gotSum = 5;
+    ASSERT_EQ(pimRedSum(oa, &gotSum, r.b, r.e), PIM_OK);
+    EXPECT_EQ(gotSum, sum);
+    T gotMin = std::numeric_limits<T>::max(), gotMax = std::numeric_limits<T>::min();
+    ASSERT_EQ(pimRedMin(oa, &gotMin, r.b, r.e), PIM_OK);
+    ASSERT_EQ(pimRedMax(oa, &gotMax, r.b, r.e), PIM_OK);
+    EXPECT_EQ(gotMin, T(lo));
+    EXPECT_EQ(gotMax, T(hi));
+  }
+  W dummy = 0;
+  EXPECT_EQ(pimRedSum(oa, &dummy, n + 1, 0), PIM_ERROR);
+  EXPECT_EQ(pimRedSum(oa, &dummy, 9, 4), PIM_ERROR);
+
+  // Prefix sum, element moves.
+  ASSERT_EQ(pimPrefixSum(oa, od), PIM_OK);
+  got = Read<T>(od, n);
+  uint64_t run = 0;
+  for (size_t i = 0; i < n; ++i) ASSERT_EQ(got[i], Wrap<T>(run += U(a[i]))) << i;
+  ASSERT_EQ(pimCopyObjectToObject(oa, od), PIM_OK);
+  ASSERT_EQ(pimShiftElementsRight(od), PIM_OK);
+  got = Read<T>(od, n);
+  for (size_t i = 0; i < n; ++i) ASSERT_EQ(got[i], i == 0 ? T(0) : a[i - 1]) << i;
+  ASSERT_EQ(pimCopyObjectToObject(oa, od), PIM_OK);
+  ASSERT_EQ(pimShiftElementsLeft(od), PIM_OK);
+  got = Read<T>(od, n);
+  for (size_t i = 0; i < n; ++i) ASSERT_EQ(got[i], i + 1 == n ? T(0) : a[i + 1]) << i;
+  ASSERT_EQ(pimCopyObjectToObject(oa, od), PIM_OK);
+  ASSERT_EQ(pimRotateElementsRight(od), PIM_OK);
+  got = Read<T>(od, n);
+  for (size_t i = 0; i < n; ++i) ASSERT_EQ(got[i], a[(i + n - 1) % n]) << i;
+  ASSERT_EQ(pimRotateElementsLeft(od), PIM_OK);
+  EXPECT_EQ(Read<T>(od, n), a);
+
+  // Copies with ranges (at the ends, empty), device to device.
+  ASSERT_EQ(pimCopyObjectToObject(ob, od), PIM_OK);
+  ASSERT_EQ(pimCopyHostToDevice((void*)(a.data() + n - 4), od, n - 4, n), PIM_OK);
+  ASSERT_EQ(pimCopyHostToDevice((void*)a.data(), od, 0, 2), PIM_OK);
+  ASSERT_EQ(pimCopyHostToDevice((void*)a.data(), od, 9, 9), PIM_OK);
+  got = Read<T>(od, n);
+  for (size_t i = 0; i < n; ++i) ASSERT_EQ(got[i], (i < 2 || i >= n - 4) ? a[i] : b[i]) << i;
+  std::vector<T> part(3, T(99));
+  ASSERT_EQ(pimCopyDeviceToHost(oa, part.data(), n - 3, n), PIM_OK);
+  EXPECT_EQ(part, std::vector<T>(a.end() - 3, a.end()));
+  ASSERT_EQ(pimCopyDeviceToDevice(oa, ob, 1, 3), PIM_OK);
+  got = Read<T>(ob, n);
+  for (size_t i = 0; i < n; ++i) ASSERT_EQ(got[i], (i >= 1 && i < 3) ? a[i] : b[i]) << i;
+  EXPECT_EQ(pimCopyHostToDevice((void*)a.data(), od, 0, n + 1), PIM_ERROR);
+  EXPECT_EQ(pimCopyHostToDevice((void*)a.data(), od, 5, 2), PIM_ERROR);
+
+  for (PimObjId o : {oa, ob, od, oc}) EXPECT_EQ(pimFree(o), PIM_OK);
+}
+
+TEST_F(Pim, EveryOperationOnInt8MatchesCpp) { CheckEveryOperation<int8_t>(1000); }
+TEST_F(Pim, EveryOperationOnInt16MatchesCpp) { CheckEveryOperation<int16_t>(1000); }
+TEST_F(Pim, EveryOperationOnInt32MatchesCpp) { CheckEveryOperation<int32_t>(1000); }
+TEST_F(Pim, EveryOperationOnInt64MatchesCpp) { CheckEveryOperation<int64_t>(1000); }
+TEST_F(Pim, EveryOperationOnUint8MatchesCpp) { CheckEveryOperation<uint8_t>(1000); }
+TEST_F(Pim, EveryOperationOnUint16MatchesCpp) { CheckEveryOperation<uint16_t>(1000); }
+TEST_F(Pim, EveryOperationOnUint32MatchesCpp) { CheckEveryOperation<uint32_t>(1000); }
+TEST_F(Pim, EveryOperationOnUint64MatchesCpp) { CheckEveryOperation<uint64_t>(1000); }
+// More elements than the device's 2048 columns: three layers of PEs.
+TEST_F(Pim, EveryOperationOverSeveralLayersMatchesCpp) { CheckEveryOperation<int32_t>(6144); }
+// Element moves over several layers need whole layers (the engine's virtual mesh).
+TEST_F(Pim, ElementMovesOverPartLayersAreAnErrorNamingTheShape) {
+  const PimObjId a = pimAlloc(PIM_ALLOC_AUTO, 5000, PIM_INT32), d = pimAllocAssociated(a, PIM_INT32);
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(pimPrefixSum(a, d), PIM_ERROR);
+  EXPECT_EQ(pimShiftElementsRight(a), PIM_ERROR);
+  const std::string err = testing::internal::GetCapturedStderr();
+  EXPECT_NE(err.find("pimPrefixSum: "), std::string::npos) << err;
+  EXPECT_NE(err.find("5000"), std::string::npos) << err;
+}
+
+TEST_F(Pim, BoolObjectsAddIntoIntegersAndCount) {
+  const size_t n = 700;
+  std::vector<uint8_t> f(n), g(n);
+  std::vector<int32_t> x(n);
+  for (size_t i = 0; i < n; ++i) f[i] = i % 3 == 0, g[i] = i % 5 < 2, x[i] = int32_t(i) - 350;
+  const PimObjId ox = pimAlloc(PIM_ALLOC_V, n, PIM_INT32);
+  const PimObjId of = pimAllocAssociated(ox, PIM_BOOL), og = pimAllocAssociated(ox, PIM_BOOL);
+  const PimObjId oh = pimAllocAssociated(ox, PIM_BOOL);
+  ASSERT_EQ(pimCopyHostToDevice(f.data(), of), PIM_OK);
+  ASSERT_EQ(pimCopyHostToDevice(g.data(), og), PIM_OK);
+  ASSERT_EQ(pimCopyHostToDevice(x.data(), ox), PIM_OK);
+  ASSERT_EQ(pimAnd(of, og, oh), PIM_OK);
+  std::vector<uint8_t> h = Read<uint8_t>(oh, n);
+  for (size_t i = 0; i < n; ++i) ASSERT_EQ(h[i], f[i] & g[i]);
+  ASSERT_EQ(pimXor(of, og, oh), PIM_OK);
+  h = Read<uint8_t>(oh, n);
+  for (size_t i = 0; i < n; ++i) ASSERT_EQ(h[i], f[i] ^ g[i]);
+  ASSERT_EQ(pimNot(of, oh), PIM_OK);
+  h = Read<uint8_t>(oh, n);
+  for (size_t i = 0; i < n; ++i) ASSERT_EQ(h[i], 1 - f[i]);
+  uint64_t count = 0;
+  ASSERT_EQ(pimRedSum(of, &count), PIM_OK);
+  EXPECT_EQ(count, uint64_t(std::count(f.begin(), f.end(), 1)));
+  ASSERT_EQ(pimAdd(ox, of, ox), PIM_OK);  // an integer plus a BOOL (PIMeval's accumulation)
+  const std::vector<int32_t> y = Read<int32_t>(ox, n);
+  for (size_t i = 0; i < n; ++i) ASSERT_EQ(y[i], x[i] + f[i]);
+  // pimConvertType: a C++ cast (wrap to a narrower type; to BOOL, nonzero).
+  const PimObjId o8 = pimAllocAssociated(ox, PIM_INT8);
+  ASSERT_EQ(pimConvertType(ox, o8), PIM_OK);
+  const std::vector<int8_t> z = Read<int8_t>(o8, n);
+  for (size_t i = 0; i < n; ++i) ASSERT_EQ(z[i], int8_t(y[i]));
+  ASSERT_EQ(pimConvertType(ox, oh), PIM_OK);
+  h = Read<uint8_t>(oh, n);
+  for (size_t i = 0; i < n; ++i) ASSERT_EQ(h[i], y[i] != 0);
+}
+
+TEST_F(Pim, AesSboxIsTheTableLookedUpOnTheArray) {
+  const size_t n = 600;
+  std::vector<uint8_t> lut(256), v(n);
+  for (int i = 0; i < 256; ++i) lut[i] = uint8_t(i * 167 + 13);
+  for (size_t i = 0; i < n; ++i) v[i] = uint8_t(i * 31);
+  const PimObjId a = pimAlloc(PIM_ALLOC_AUTO, n, PIM_UINT8), d = pimAllocAssociated(a, PIM_UINT8);
+  ASSERT_EQ(pimCopyHostToDevice(v.data(), a), PIM_OK);
+  ASSERT_EQ(pimAesSbox(a, d, lut), PIM_OK);
+  std::vector<uint8_t> got = Read<uint8_t>(d, n);
+  for (size_t i = 0; i < n; ++i) ASSERT_EQ(got[i], lut[v[i]]) << i;
+  ASSERT_EQ(pimAesInverseSbox(a, d, lut), PIM_OK);
+  EXPECT_EQ(Read<uint8_t>(d, n), got);
+  EXPECT_EQ(pimAesSbox(a, d, std::vector<uint8_t>(255)), PIM_ERROR);
+}
+
+TEST_F(Pim, DivisionByZeroIsAnErrorAndLeavesTheDestination) {
+  std::vector<int32_t> a = {7, -7, 9}, b = {2, 0, 3}, d = {1, 2, 3};
+  const PimObjId oa = pimAlloc(PIM_ALLOC_AUTO, 3, PIM_INT32);
+  const PimObjId ob = pimAllocAssociated(oa, PIM_INT32), od = pimAllocAssociated(oa, PIM_INT32);
+  pimCopyHostToDevice(a.data(), oa);
+  pimCopyHostToDevice(b.data(), ob);
+  pimCopyHostToDevice(d.data(), od);
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(pimDiv(oa, ob, od), PIM_ERROR);
+  EXPECT_EQ(pimDivScalar(oa, od, 0), PIM_ERROR);
+  const std::string err = testing::internal::GetCapturedStderr();
+  EXPECT_NE(err.find("pimDiv: division by zero"), std::string::npos) << err;
+  EXPECT_NE(err.find("pimDivScalar: division by zero"), std::string::npos) << err;
+  EXPECT_EQ(Read<int32_t>(od, 3), d);
+}
+
+TEST_F(Pim, WhatIsNotSupportedIsAnErrorNamingIt) {
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(pimAlloc(PIM_ALLOC_AUTO, 10, PIM_FP32), -1);
+  EXPECT_EQ(pimAlloc(PIM_ALLOC_H, 10, PIM_INT32), -1);
+  EXPECT_EQ(pimAlloc(PIM_ALLOC_AUTO, 0, PIM_INT32), -1);
+  EXPECT_EQ(pimAllocBuffer(10, PIM_INT32), -1);
+  const PimObjId a = pimAlloc(PIM_ALLOC_AUTO, 10, PIM_INT32), b = pimAlloc(PIM_ALLOC_AUTO, 10, PIM_INT32);
+  const PimObjId c = pimAllocAssociated(a, PIM_INT16);
+  EXPECT_EQ(pimAdd(a, b, a), PIM_ERROR);  // not associated
+  EXPECT_EQ(pimAdd(a, c, a), PIM_ERROR);  // mixed types
+  EXPECT_EQ(pimMAC(a, b, nullptr), PIM_ERROR);
+  EXPECT_EQ(pimBroadcastFP(a, 1.5f), PIM_ERROR);
+  EXPECT_EQ(pimOpAnd(a, PIM_RREG_R1, PIM_RREG_R2, PIM_RREG_R3), PIM_ERROR);
+  EXPECT_EQ(pimFree(12345), PIM_ERROR);
+  EXPECT_EQ(pimCreateDevice(PIM_FUNCTIONAL, 1, 1, 1, 1024, 1024), PIM_ERROR);  // one at a time
+  // 2048 columns x 1024 rows hold 65,536 INT32 elements at most.
+  EXPECT_EQ(pimAlloc(PIM_ALLOC_AUTO, 70000, PIM_INT32), -1);
+  const std::string err = testing::internal::GetCapturedStderr();
+  for (const char* want :
+       {"PIM_FP32", "PIM_ALLOC_H", "at least one element", "pimAllocBuffer", "not associated",
+        "is PIM_INT16, expected PIM_INT32", "pimMAC", "pimBroadcastFP", "pimOpAnd",
+        "object id 12345 does not exist", "a device exists already",
+        "70000 elements of PIM_INT32 need 2240000 bits; the device holds 2097152"})
+    EXPECT_NE(err.find(want), std::string::npos) << want << "\n" << err;
+}
+
+TEST(PimDevice, BitParallelAndOtherBitSerialDevicesAreRefused) {
+  ::unsetenv("ZEPHYR_MACHINE");
+  testing::internal::CaptureStderr();
+  for (PimDeviceEnum d : {PIM_DEVICE_FULCRUM, PIM_DEVICE_BANK_LEVEL, PIM_DEVICE_AQUABOLT,
+                          PIM_DEVICE_AIM, PIM_DEVICE_BITSIMD_H, PIM_DEVICE_SIMDRAM})
+    EXPECT_EQ(pimCreateDevice(d, 1, 1, 1, 1024, 1024), PIM_ERROR);
+  const std::string err = testing::internal::GetCapturedStderr();
+  EXPECT_NE(err.find("PIM_DEVICE_FULCRUM is bit-parallel"), std::string::npos) << err;
+  EXPECT_NE(err.find("word-parallel engine"), std::string::npos) << err;
+  EXPECT_NE(err.find("PIM_DEVICE_SIMDRAM is a bit-serial design"), std::string::npos) << err;
+  PimDeviceProperties p;
+  EXPECT_EQ(pimGetDeviceProperties(&p), PIM_ERROR);  // no device was created
+}
+
+TEST(PimDevice, PropertiesAreTheGeometryAsked) {
+  ::unsetenv("ZEPHYR_MACHINE");
+  ASSERT_EQ(pimCreateDevice(PIM_DEVICE_BITSIMD_V_AP, 2, 4, 8, 512, 1024), PIM_OK);
+  PimDeviceProperties p;
+  ASSERT_EQ(pimGetDeviceProperties(&p), PIM_OK);
+  EXPECT_EQ(p.deviceType, PIM_DEVICE_BITSIMD_V_AP);
+  EXPECT_EQ(p.simTarget, PIM_DEVICE_BITSIMD_V_AP);
+  EXPECT_EQ(p.numRanks, 2u);
+  EXPECT_EQ(p.numBankPerRank, 4u);
+  EXPECT_EQ(p.numSubarrayPerBank, 8u);
+  EXPECT_EQ(p.numRowPerSubarray, 512u);
+  EXPECT_EQ(p.numColPerSubarray, 1024u);
+  EXPECT_EQ(p.numPIMCores, 64u);
+  EXPECT_FALSE(p.isHLayoutDevice);
+  EXPECT_EQ(pimDeleteDevice(), PIM_OK);
+}
+
+// The modelled time of one call, from the ZEPHYR_REPORT file pimShowStats writes.
+double ModelledMs(const std::string& call, const std::string& file) {
+  std::ifstream in(file);
+  std::stringstream s;
+  s << in.rdbuf();
+  const std::string text = s.str();
+  const size_t at = text.find("\"" + call + "\"");
+  if (at == std::string::npos) return -1;
+  const size_t ms = text.find("\"modelledMs\":", at);
+  return std::stod(text.substr(ms + 13));
+}
+
+// An add over the device's columns takes one pass whatever the element count; twice the
+// columns take two (PIMeval's regions per core); the copies scale with the bytes.
+TEST(PimDevice, ModelledTimeFollowsTheDevicesParallelism) {
+  ::unsetenv("ZEPHYR_MACHINE");
+  char path[] = "/tmp/zephyr_pim_report_XXXXXX";
+  const int fd = ::mkstemp(path);
+  ASSERT_GE(fd, 0);
+  ::close(fd);
+  ::setenv("ZEPHYR_REPORT", path, 1);
+  std::vector<double> ms;
+  for (uint64_t n : {512, 4096, 8192, 16384}) {
+    ASSERT_EQ(pimCreateDevice(PIM_FUNCTIONAL, 1, 1, 2, 256, 4096), PIM_OK);  // 8192 columns
+    const PimObjId a = pimAlloc(PIM_ALLOC_AUTO, n, PIM_INT32);
+    const PimObjId b = pimAllocAssociated(a, PIM_INT32);
+    ASSERT_EQ(pimAdd(a, b, b), PIM_OK);
+    testing::internal::CaptureStdout();
+    pimShowStats();
+    const std::string out = testing::internal::GetCapturedStdout();
+    EXPECT_NE(out.find("pimAdd INT32"), std::string::npos) << out;
+    EXPECT_NE(out.find("by operation"), std::string::npos) << out;  // the cycle report
+    ms.push_back(ModelledMs("pimAdd INT32", path));
+    ASSERT_EQ(pimDeleteDevice(), PIM_OK);
+  }
+  ::unsetenv("ZEPHYR_REPORT");
+  std::remove(path);
+  EXPECT_GT(ms[0], 0);
+  EXPECT_DOUBLE_EQ(ms[0], ms[1]);
+  EXPECT_DOUBLE_EQ(ms[1], ms[2]);
+  EXPECT_DOUBLE_EQ(ms[3], 2 * ms[2]);
+}
+
+TEST(PimDevice, ZephyrMachineRunsTheProgramOnAnotherProfile) {
+  ::setenv("ZEPHYR_MACHINE", "wavetracer", 1);
+  ASSERT_EQ(pimCreateDevice(PIM_FUNCTIONAL, 4, 128, 32, 1024, 8192), PIM_OK);
+  ::unsetenv("ZEPHYR_MACHINE");
+  const size_t n = 20000;  // 3 layers of the WaveTracer's 8192 PEs
+  std::vector<int32_t> a(n), b(n);
+  for (size_t i = 0; i < n; ++i) a[i] = int32_t(i * 2654435761u), b[i] = int32_t(i) - 7;
+  const PimObjId oa = pimAlloc(PIM_ALLOC_AUTO, n, PIM_INT32);
+  const PimObjId ob = pimAllocAssociated(oa, PIM_INT32);
+  pimCopyHostToDevice(a.data(), oa);
+  pimCopyHostToDevice(b.data(), ob);
+  ASSERT_EQ(pimAdd(oa, ob, ob), PIM_OK);
+  const std::vector<int32_t> c = Read<int32_t>(ob, n);
+  for (size_t i = 0; i < n; ++i) ASSERT_EQ(c[i], int32_t(uint32_t(a[i]) + uint32_t(b[i])));
+  testing::internal::CaptureStdout();
+  pimShowStats();
+  const std::string out = testing::internal::GetCapturedStdout();
+  EXPECT_NE(out.find("machine profile wavetracer (ZEPHYR_MACHINE)"), std::string::npos) << out;
+  EXPECT_NE(out.find("3 virtual-PE layers"), std::string::npos) << out;
+  EXPECT_EQ(pimDeleteDevice(), PIM_OK);
+}
+
+}  // namespace
