@@ -363,10 +363,10 @@ nlohmann::json CalibrateThisHost(const nlohmann::json& r, const std::string& fil
   if (!r.is_object())
     throw UserError(file + ": expected a render report (a JSON object), got " +
                     std::string(r.type_name()));
-  const auto method = r.find("method");
-  const std::string name = method != r.end() && method->is_string() ? method->get<std::string>()
-                           : method != r.end()                       ? method->dump()
-                                                                     : "?";
+  const auto given = r.find("method");
+  const std::string name = given == r.end()     ? "?"
+                           : given->is_string() ? given->get<std::string>()
+                                                : given->dump();
   if (name != "seq")
     throw UserError(file + ": calibrate from a report of `zephyr render --method seq` (this is '" +
                     name + "')");

@@ -444,7 +444,7 @@ SecondaryPlan PlanSecondary(const Scene& scene, int fracBits, double primaryTErr
       throw UserError(fmt::format(
           "{}: a sphere of radius {:.3g} is too small for the array's secondary rays at {} "
           "fraction bits (1/r needs {} integer bits; docs/wavefront.md, \"Formats\"): render it "
-          "with --method seq, simd or hetero",
+          "with the seq, simd or hetero method (--method)",
           o.where.ToString(), s.radius, F, IntBitsFor(1 / s.radius)));
     for (int k = 0; k < 3; ++k) t.centre[k] = Tight(s.centre[k], F);
     t.r2 = Tight(s.radius * s.radius, F);

@@ -310,11 +310,11 @@ SecondaryPlan PlanResolvingSecondary(const Scene& scene, const WavefrontOptions&
   if (needed < 0)
     throw UserError(describe(first) + "; no width up to " +
                     std::to_string(kMaxSecondaryFracBits) +
-                    " fraction bits that fits the scene's extent resolves it: render it with "
-                    "--method seq, simd or hetero");
+                    " fraction bits that fits the scene's extent resolves it: render it with the "
+                    "seq, simd or hetero method (--method)");
   if (options.fracBits > 0)
-    throw UserError("--array-frac-bits " + std::to_string(options.fracBits) + ": " +
-                    describe(first) + "; give --array-frac-bits " + std::to_string(needed) +
+    throw UserError(describe(first) + " (--array-frac-bits " + std::to_string(options.fracBits) +
+                    "); give --array-frac-bits " + std::to_string(needed) +
                     " or more, or leave the flag out");
   return found;
 }
