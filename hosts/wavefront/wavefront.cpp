@@ -311,7 +311,10 @@ SecondaryPlan PlanResolvingSecondary(const Scene& scene, const WavefrontOptions&
     throw UserError(describe(first) + "; no width up to " +
                     std::to_string(kMaxSecondaryFracBits) +
                     " fraction bits that fits the scene's extent resolves it: render it with the "
-                    "seq, simd or hetero method (--method)");
+                    "seq, simd or hetero method (--method)" +
+                    (options.fracBits > 0
+                         ? " (--array-frac-bits " + std::to_string(options.fracBits) + ")"
+                         : std::string()));
   if (options.fracBits > 0)
     throw UserError(describe(first) + " (--array-frac-bits " + std::to_string(options.fracBits) +
                     "); give --array-frac-bits " + std::to_string(needed) +

@@ -51,13 +51,13 @@ struct SmallestObject {
 };
 SmallestObject SmallestObjectOf(const Scene& scene);
 
-// The secondary rays' t error bound and their cut-off ε must stay within this fraction of the
-// smallest object's size (SmallestObjectOf): a larger bound drops or misorders hits between
+// The secondary rays' t error bound and their cut-off ε must stay within half the smallest
+// object's size (SmallestObjectOf): a larger bound drops or misorders hits between
 // small, close objects (issue 39: t error 4.49 and ε 1.36 rendered 30 % of a scene's pixels up
 // to 80 levels off seq). Without --array-frac-bits the fraction bits are raised until the plan
 // resolves it; with the flag, or past the widest F the scene's extent allows, the method
 // refuses naming the flag (docs/wavefront.md, "Formats").
-inline constexpr double kResolvedFraction = 1.0 / 16;
+inline constexpr double kResolvedFraction = 1.0 / 2;
 
 // One secondary ray as the array held it and what the array found (tests: the exact check
 // of every bounce, docs/wavefront.md "Accuracy"). The origin and direction are the array's
