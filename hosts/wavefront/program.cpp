@@ -1158,6 +1158,15 @@ void RunBounce(Machine& m, const SecondaryPlan& plan, bool intersect, const Boun
   Run(m, plan, intersect, in, &out, audit);
 }
 
+int64_t LightRecordBits(const SecondaryPlan& plan) {
+  // The widths Run gives nl, rv, through and shadowUnsure.
+  const int F = plan.fracBits;
+  const int64_t each = int64_t(plan.direction.Width()) + Format::Signed(3, F).Width() +
+                       plan.unit.Width() + 1;
+  const auto lights = int64_t(plan.lights[0].size());
+  return lights > INT64_MAX / each ? INT64_MAX : lights * each;
+}
+
 bool BounceFits(const bitserial::MachineProfile& profile, int layers, const SecondaryPlan& plan,
                 bool intersect) {
   bitserial::MachineProfile one = profile;

@@ -213,4 +213,11 @@ void RunBounce(bitserial::Machine& m, const SecondaryPlan& plan, bool intersect,
 bool BounceFits(const bitserial::MachineProfile& profile, int layers, const SecondaryPlan& plan,
                 bool intersect);
 
+// The PE memory, in bits per virtual PE, that the bounce's light records alone hold until the
+// host reads them: every light's N·L and R·V (s1.F, s3.F), its shadow product (u1.F) and its
+// uncertainty flag — a lower bound of what the program needs, known without running it
+// (BounceFits runs the program, 3 ms a light on this kind of host: a scene of 10^6 lights would
+// run for most of an hour before it is found not to fit). Saturates at INT64_MAX.
+int64_t LightRecordBits(const SecondaryPlan& plan);
+
 }  // namespace zephyr::wavefront

@@ -247,15 +247,22 @@ std::vector<Slot> Balance(std::vector<Slot> packed, int pes, const SecondaryPlan
 // The layers per array pass: the most (up to `layers`) whose program fits the PE memory.
 int LayersPerPass(const bitserial::MachineProfile& profile, int64_t layers,
                   const SecondaryPlan& plan, bool intersect) {
+  // The lights' records bound the program from below (LightRecordBits): a memory that cannot
+  // hold them is not tried by running the program.
+  const int64_t records = LightRecordBits(plan);
+  const auto mayFit = [&](const bitserial::MachineProfile& p, int layers) {
+    return records <= (int64_t(p.internalBitsPerPe) + p.externalBitsPerPe) / layers &&
+           BounceFits(p, layers, plan, intersect);
+  };
   int l = int(std::min<int64_t>(layers, 1 << 20));
-  while (!BounceFits(profile, l, plan, intersect)) {
+  while (!mayFit(profile, l)) {
     if (l == 1) {
       // Say how much it would take: the PE memory scaled until one layer fits.
       std::string needs;
       for (int scale = 2; scale <= 64; scale *= 2) {
         bitserial::MachineProfile larger = profile;
         larger.internalBitsPerPe *= scale, larger.externalBitsPerPe *= scale;
-        if (BounceFits(larger, 1, plan, intersect)) {
+        if (mayFit(larger, 1)) {
           needs = "; it fits " + std::to_string(larger.internalBitsPerPe) + " internal + " +
                   std::to_string(larger.externalBitsPerPe) + " external bits, " +
                   std::to_string(scale) + " times these: --set internalBitsPerPe=" +
@@ -264,6 +271,14 @@ int LayersPerPass(const bitserial::MachineProfile& profile, int64_t layers,
           break;
         }
       }
+      const size_t lights = plan.lights[0].size();
+      if (needs.empty() && records > 64 * (int64_t(profile.internalBitsPerPe) +
+                                           profile.externalBitsPerPe))
+        needs = fmt::format(
+            "; its {} lights alone keep {} bits on every PE until the host reads them (N.L, R.V, "
+            "the shadow product and its flag, {} bits a light), more than 64 times these: give "
+            "fewer lights, or --method simd, whose host shades any number of lights",
+            lights, records, records / int64_t(lights));
       throw UserError("the wavefront's bounce program does not fit one virtual-PE layer of the " +
                       profile.name + " PE memory (" + std::to_string(profile.internalBitsPerPe) +
                       " internal + " + std::to_string(profile.externalBitsPerPe) +
@@ -343,6 +358,19 @@ void CheckBeforePrimaryPass(const Scene& scene, const simd::PrimaryPlan& primary
   const bool secondary = std::any_of(scene.materials.begin(), scene.materials.end(),
                                      [](const Material& m) { return m.ks > 0 || m.t > 0; });
   if (depth > 1 && secondary) LayersPerPass(profile, 1, plan, true);
+}
+
+uint64_t UncompactedLayoutBytes(const Scene& scene, int depth, int64_t pixels, int pes,
+                                Compaction compaction) {
+  const bool doubles = std::any_of(scene.materials.begin(), scene.materials.end(),
+                                   [](const Material& m) { return m.ks > 0 && m.t > 0; });
+  if (compaction != Compaction::kNone || !doubles || depth < 2 || pixels <= 0 || pes <= 0)
+    return 0;
+  // The deepest bounce's slots (S), and the one before it with its children (3 × S / 2); each
+  // live slot also leaves one Share for the pixel sums. Saturates past 2^63.
+  const double layers = std::ceil(double(pixels) / pes) * std::ldexp(1.0, depth - 1);
+  const double bytes = layers * pes * (1.5 * sizeof(Slot) + sizeof(Share));
+  return bytes >= 0x1p63 ? uint64_t(1) << 63 : uint64_t(bytes);
 }
 
 SmallestObject SmallestObjectOf(const Scene& scene) {
@@ -428,7 +456,7 @@ WavefrontResult RenderWavefront(const Tracer& tracer, const simd::PrimaryPass& p
     report.utilisation = report.slots ? double(report.rays) / double(report.slots) : 0;
     // The next bounce's rays, laid out without compaction: a first child in its parent's
     // slot, a second (the refracted ray of a surface that also reflects) `layers` layers on.
-    std::vector<Slot> children(slots.size() * 2);
+    std::vector<Slot> children(bounce < depth ? slots.size() * 2 : 0);
     std::vector<Share> shares;
     bool anySecond = false;
     for (int64_t first = 0; first < layers; first += perPass) {
@@ -533,7 +561,7 @@ WavefrontResult RenderWavefront(const Tracer& tracer, const simd::PrimaryPass& p
     }
     std::sort(shares.begin(), shares.end());
     for (const Share& share : shares) pixels[share.pixel] += share.colour;
-    if (!anySecond) children.resize(slots.size());
+    if (!anySecond && bounce < depth) children.resize(slots.size());
     // The second children's masked copies into their layers (one per source layer), then
     // the next bounce's layout; both charged to the next bounce.
     for (int64_t l = 0; anySecond && l < layers; ++l)

@@ -155,6 +155,18 @@ void CheckBeforePrimaryPass(const Scene& scene, const simd::PrimaryPlan& primary
                             const WavefrontOptions& options, int depth,
                             const bitserial::MachineProfile& profile);
 
+// The host memory the bounces' ray layout may take at its peak, in bytes: the slots of the
+// deepest bounce, and before it a bounce's slots with its children's twice as many. Without
+// compaction (`kNone`) a surface that both reflects and transmits puts its second child a whole
+// layer block on, so a scene with such a material may double the layers at every level
+// (`pixels` ÷ `pes` rounded up, times 2^(depth−1), at worst: one second child in the block's
+// last layer doubles it); with `kLocal`/`kMesh`, or no such material, the layout holds each
+// level's live rays, at most one per pixel per path, and this bound is not used (0 returned).
+// The array method refuses before the primary pass when it exceeds the memory the process may
+// still allocate (issue 39: `--compact none` at depth ≥ 10 ran out of memory).
+uint64_t UncompactedLayoutBytes(const Scene& scene, int depth, int64_t pixels, int pes,
+                                Compaction compaction);
+
 // The primary pass's hits shaded by the wavefront: fills `pixels` (linear RGB, row-major,
 // resized to the image) and the host's counted work (`hostWork`: the local shading from
 // records, and the subtrees and shadow products the array could not certify). UserError for a

@@ -1,8 +1,10 @@
 // libFuzzer target for every reader of a user's file besides the NFF scene (issue 39): the
 // machine profile reader and `--set` (bitserial/profile.h), the ledger's runs.csv and recorded
 // errors (hosts/methods/ledger.h: `zephyr validate --runs` / `--check`), and the calibrate
-// report (`zephyr testbed calibrate`: JSON, then hosts/testbed/testbed.h). The first byte picks
-// the reader, the rest is the file. Any input must read or raise a UserError — never a crash,
+// report (`zephyr testbed calibrate`: JSON, then hosts/testbed/testbed.h), and PIMeval's device
+// files as the PIMeval API reads them (tools/pimeval/config.h: a .cfg, and a memory .ini with
+// the BitSIMD-V timings taken from it). The first byte picks the reader (modulo 6: the seeds'
+// ASCII '0'-'5'), the rest is the file. Any input must read or raise a UserError — never a crash,
 // an internal-check abort, an uncaught exception, a hang or a sanitizer report. Built by
 // `make fuzz` with clang, -fsanitize=fuzzer,address,undefined; seeds in
 // tests/fuzz/readers_corpus/ and made from the built-in profiles.
@@ -22,6 +24,7 @@
 #include "fixed/check.h"
 #include "hosts/methods/ledger.h"
 #include "hosts/testbed/testbed.h"
+#include "tools/pimeval/config.h"
 
 namespace {
 
@@ -69,7 +72,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (size == 0 || size > (1 << 16)) return 0;
   const std::string_view text(reinterpret_cast<const char*>(data) + 1, size - 1);
   try {
-    switch (data[0] % 4) {
+    switch (data[0] % 6) {
       case 0:
         Profile(text);
         break;
@@ -82,6 +85,25 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       case 3: {
         const nlohmann::json r = nlohmann::json::parse(text, nullptr, false);
         if (!r.is_discarded()) zephyr::testbed::CalibrateThisHost(r, "fuzz.json");
+        break;
+      }
+      case 4: {
+        // A device read must have its whole geometry, each count at least 1.
+        const zephyr::pimeval::DeviceConfig c =
+            zephyr::pimeval::ReadDeviceConfig(ScratchFile(text));
+        if (c.geometry.Pes() == 0) __builtin_trap();
+        break;
+      }
+      case 5: {
+        // Timings taken must leave a clock and costs the profile can write and read back.
+        zephyr::bitserial::MachineProfile p = zephyr::bitserial::Profile("pim-bitsimd-v-bank");
+        zephyr::pimeval::ApplyMemoryTimings(
+            p, zephyr::pimeval::ReadMemoryIni(ScratchFile(text)), "fuzz.ini", 8192);
+        try {
+          zephyr::bitserial::ProfileFromJson(p.FileText(), "timed.json");
+        } catch (const zephyr::UserError&) {
+          __builtin_trap();
+        }
         break;
       }
     }

@@ -117,6 +117,30 @@ TEST(MemoryPreflight, AnImageLargerThanMemoryIsRefusedWithTheLargestThatFits) {
   EXPECT_LT(side, 8192);
 }
 
+// The --dump-primary matrix is part of the estimate: 6000x6000 fits 2 GiB at seq's 32 bytes a
+// pixel, but not with the dump's records (issue 39: it passed the check and ran out of memory
+// after 27 s). Refused at once, naming the per-pixel figure with the dump; no file written.
+TEST(MemoryPreflight, TheDumpOfPrimaryHitsIsInTheEstimate) {
+  TempDir dir;
+  const std::string scene = dir / "big.nff";
+  ASSERT_EQ(
+      RunZephyrProcess("gen spheres --count 4 --seed 1 --size 6000x6000 --out " + scene).status,
+      0);
+  const auto r = RunCommand("bash -c 'ulimit -v 2097152 && " + testing::ZephyrPath() +
+                            " render --no-progress --method seq " + scene + " --out " +
+                            (dir / "o.png") + " --dump-primary " + (dir / "d.csv") + "'");
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find("render --method seq at 6000x6000 needs about"), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("36000000 pixels at 142 bytes each"), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "o.png"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "d.csv"));
+  // Without the dump the same image is within the estimate (only the check, not the render,
+  // is asked for: 32 bytes a pixel need 1.14 GiB).
+  EXPECT_NO_THROW(CheckMemoryFits("seq", {.perPixel = 32, .pixels = 36000000},
+                                  {uint64_t(2) << 30, "test"}));
+}
+
 // The estimate against a given limit, exactly: a need equal to the limit fits, one byte more
 // does not, and the largest square named is the one whose pixels fill the limit less the
 // fixed bytes (floor of the square root).

@@ -2,6 +2,7 @@
 // file's timings with the BitSIMD-V derivation, and every config PIMeval ships (when
 // ../shared/pimbench is there) either read or refused naming why.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <filesystem>
 #include <string>
@@ -73,7 +74,8 @@ TEST(PimConfig, ApiErrorsNameTheFile) {
   EXPECT_EQ(pimCreateDeviceFromConfig(PIM_FUNCTIONAL, "/nonexistent/a.cfg"), PIM_ERROR);
   const std::string err = testing::internal::GetCapturedStderr();
   EXPECT_NE(err.find(cfg.string() + ":2: num_bank_per_rank"), std::string::npos) << err;
-  EXPECT_NE(err.find("cannot read the device config file '/nonexistent/a.cfg'"), std::string::npos)
+  EXPECT_NE(err.find("/nonexistent/a.cfg: cannot open the device config file (no such file)"),
+            std::string::npos)
       << err;
   fs::remove(cfg);
 }
@@ -116,6 +118,66 @@ TEST(PimConfig, MemoryFileLackingATimingIsRefusedNamingIt) {
     ADD_FAILURE();
   } catch (const UserError& e) {
     EXPECT_NE(std::string(e.what()).find("h.ini:2:"), std::string::npos) << e.what();
+  }
+}
+
+// The readers take what a user can hand them (issue 39): only regular files, a memory key once,
+// and timings that are decimal numbers of a clock the profile can hold.
+TEST(PimConfig, FilesThatAreNotRegularOrTimingsOutOfRangeAreRefused) {
+  const fs::path dir = fs::temp_directory_path() / "zephyr_pim_kinds";
+  fs::create_directories(dir);
+  const fs::path fifo = dir / "fifo.cfg";
+  fs::remove(fifo);
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  for (const auto& [path, want] :
+       {std::pair<std::string, std::string>{dir.string(), ": is a directory"},
+        {fifo.string(), ": is not a regular file"}}) {
+    try {
+      ReadDeviceConfig(path);
+      ADD_FAILURE() << path;
+    } catch (const UserError& e) {
+      EXPECT_NE(std::string(e.what()).find(path + want), std::string::npos) << e.what();
+    }
+    try {
+      ReadMemoryIni(path);
+      ADD_FAILURE() << path;
+    } catch (const UserError& e) {
+      EXPECT_NE(std::string(e.what()).find(path + want), std::string::npos) << e.what();
+    }
+  }
+  fs::remove_all(dir);
+  try {
+    ParseMemoryIni("[timing]\ntCK = 1\n[other]\ntCK = 2\n", "h.ini");
+    ADD_FAILURE();
+  } catch (const UserError& e) {
+    EXPECT_NE(std::string(e.what()).find("h.ini:4: tCK is given twice (first at line 2)"),
+              std::string::npos)
+        << e.what();
+  }
+  const std::string rest = "tRP = 14\ntRAS = 33\ntCCD_S = 2\n";
+  for (const char* tck : {"0x10", "inf", "nan", "1e-300", "1e300", "0", "-1", " ", "1.0.0"}) {
+    bitserial::MachineProfile p = bitserial::Profile("pim-bitsimd-v-bank");
+    try {
+      ApplyMemoryTimings(p, ParseMemoryIni(std::string("tCK = ") + tck + "\n" + rest, "h.ini"),
+                         "h.ini", 8192);
+      ADD_FAILURE() << tck;
+    } catch (const UserError& e) {
+      EXPECT_NE(std::string(e.what()).find("h.ini: tCK must be a decimal number in [0.001, "
+                                           "1000000000] ns"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+  bitserial::MachineProfile p = bitserial::Profile("pim-bitsimd-v-bank");
+  try {
+    ApplyMemoryTimings(p, ParseMemoryIni("tCK = 1\ntRP = 1e12\ntRAS = 33\ntCCD_S = 2\n", "h.ini"),
+                       "h.ini", 8192);
+    ADD_FAILURE();
+  } catch (const UserError& e) {
+    EXPECT_NE(std::string(e.what()).find("h.ini: tRP must be a decimal number in [1, "
+                                         "100000000] cycles, got '1e12'"),
+              std::string::npos)
+        << e.what();
   }
 }
 

@@ -969,6 +969,15 @@ TEST(TestbedSimulated, TooFewHostsNamesTheFile) {
                  " --zephyr " + SmpiPath() + " -- render --method dist x.nff");
   EXPECT_NE(r.status, 0);
   EXPECT_NE(r.output.find(platform), std::string::npos) << r.output;
+  // A testbed name simrun does not know is the program's refusal, before SimGrid starts.
+  r = RunCommand("bash " + Repo() + "/tools/testbed/simrun.sh --children 1 --testbed nosuch" +
+                 " --zephyr " + SmpiPath() + " -- render --method dist x.nff --out " +
+                 (dir / "n.png"));
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.output.find("unknown testbed 'nosuch' (known: today-pim, today-zephyr, ufmg1992)"),
+            std::string::npos)
+      << r.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "n.png"));
   const std::string broken = dir / "broken.xml";
   std::ofstream(broken)
       << "<platform version=\"4.1\"><zone id=\"z\" routing=\"Full\"><host id=\"parent\"\n";

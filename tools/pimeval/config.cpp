@@ -4,10 +4,10 @@
 #include <fmt/format.h>
 
 #include <cmath>
-#include <fstream>
 #include <sstream>
 
 #include "fixed/check.h"
+#include "fixed/input_file.h"
 
 namespace zephyr::pimeval {
 
@@ -20,13 +20,8 @@ std::string Trim(const std::string& s) {
   return s.substr(b, e - b + 1);
 }
 
-std::string ReadText(const std::string& path, const char* what) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw UserError(fmt::format("cannot read the {} '{}'", what, path));
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+// PIMeval's shipped files are a few KiB; anything past 1 MiB is not one of them.
+constexpr std::uintmax_t kMaxFileBytes = std::uintmax_t{1} << 20;
 
 unsigned ParseCount(const std::string& value, const std::string& where, const std::string& key) {
   size_t used = 0;
@@ -99,12 +94,21 @@ DeviceConfig ParseDeviceConfig(const std::string& text, const std::string& file)
 }
 
 DeviceConfig ReadDeviceConfig(const std::string& path) {
-  return ParseDeviceConfig(ReadText(path, "device config file"), path);
+  return ParseDeviceConfig(
+      ReadInputFile(path, {"the device config file", "a PIMeval device config file"},
+                    kMaxFileBytes),
+      path);
+}
+
+std::map<std::string, std::string> ReadMemoryIni(const std::string& path) {
+  return ParseMemoryIni(
+      ReadInputFile(path, {"the memory file", "a DRAM memory .ini file"}, kMaxFileBytes), path);
 }
 
 std::map<std::string, std::string> ParseMemoryIni(const std::string& text,
                                                   const std::string& file) {
   std::map<std::string, std::string> kv;
+  std::map<std::string, int> seen;
   std::istringstream in(text);
   std::string raw;
   int line = 0;
@@ -116,7 +120,11 @@ std::map<std::string, std::string> ParseMemoryIni(const std::string& text,
     if (eq == std::string::npos || Trim(s.substr(0, eq)).empty())
       throw UserError(
           fmt::format("{}:{}: expected '[section]' or 'key = value', got '{}'", file, line, s));
-    kv[Trim(s.substr(0, eq))] = Trim(s.substr(eq + 1));
+    const std::string key = Trim(s.substr(0, eq));
+    if (!seen.emplace(key, line).second)
+      throw UserError(fmt::format("{}:{}: {} is given twice (first at line {})", file, line, key,
+                                  seen[key]));
+    kv[key] = Trim(s.substr(eq + 1));
   }
   return kv;
 }
@@ -124,23 +132,31 @@ std::map<std::string, std::string> ParseMemoryIni(const std::string& text,
 void ApplyMemoryTimings(bitserial::MachineProfile& p,
                         const std::map<std::string, std::string>& ini, const std::string& file,
                         unsigned cols) {
-  auto get = [&](const char* key) {
+  // tCK in ns: from 1 ps (a 1 THz clock) to 1 s (the profile reader's 1 Hz floor); the others in
+  // cycles of tCK, at most 10^8 (so that tRAS + tRP and 3 tCCD_S stay within the 10^9 cycles
+  // a profile cost may have).
+  auto get = [&](const char* key, double minimum, double maximum, const char* unit) {
     auto it = ini.find(key);
     if (it == ini.end())
       throw UserError(fmt::format(
           "{}: the memory file has no {} (the BitSIMD-V timings need tCK, tRAS, tRP and tCCD_S; "
           "docs/pim.md)",
           file, key));
+    // A decimal number (no hex, inf or nan, which stod would take), then its range.
+    const std::string& text = it->second;
+    const bool decimal = !text.empty() &&
+                         text.find_first_not_of("0123456789.eE+-") == std::string::npos;
     try {
       size_t used = 0;
-      const double v = std::stod(it->second, &used);
-      if (used == it->second.size() && v > 0 && std::isfinite(v)) return v;
+      const double v = decimal ? std::stod(text, &used) : 0;
+      if (decimal && used == text.size() && v >= minimum && v <= maximum) return v;
     } catch (const std::exception&) {
     }
-    throw UserError(
-        fmt::format("{}: {} must be a positive number, got '{}'", file, key, it->second));
+    throw UserError(fmt::format("{}: {} must be a decimal number in [{}, {}] {}, got '{}'",
+                                file, key, minimum, maximum, unit, text));
   };
-  const double tCK = get("tCK"), tRAS = get("tRAS"), tRP = get("tRP"), tCCD = get("tCCD_S");
+  const double tCK = get("tCK", 1e-3, 1e9, "ns"), tRAS = get("tRAS", 1, 1e8, "cycles"),
+               tRP = get("tRP", 1, 1e8, "cycles"), tCCD = get("tCCD_S", 1, 1e8, "cycles");
   using bitserial::MicroOp;
   const double bytesPerSecond =
       p.physicalPes / 8.0 / p.Cost(MicroOp::kHostPlane) * p.clockHz;  // the profile's channel

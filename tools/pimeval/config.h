@@ -32,11 +32,14 @@ struct DeviceConfig {
 // number that is not a whole number in [1, 2^32), a repeated key; "FILE: ..." for a missing
 // geometry key. `file` names the file in errors and resolves the memory file's directory.
 DeviceConfig ParseDeviceConfig(const std::string& text, const std::string& file);
-DeviceConfig ReadDeviceConfig(const std::string& path);  // UserError if unreadable
+// The file at `path` (a regular file of at most 1 MiB: fixed/input_file.h), then as above.
+DeviceConfig ReadDeviceConfig(const std::string& path);
 
 // A memory .ini file (DRAMsim3's format, PIMeval's configs/): "[section]" lines and
-// "key = value" lines; UserError "FILE:LINE: what" for any other line.
+// "key = value" lines; UserError "FILE:LINE: what" for any other line and for a key given twice
+// (PIMeval's shipped files repeat none, in any section).
 std::map<std::string, std::string> ParseMemoryIni(const std::string& text, const std::string& file);
+std::map<std::string, std::string> ReadMemoryIni(const std::string& path);  // as ReadDeviceConfig
 
 // The BitSIMD-V profile's timings from a memory file, with the derivation of docs/present-day.md
 // and bitserial/profiles/pim-bitsimd-v-bank.json: clockHz = 1/tCK; a row read or write (and
@@ -44,7 +47,9 @@ std::map<std::string, std::string> ParseMemoryIni(const std::string& text, const
 // step, a shift through bit registers); flagOp = activitySet = broadcastBit = tCCD_S;
 // reduceBit = cols/64 x 0.76 ns in tCK (PIMeval pimPerfEnergyBitSerial.h:37); hostPlane keeps
 // the profile's bytes per second (its DDR4 channel). UserError naming the file and the first
-// parameter of tCK, tRAS, tRP, tCCD_S it lacks or cannot read as a positive number.
+// parameter of tCK, tRAS, tRP, tCCD_S it lacks or cannot read as a decimal number in range:
+// tCK in [0.001, 10^9] ns (1 THz down to the profile reader's 1 Hz), the others in [1, 10^8]
+// cycles.
 void ApplyMemoryTimings(bitserial::MachineProfile& profile,
                         const std::map<std::string, std::string>& ini, const std::string& file,
                         unsigned cols);

@@ -405,10 +405,7 @@ void CreateDevice(PimDeviceEnum type, PimDeviceEnum target, Geometry g, const st
     d->profile = bitserial::Profile("pim-bitsimd-v-bank");
     const double baseColumns = 8192;  // columns per subarray of pim-bitsimd-v-bank.json
     if (!memFile.empty()) {
-      std::ifstream in(memFile);
-      if (!in) throw UserError(fmt::format("cannot read the memory file '{}'", memFile));
-      std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-      ApplyMemoryTimings(d->profile, ParseMemoryIni(text, memFile), memFile, g.cols);
+      ApplyMemoryTimings(d->profile, ReadMemoryIni(memFile), memFile, g.cols);
     } else {
       d->profile.cost[int(MicroOp::kReduceBit)] *= g.cols / baseColumns;
     }
