@@ -71,7 +71,8 @@ enum PimCopyEnum {
 
 // Element types. Supported: PIM_BOOL (one bit; one uint8_t per element on the host, its
 // lowest bit), PIM_INT8..64 and PIM_UINT8..64 (two's complement / unsigned, wrapping as C++'s
-// fixed-width arithmetic). Refused: PIM_FP32, PIM_FP16, PIM_BF16, PIM_FP8.
+// fixed-width arithmetic), PIM_FP32 (IEEE binary32, one float per element on the host; the
+// engine's bit-serial MultiFloat, round to nearest even). Refused: PIM_FP16, PIM_BF16, PIM_FP8.
 enum PimDataType {
   PIM_BOOL = 0,
   PIM_INT8,
@@ -154,13 +155,16 @@ PimStatus pimCopyDeviceToHost(PimObjId src, void* dest, uint64_t idxBegin = 0,
 PimStatus pimCopyDeviceToDevice(PimObjId src, PimObjId dest, uint64_t idxBegin = 0,
                                 uint64_t idxEnd = 0);
 PimStatus pimCopyObjectToObject(PimObjId src, PimObjId dest);
-// Element-wise conversion between integer types (value wrapped into dest's type, as a C++ cast).
+// Element-wise conversion between integer types (value wrapped into dest's type, as a C++ cast);
+// from or to PIM_FP32 refused (PIMeval leaves it unimplemented).
 PimStatus pimConvertType(PimObjId src, PimObjId dest);
 
 // ---- element-wise arithmetic and logic (operands associated, of one type) ------------------
 // Results wrap to the type's width as C++'s fixed-width integers do; pimAdd/pimSub also take
 // a PIM_BOOL src2. Division truncates toward zero; a zero divisor anywhere is PIM_ERROR with
-// dest unchanged (PIMeval's "Division by zero").
+// dest unchanged (PIMeval's "Division by zero"). On PIM_FP32: the C++ float operation on each
+// element (NaN results canonical 0x7fc00000); pimMin/pimMax are (a < b) ? a : b and
+// (a > b) ? a : b, pimAbs a < 0 ? -a : a; the bitwise calls are refused.
 PimStatus pimAdd(PimObjId src1, PimObjId src2, PimObjId dest);
 PimStatus pimSub(PimObjId src1, PimObjId src2, PimObjId dest);
 PimStatus pimMul(PimObjId src1, PimObjId src2, PimObjId dest);
@@ -174,7 +178,8 @@ PimStatus pimXnor(PimObjId src1, PimObjId src2, PimObjId dest);
 PimStatus pimMin(PimObjId src1, PimObjId src2, PimObjId dest);
 PimStatus pimMax(PimObjId src1, PimObjId src2, PimObjId dest);
 // The scalar is a 64-bit value (int64_t for signed types): the result is the C++ operation on
-// the element widened to 64 bits and the scalar, wrapped to the element's type.
+// the element widened to 64 bits and the scalar, wrapped to the element's type. On PIM_FP32 the
+// scalar's low 32 bits are the float's pattern; pimMinScalar/pimMaxScalar are std::min/std::max.
 PimStatus pimAddScalar(PimObjId src, PimObjId dest, uint64_t scalarValue);
 PimStatus pimSubScalar(PimObjId src, PimObjId dest, uint64_t scalarValue);
 PimStatus pimMulScalar(PimObjId src, PimObjId dest, uint64_t scalarValue);
@@ -200,7 +205,8 @@ PimStatus pimNEScalar(PimObjId src, PimObjId destBool, uint64_t scalarValue);
 PimStatus pimScaledAdd(PimObjId src1, PimObjId src2, PimObjId dest, uint64_t scalarValue);
 // dest = the number of one bits of each element (same type as src).
 PimStatus pimPopCount(PimObjId src, PimObjId dest);
-// Inclusive prefix sum along the elements, wrapped (all elements within one layer of PEs).
+// Inclusive prefix sum along the elements, wrapped (all elements within one layer of PEs);
+// refused on PIM_FP32 (PIMeval's element-by-element float order is not reproduced).
 PimStatus pimPrefixSum(PimObjId src, PimObjId dest);
 // AiM's per-core multiply-accumulate into a global buffer: refused (no bank-level device).
 PimStatus pimMAC(PimObjId src1, PimObjId src2, void* dest);
@@ -208,7 +214,9 @@ PimStatus pimMAC(PimObjId src1, PimObjId src2, void* dest);
 // Reductions over [idxBegin, idxEnd) (idxEnd 0: to the end; idxBegin == idxEnd != 0: empty).
 // As PIMeval, they fold into what *sum / *min / *max already holds: pimRedSum ADDS the range's
 // sum to an int64_t (signed types) or uint64_t (unsigned, PIM_BOOL); pimRedMin/Max keep the
-// smaller/larger of the object's C type value at *min/*max and the range's extreme.
+// smaller/larger of the object's C type value at *min/*max and the range's extreme. PIM_FP32:
+// a float at *sum/*min/*max; min/max pick PIMeval's element (first of the extremes, NaN skipped,
+// seeded with FLT_MAX / -FLT_MAX); the sum adds pairwise by element index (docs/pim.md).
 PimStatus pimRedSum(PimObjId src, void* sum, uint64_t idxBegin = 0, uint64_t idxEnd = 0);
 PimStatus pimRedMin(PimObjId src, void* min, uint64_t idxBegin = 0, uint64_t idxEnd = 0);
 PimStatus pimRedMax(PimObjId src, void* max, uint64_t idxBegin = 0, uint64_t idxEnd = 0);
@@ -224,7 +232,8 @@ PimStatus pimCondSelect(PimObjId condBool, PimObjId src1, PimObjId src2, PimObjI
 PimStatus pimCondSelectScalar(PimObjId condBool, PimObjId src1, uint64_t scalarBits,
                               PimObjId dest);
 
-// Every element = value wrapped to the type. pimBroadcastFP is refused (no PIM_FP32).
+// Every element = value wrapped to the type; pimBroadcastFP writes the float's bit pattern (into
+// an integer object its low bits), as PIMeval's.
 PimStatus pimBroadcastInt(PimObjId dest, int64_t value);
 PimStatus pimBroadcastUInt(PimObjId dest, uint64_t value);
 PimStatus pimBroadcastFP(PimObjId dest, float value);
