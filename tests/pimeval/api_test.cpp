@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <fstream>
@@ -419,7 +420,7 @@ TEST_F(Pim, DivisionByZeroIsAnErrorAndLeavesTheDestination) {
 TEST_F(Pim, WhatIsNotSupportedIsAnErrorNamingIt) {
   testing::internal::CaptureStderr();
   EXPECT_EQ(pimAlloc(PIM_ALLOC_AUTO, 10, PIM_BF16), -1);
-  EXPECT_EQ(pimAlloc(PIM_ALLOC_H, 10, PIM_INT32), -1);
+  EXPECT_EQ(pimAlloc(PIM_ALLOC_H1, 100, PIM_INT32), -1);  // 3200 columns of the device's 2048
   EXPECT_EQ(pimAlloc(PIM_ALLOC_AUTO, 0, PIM_INT32), -1);
   EXPECT_EQ(pimAllocBuffer(10, PIM_INT32), -1);
   const PimObjId a = pimAlloc(PIM_ALLOC_AUTO, 10, PIM_INT32), b = pimAlloc(PIM_ALLOC_AUTO, 10, PIM_INT32);
@@ -434,7 +435,7 @@ TEST_F(Pim, WhatIsNotSupportedIsAnErrorNamingIt) {
   EXPECT_EQ(pimAlloc(PIM_ALLOC_AUTO, 70000, PIM_INT32), -1);
   const std::string err = testing::internal::GetCapturedStderr();
   for (const char* want :
-       {"PIM_BF16", "PIM_ALLOC_H", "at least one element", "pimAllocBuffer", "not associated",
+       {"PIM_BF16", "PIM_ALLOC_H1: 100 elements x 32 column(s) exceed the device's 2048 columns", "at least one element", "pimAllocBuffer", "not associated",
         "is PIM_INT16, expected PIM_INT32", "pimMAC", "pimOpAnd",
         "object id 12345 does not exist", "a device exists already",
         "70000 elements of PIM_INT32 need 2240000 bits; the device holds 2097152"})
@@ -472,6 +473,21 @@ TEST(PimDevice, PropertiesAreTheGeometryAsked) {
   EXPECT_EQ(pimDeleteDevice(), PIM_OK);
 }
 
+// A temporary file (removed with this).
+struct TempFile {
+  char path[40] = "/tmp/zephyr_pim_report_XXXXXX";
+  TempFile() { ::close(::mkstemp(path)); }
+  ~TempFile() { std::remove(path); }
+};
+// pimShowStats with ZEPHYR_REPORT naming `path`: what it prints.
+std::string ShowStats(const char* path) {
+  ::setenv("ZEPHYR_REPORT", path, 1);
+  testing::internal::CaptureStdout();
+  pimShowStats();
+  ::unsetenv("ZEPHYR_REPORT");
+  return testing::internal::GetCapturedStdout();
+}
+
 // The modelled time of one call, from the ZEPHYR_REPORT file pimShowStats writes.
 double ModelledMs(const std::string& call, const std::string& file) {
   std::ifstream in(file);
@@ -488,27 +504,19 @@ double ModelledMs(const std::string& call, const std::string& file) {
 // columns take two (PIMeval's regions per core); the copies scale with the bytes.
 TEST(PimDevice, ModelledTimeFollowsTheDevicesParallelism) {
   ::unsetenv("ZEPHYR_MACHINE");
-  char path[] = "/tmp/zephyr_pim_report_XXXXXX";
-  const int fd = ::mkstemp(path);
-  ASSERT_GE(fd, 0);
-  ::close(fd);
-  ::setenv("ZEPHYR_REPORT", path, 1);
+  const TempFile report;
   std::vector<double> ms;
   for (uint64_t n : {512, 4096, 8192, 16384}) {
     ASSERT_EQ(pimCreateDevice(PIM_FUNCTIONAL, 1, 1, 2, 256, 4096), PIM_OK);  // 8192 columns
     const PimObjId a = pimAlloc(PIM_ALLOC_AUTO, n, PIM_INT32);
     const PimObjId b = pimAllocAssociated(a, PIM_INT32);
     ASSERT_EQ(pimAdd(a, b, b), PIM_OK);
-    testing::internal::CaptureStdout();
-    pimShowStats();
-    const std::string out = testing::internal::GetCapturedStdout();
+    const std::string out = ShowStats(report.path);
     EXPECT_NE(out.find("pimAdd INT32"), std::string::npos) << out;
     EXPECT_NE(out.find("by operation"), std::string::npos) << out;  // the cycle report
-    ms.push_back(ModelledMs("pimAdd INT32", path));
+    ms.push_back(ModelledMs("pimAdd INT32", report.path));
     ASSERT_EQ(pimDeleteDevice(), PIM_OK);
   }
-  ::unsetenv("ZEPHYR_REPORT");
-  std::remove(path);
   EXPECT_GT(ms[0], 0);
   EXPECT_DOUBLE_EQ(ms[0], ms[1]);
   EXPECT_DOUBLE_EQ(ms[1], ms[2]);
@@ -848,39 +856,60 @@ TEST_F(Pim, FloatOperationsAreChargedTheirEngineCycles) {
   const PimObjId i = pimAlloc(PIM_ALLOC_AUTO, 1000, PIM_INT32), j = pimAllocAssociated(i, PIM_INT32);
   ASSERT_GE(g, 0);
   ASSERT_GE(j, 0);
-  pimResetStats();
-  ASSERT_EQ(pimAdd(f, g, f), PIM_OK);
-  ASSERT_EQ(pimDiv(i, i, i), PIM_ERROR);  // zeros: nothing charged but the check
-  ASSERT_EQ(pimAdd(i, j, i), PIM_OK);
   std::vector<float> ones(1000, 1.0f);
   ASSERT_EQ(pimCopyHostToDevice(ones.data(), g), PIM_OK);
+  pimResetStats();
+  ASSERT_EQ(pimAdd(f, g, f), PIM_OK);
+  ASSERT_EQ(pimAdd(i, j, i), PIM_OK);
   ASSERT_EQ(pimDiv(f, g, f), PIM_OK);
-  char path[] = "/tmp/pim_fp_statsXXXXXX";
-  const int fd = mkstemp(path);
-  ASSERT_GE(fd, 0);
-  close(fd);
-  ::setenv("ZEPHYR_REPORT", path, 1);
-  testing::internal::CaptureStdout();
-  pimShowStats();
-  const std::string out = testing::internal::GetCapturedStdout();
-  ::unsetenv("ZEPHYR_REPORT");
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  std::remove(path);
-  // "pimAdd FP32" ... modelledMs: the float add costs more than the 32-bit integer add, the
-  // division more than the add (restoring, a quotient bit per step).
-  auto ms = [&](const std::string& key) {
-    const std::string j = text.str();
-    const size_t at = j.find("\"" + key + "\"");
-    EXPECT_NE(at, std::string::npos) << key << "\n" << j;
-    const size_t m = j.find("\"modelledMs\":", at);
-    return std::stod(j.substr(m + 13));
-  };
-  const double fadd = ms("pimAdd FP32"), iadd = ms("pimAdd INT32"), fdiv = ms("pimDiv FP32");
+  const TempFile report;
+  const std::string out = ShowStats(report.path);
+  // The float add costs more than the 32-bit integer add, the division more than the add
+  // (restoring, a quotient bit per step); the engine's cycle report names its float operations.
+  const double fadd = ModelledMs("pimAdd FP32", report.path);
+  const double iadd = ModelledMs("pimAdd INT32", report.path);
+  const double fdiv = ModelledMs("pimDiv FP32", report.path);
   EXPECT_GT(iadd, 0);
   EXPECT_GT(fadd, 2 * iadd);
   EXPECT_GT(fdiv, fadd);
-  EXPECT_NE(out.find("fadd"), std::string::npos) << out;  // the engine's cycle report names it
+  EXPECT_NE(out.find("fadd"), std::string::npos) << out;
   EXPECT_NE(out.find("fdiv"), std::string::npos) << out;
+}
+
+// PIMeval accepts the horizontal layouts on its BitSIMD devices: the results are the elements'
+// (its functional model), the time the bit-serial table's over the passes the horizontal
+// regions take per core: ceil(ceil(n x bits / columns) / cores). The copies ignore the copy type.
+TEST(PimDevice, HorizontalLayoutGivesTheSameResultsOverPimevalsPasses) {
+  ::unsetenv("ZEPHYR_MACHINE");
+  // 1 rank x 1 bank x 4 subarrays x 8192 columns: 4 cores, 32768 columns.
+  ASSERT_EQ(pimCreateDevice(PIM_FUNCTIONAL, 1, 1, 4, 1024, 8192), PIM_OK);
+  const uint64_t n = 8192;
+  std::vector<int32_t> a(n), b(n);
+  for (uint64_t k = 0; k < n; ++k) a[k] = int32_t(k * 2654435761u), b[k] = int32_t(k * 40503u + 7);
+  const TempFile report;
+  std::vector<double> ms;
+  for (const PimAllocEnum layout : {PIM_ALLOC_V, PIM_ALLOC_H}) {
+    SCOPED_TRACE(layout == PIM_ALLOC_H ? "PIM_ALLOC_H" : "PIM_ALLOC_V");
+    const PimObjId x = pimAlloc(layout, n, PIM_INT32), y = pimAllocAssociated(x, PIM_INT32);
+    ASSERT_GE(y, 0);
+    ASSERT_EQ(pimCopyHostToDeviceWithType(PIM_COPY_H, a.data(), x, 0, 0), PIM_OK);
+    ASSERT_EQ(pimCopyHostToDevice(b.data(), y), PIM_OK);
+    pimResetStats();
+    ASSERT_EQ(pimAdd(x, y, y), PIM_OK);
+    ShowStats(report.path);
+    ms.push_back(ModelledMs("pimAdd INT32", report.path));
+    std::vector<int32_t> got(n);
+    ASSERT_EQ(pimCopyDeviceToHostWithType(PIM_COPY_H, y, got.data(), 0, 0), PIM_OK);
+    for (uint64_t k = 0; k < n; ++k)
+      ASSERT_EQ(got[k], int32_t(uint32_t(a[k]) + uint32_t(b[k]))) << k;
+  }
+  const double passesV = std::ceil(std::ceil(n / 8192.0) / 4), passesH = std::ceil(std::ceil(n * 32 / 8192.0) / 4);
+  EXPECT_EQ(passesH, 8);
+  EXPECT_GT(ms[0], 0);
+  EXPECT_NEAR(ms[1] / ms[0], passesH / passesV, 1e-9);
+  // H1 holds one region per core at most: 1024 INT32 elements fill the 32768 columns.
+  EXPECT_GE(pimAlloc(PIM_ALLOC_H1, 1024, PIM_INT32), 0);
+  EXPECT_EQ(pimAlloc(PIM_ALLOC_H1, 1025, PIM_INT32), -1);
+  EXPECT_EQ(pimCopyHostToDeviceWithType(PimCopyEnum(7), a.data(), 0, 0, 0), PIM_ERROR);
+  ASSERT_EQ(pimDeleteDevice(), PIM_OK);
 }

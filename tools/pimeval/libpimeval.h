@@ -54,7 +54,10 @@ enum PimDeviceProtocolEnum {
 };
 
 // Object layouts: AUTO, V and V1 are the vertical (bit-serial) layout, one element per
-// column, its bits down the rows; H and H1 (horizontal, bit-parallel) are refused.
+// column, its bits down the rows. H and H1 (an element across its bits' columns of one row) are
+// accepted as PIMeval's BitSIMD model accepts them: the same results, computed bit-serially,
+// the device counted as columns / bits-per-element columns (PIMeval's extra passes; docs/pim.md).
+// V1 and H1 refuse an object that needs more than one region per core.
 enum PimAllocEnum {
   PIM_ALLOC_AUTO = 0,
   PIM_ALLOC_V,
@@ -63,7 +66,7 @@ enum PimAllocEnum {
   PIM_ALLOC_H1,
 };
 
-// Copy layouts of the ...WithType copies: PIM_COPY_V is the plain copy; PIM_COPY_H is refused.
+// Copy layouts of the ...WithType copies: both are the plain copy (PIMeval does not use it).
 enum PimCopyEnum {
   PIM_COPY_V,
   PIM_COPY_H,
@@ -141,7 +144,7 @@ PimStatus pimDeleteDevice();  // frees every object; statistics are kept until t
 // PEs only through pimAllocAssociated; operands of every operation must be associated.
 PimObjId pimAlloc(PimAllocEnum allocType, uint64_t numElements, PimDataType dataType);
 PimObjId pimAllocAssociated(PimObjId assocId, PimDataType dataType);
-// AiM's global buffer: refused (no bank-level device here).
+// AiM's global buffer: refused, as PIMeval refuses it on every target but PIM_DEVICE_AIM.
 PimObjId pimAllocBuffer(uint32_t numElements, PimDataType dataType);
 PimStatus pimFree(PimObjId obj);
 
@@ -208,7 +211,8 @@ PimStatus pimPopCount(PimObjId src, PimObjId dest);
 // Inclusive prefix sum along the elements, wrapped (all elements within one layer of PEs);
 // refused on PIM_FP32 (PIMeval's element-by-element float order is not reproduced).
 PimStatus pimPrefixSum(PimObjId src, PimObjId dest);
-// AiM's per-core multiply-accumulate into a global buffer: refused (no bank-level device).
+// AiM's per-core multiply-accumulate over the global buffer: refused, as PIMeval refuses it on
+// every target but PIM_DEVICE_AIM.
 PimStatus pimMAC(PimObjId src1, PimObjId src2, void* dest);
 
 // Reductions over [idxBegin, idxEnd) (idxEnd 0: to the end; idxBegin == idxEnd != 0: empty).
@@ -265,7 +269,7 @@ struct PimProg {
 PimStatus pimFuse(PimProg prog);
 
 // ---- calls PIMeval marks as architecture-dependent -----------------------------------------
-// PIM_COPY_V is the plain copy; PIM_COPY_H is refused.
+// PIM_COPY_V and PIM_COPY_H are the plain copy (PIMeval's copies ignore the type).
 PimStatus pimCopyHostToDeviceWithType(PimCopyEnum copyType, void* src, PimObjId dest,
                                       uint64_t idxBegin = 0, uint64_t idxEnd = 0);
 PimStatus pimCopyDeviceToHostWithType(PimCopyEnum copyType, PimObjId src, void* dest,

@@ -229,12 +229,18 @@ PimStatus Refuse(const char* api, const std::string& why) {
 }
 
 // ---- the machine of a group ---------------------------------------------------------------
-MachineProfile GroupProfile(const Device& d, uint64_t n) {
+// The profile of a group of n elements. `rowBits` is how many columns one element takes in a
+// row: 1 in the vertical layout; the first object's bits per element in the horizontal one
+// (PIM_ALLOC_H/H1), whose elements PIMeval's BitSIMD model charges as the vertical layout's
+// operations over as many passes as the horizontal regions take per core — so the device
+// counts as Pes / rowBits columns of rows x rowBits bits each (at least 512, the engine's
+// vector), the elements computed bit-serially as ever.
+MachineProfile GroupProfile(const Device& d, uint64_t n, int rowBits) {
   MachineProfile p = d.profile;
   if (d.custom) return p;
   // The engine's planes are whole vectors of 512 PEs (a profile's physicalPes is a multiple
   // of 512, bitserial/profile.cpp): the columns used are rounded up to one.
-  const uint64_t columns = d.geometry.Pes() / 512 * 512;
+  const uint64_t columns = std::max<uint64_t>(512, d.geometry.Pes() / rowBits / 512 * 512);
   const uint64_t pes = std::min((n + 511) / 512 * 512, columns);
   if (pes > (uint64_t{1} << 30))
     throw UserError(fmt::format("{} elements: more than 2^30 PEs in one layer are not emulated", n));
@@ -242,14 +248,19 @@ MachineProfile GroupProfile(const Device& d, uint64_t n) {
       d.profile.physicalPes / 8.0 / d.profile.Cost(MicroOp::kHostPlane) * d.profile.clockHz;
   p.physicalPes = static_cast<int>(pes);
   p.shapes = {bitserial::MeshShape{{static_cast<int>(pes)}}};
-  p.internalBitsPerPe = d.geometry.rows;
+  p.internalBitsPerPe = d.geometry.rows * rowBits;
   p.externalBitsPerPe = 0;
   p.geometryNote[1] = fmt::format(
       "the {} columns this group's {} elements occupy (of the device's {} = {} ranks x {} banks "
-      "x {} subarrays x {} columns), rounded up to 512; more elements than columns run as layers",
+      "x {} subarrays x {} columns{}), rounded up to 512; more elements than columns run as layers",
       pes, n, d.geometry.Pes(), d.geometry.ranks, d.geometry.banks, d.geometry.subarrays,
-      d.geometry.cols);
-  p.geometryNote[2] = fmt::format("the device's {} rows per subarray", d.geometry.rows);
+      d.geometry.cols,
+      rowBits == 1 ? "" : fmt::format("; horizontal layout: {} columns per element", rowBits));
+  p.geometryNote[2] = rowBits == 1
+                          ? fmt::format("the device's {} rows per subarray", d.geometry.rows)
+                          : fmt::format("the device's {} rows per subarray x the {} columns of "
+                                        "a horizontal element",
+                                        d.geometry.rows, rowBits);
   p.geometryNote[3] = "one space: the rows are internal memory";
   p.geometryNote[4] = "one chain of the group's columns";
   p.cost[int(MicroOp::kHostPlane)] =
@@ -647,21 +658,21 @@ PimObjId pimAlloc(PimAllocEnum allocType, uint64_t numElements, PimDataType data
   PimObjId id = -1;
   Call("pimAlloc", [&] {
     Device& d = Dev();
-    if (allocType == PIM_ALLOC_H || allocType == PIM_ALLOC_H1)
-      throw UserError(fmt::format(
-          "allocation type {} (horizontal, bit-parallel layout) is not supported: the emulated "
-          "array is bit-serial, vertical layout only (PIM_ALLOC_AUTO, _V, _V1)",
-          allocType == PIM_ALLOC_H ? "PIM_ALLOC_H" : "PIM_ALLOC_H1"));
-    if (allocType != PIM_ALLOC_AUTO && allocType != PIM_ALLOC_V && allocType != PIM_ALLOC_V1)
+    if (allocType != PIM_ALLOC_AUTO && allocType != PIM_ALLOC_V && allocType != PIM_ALLOC_V1 &&
+        allocType != PIM_ALLOC_H && allocType != PIM_ALLOC_H1)
       throw UserError(fmt::format("allocation type {} is not a PimAllocEnum", int(allocType)));
     if (numElements == 0) throw UserError("an object needs at least one element");
     if (numElements > (uint64_t{1} << 31))
       throw UserError(fmt::format("{} elements: at most 2^31 are emulated", numElements));
-    Info(dataType);
-    if (allocType == PIM_ALLOC_V1 && !d.custom && numElements > d.geometry.Pes())
-      throw UserError(fmt::format("PIM_ALLOC_V1: {} elements exceed the device's {} columns "
+    // The horizontal layouts: each element across bits columns of one row (docs/pim.md).
+    const bool horizontal = allocType == PIM_ALLOC_H || allocType == PIM_ALLOC_H1;
+    const int rowBits = horizontal ? Info(dataType).bits : 1;
+    if ((allocType == PIM_ALLOC_V1 || allocType == PIM_ALLOC_H1) && !d.custom &&
+        numElements * rowBits > d.geometry.Pes())
+      throw UserError(fmt::format("{}: {} elements x {} column(s) exceed the device's {} columns "
                                   "(one region per core)",
-                                  numElements, d.geometry.Pes()));
+                                  allocType == PIM_ALLOC_V1 ? "PIM_ALLOC_V1" : "PIM_ALLOC_H1",
+                                  numElements, rowBits, d.geometry.Pes()));
     const uint64_t capacity = d.geometry.Pes() * d.geometry.rows;
     if (!d.custom && numElements * Info(dataType).bits > capacity)
       throw UserError(fmt::format("{} elements of {} need {} bits; the device holds {} ({} columns "
@@ -671,7 +682,8 @@ PimObjId pimAlloc(PimAllocEnum allocType, uint64_t numElements, PimDataType data
     auto g = std::make_shared<Group>();
     g->id = static_cast<int>(g_stats.groups.size()) + 1;
     g->elements = numElements;
-    g->machine = std::make_unique<Machine>(GroupProfile(d, numElements), int64_t(numElements));
+    g->machine =
+        std::make_unique<Machine>(GroupProfile(d, numElements, rowBits), int64_t(numElements));
     g_stats.groups.push_back(g);
     NewObject(d, dataType, g, &id);
     return std::string(TypeName(dataType));
@@ -690,10 +702,13 @@ PimObjId pimAllocAssociated(PimObjId assocId, PimDataType dataType) {
   return id;
 }
 
+// PIMeval allocates the global buffer on PIM_DEVICE_AIM only ("Device does not support On-Chip
+// Buffer" on every other target, pimDevice.cpp); AiM is bit-parallel and not emulated here.
 PimObjId pimAllocBuffer(uint32_t, PimDataType) {
   Refuse("pimAllocBuffer",
-         "a global buffer is AiM's (PIM_DEVICE_AIM, bank-level); this library emulates "
-         "bit-serial devices only");
+         "the global buffer exists on PIM_DEVICE_AIM only (PIMeval refuses it on every other "
+         "simulation target: \"Device does not support On-Chip Buffer\"); AiM is bit-parallel, "
+         "not emulated here");
   return -1;
 }
 
@@ -1108,10 +1123,13 @@ PimStatus pimPrefixSum(PimObjId src, PimObjId dest) {
   });
 }
 
+// PIMeval runs pimMAC on PIM_DEVICE_AIM only ("only supported on AiM", pimCmd.cpp, pimCmdMAC):
+// its per-core results are AiM's banks, its second operand the global buffer above.
 PimStatus pimMAC(PimObjId, PimObjId, void*) {
   return Refuse("pimMAC",
-                "the multiply-accumulate into per-core results over a global buffer is AiM's "
-                "(PIM_DEVICE_AIM, bank-level); this library emulates bit-serial devices only");
+                "the multiply-accumulate over the global buffer into per-core results runs on "
+                "PIM_DEVICE_AIM only (PIMeval refuses it on every other simulation target: \"only "
+                "supported on AiM\"); AiM is bit-parallel, not emulated here");
 }
 
 // ---- reductions -------------------------------------------------------------------------------
@@ -1455,18 +1473,21 @@ PimStatus pimFuse(PimProg prog) {
   return PIM_OK;
 }
 
+// PIMeval's copies take the copy type and do not use it (pimCmd.cpp, pimCmdCopy: elements are
+// copied by index and charged by bytes whatever the layout): PIM_COPY_V and PIM_COPY_H are the
+// plain copy; another value is an error.
 PimStatus pimCopyHostToDeviceWithType(PimCopyEnum copyType, void* src, PimObjId dest,
                                       uint64_t idxBegin, uint64_t idxEnd) {
-  if (copyType != PIM_COPY_V)
+  if (copyType != PIM_COPY_V && copyType != PIM_COPY_H)
     return Refuse("pimCopyHostToDeviceWithType",
-                  "PIM_COPY_H (horizontal layout) is not supported; PIM_COPY_V is");
+                  fmt::format("copy type {} is not a PimCopyEnum", int(copyType)));
   return pimCopyHostToDevice(src, dest, idxBegin, idxEnd);
 }
 PimStatus pimCopyDeviceToHostWithType(PimCopyEnum copyType, PimObjId src, void* dest,
                                       uint64_t idxBegin, uint64_t idxEnd) {
-  if (copyType != PIM_COPY_V)
+  if (copyType != PIM_COPY_V && copyType != PIM_COPY_H)
     return Refuse("pimCopyDeviceToHostWithType",
-                  "PIM_COPY_H (horizontal layout) is not supported; PIM_COPY_V is");
+                  fmt::format("copy type {} is not a PimCopyEnum", int(copyType)));
   return pimCopyDeviceToHost(src, dest, idxBegin, idxEnd);
 }
 
