@@ -15,6 +15,7 @@
 #include <fmt/format.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -143,6 +144,9 @@ PimDeviceEnum CheckTarget(PimDeviceEnum d) {
 struct Group {
   int id = 0;
   uint64_t elements = 0;
+  // Elements per PIMeval region (one core's share in one pass): the subarray's columns, divided
+  // by the bits per element in the horizontal layout; on a ZEPHYR_MACHINE profile, its PEs.
+  uint64_t regionElements = 0;
   std::unique_ptr<Machine> machine;
   int live = 0;
   std::optional<bitserial::CycleReport> finalReport;  // kept when the last object is freed
@@ -684,6 +688,8 @@ PimObjId pimAlloc(PimAllocEnum allocType, uint64_t numElements, PimDataType data
     g->elements = numElements;
     g->machine =
         std::make_unique<Machine>(GroupProfile(d, numElements, rowBits), int64_t(numElements));
+    g->regionElements = d.custom ? uint64_t(g->machine->Profile().physicalPes)
+                                 : std::max<uint64_t>(1, d.geometry.cols / rowBits);
     g_stats.groups.push_back(g);
     NewObject(d, dataType, g, &id);
     return std::string(TypeName(dataType));
@@ -1138,9 +1144,12 @@ enum class Red { kSum, kMin, kMax };
 
 // A PIM_FP32 reduction of [b, e) folded into *out (a float), PIMeval's way where its order
 // does not matter and in a documented order where it does (docs/pim.md, "Semantics"):
-//  * the array reduces the range as a tree by element index: at step k (s = 2^k, while
-//    s < e) element i combines with element i + s (the chain moves the partner s places),
-//    so element 0 ends with the range's pairwise combination;
+//  * the range is reduced as a tree by element index: at step k (s = 2^k, while s < e)
+//    element i combines with element i + s, so element 0 ends with the range's pairwise
+//    combination. The array takes the steps within a region (s below the region's elements:
+//    the chain moves the partner s places, as a subarray's columns can); the host reads the
+//    partials (every plane) and takes the steps across regions, as PIMeval folds its regions'
+//    results on the host — the same tree, so the same result;
 //  * sums: elements outside the range are +0.0; the host then adds (+0.0 + tree) to *out.
 //    PIMeval adds one element after another per region from a +0.0 seed, then the regions
 //    into *out: the same up to the rounding of a different association;
@@ -1172,7 +1181,8 @@ void FloatReduce(Red op, Object& a, void* out, uint64_t b, uint64_t e) {
       WhereScope w(*off);
       x.Bits() = id.Bits();
     }
-    for (uint64_t s = 1; s < e; s *= 2) {
+    uint64_t s = 1;
+    for (; s < e && s < g.regionElements; s *= 2) {
       MultiFloat y = AsFloat(ShiftElements(x.Bits(), -static_cast<int>(s), n));
       if (op != Red::kSum) {  // partners past the end (the chain brings +0.0) are the seed
         const Multi past = RangeMask(g, n - s, n);
@@ -1185,7 +1195,22 @@ void FloatReduce(Red op, Object& a, void* out, uint64_t b, uint64_t e) {
         x = AsFloat(Select(op == Red::kMin ? Less(y, x) : Less(x, y), y.Bits(), x.Bits(),
                            Format::Unsigned(32, 0)));
     }
-    tree = FloatOf(ReadElement(g, x.Bits(), 0).raw.convert_to<uint64_t>());
+    if (s >= e) {
+      tree = FloatOf(ReadElement(g, x.Bits(), 0).raw.convert_to<uint64_t>());
+    } else {
+      const std::vector<int64_t> raw = x.Bits().ReadRaw();
+      std::vector<float> h(n);
+      for (uint64_t i = 0; i < n; ++i) h[i] = FloatOf(static_cast<uint64_t>(raw[i]));
+      for (; s < e; s *= 2)
+        for (uint64_t i = 0; i < n; i += 2 * s) {
+          const float y = i + s < n ? h[i + s] : seed;  // past the end: the seed, as the chain
+          // brings +0.0 and the min/max steps set it
+          h[i] = op == Red::kSum ? h[i] + y : op == Red::kMin ? (y < h[i] ? y : h[i])
+                                                               : (h[i] < y ? y : h[i]);
+        }
+      tree = h[0];
+      if (std::isnan(tree)) tree = FloatOf(0x7fc00000);  // the engine's NaN (docs/pim.md)
+    }
   }
   float cur;
   std::memcpy(&cur, out, 4);
