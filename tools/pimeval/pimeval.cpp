@@ -86,8 +86,10 @@ TypeInfo Info(PimDataType t) {
     default:
       throw UserError(fmt::format(
           "data type {} ({}) is not supported: this library emulates PIM_BOOL, PIM_INT8..64, "
-          "PIM_UINT8..64 and PIM_FP32 (the narrower floats would need their formats wired to the "
-          "engine's MultiFloat; docs/pim.md)",
+          "PIM_UINT8..64 and PIM_FP32 (PIMeval keeps FP16, BF16 and FP8 as 4-byte floats computed "
+          "in FP32 and charges the narrower width's time; an array computing in the narrow format "
+          "would round differently, one computing in FP32 would not cost the narrow time; "
+          "docs/pim.md)",
           TypeName(t), int(t)));
   }
 }
