@@ -599,8 +599,10 @@ std::vector<uint32_t> Patterns(const std::vector<float>& v) {
 
 }  // namespace
 
-TEST_F(Pim, EveryFloatOperationMatchesCppFloatBitForBit) {
-  const size_t n = 1000;
+namespace {
+// Every call on PIM_FP32 objects of n elements against plain C++ float.
+void CheckEveryFloatOperation(size_t n) {
+  SCOPED_TRACE(testing::Message() << "PIM_FP32, " << n << " elements");
   std::vector<float> a, b;
   FloatOperands(n, a, b);
   Operands o;
@@ -719,6 +721,10 @@ TEST_F(Pim, EveryFloatOperationMatchesCppFloatBitForBit) {
 
   for (PimObjId id : {oa, ob, od, oc}) EXPECT_EQ(pimFree(id), PIM_OK);
 }
+}  // namespace
+
+TEST_F(Pim, EveryFloatOperationMatchesCppFloatBitForBit) { CheckEveryFloatOperation(1000); }
+TEST_F(Pim, EveryFloatOperationOverSeveralLayersMatchesCpp) { CheckEveryFloatOperation(6144); }
 
 namespace {
 // PIMeval's pimRedMin/Max on floats (pimCmd.cpp): per region from a seed of FLT_MAX (max:
