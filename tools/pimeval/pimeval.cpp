@@ -435,12 +435,19 @@ std::pair<uint64_t, uint64_t> CopyRange(uint64_t n, uint64_t b, uint64_t e, PimO
   return {b, e};
 }
 
-// Shifts a multi by one element along the chain of elements: +1 moves element i to i+1.
+// Whether the n elements of machine m can move along their chain: one layer of a 1-D mesh, or
+// whole layers (the engine's virtual mesh).
+bool ElementsCanMove(const Machine& m, uint64_t n) {
+  return (m.Layers() == 1 && m.Shape().extent.size() == 1) ||
+         static_cast<int64_t>(n) % m.Profile().physicalPes == 0;
+}
+
+// Shifts a multi by d elements along the chain of elements: +1 moves element i to i+1.
 Multi ShiftElements(const Multi& a, int d, uint64_t n) {
   Machine& m = a.GetMachine();
   if (m.Layers() == 1 && m.Shape().extent.size() == 1) return MeshShift(a, 0, d);
   const int64_t pes = m.Profile().physicalPes;
-  if (static_cast<int64_t>(n) % pes != 0)
+  if (!ElementsCanMove(m, n))
     throw UserError(fmt::format(
         "moving {} elements along their chain takes whole layers of the machine's {} PEs on "
         "machine '{}' ({} layer(s), mesh {}): allocate a multiple of {} elements",
@@ -1151,7 +1158,8 @@ enum class Red { kSum, kMin, kMax };
 //    combination. The array takes the steps within a region (s below the region's elements:
 //    the chain moves the partner s places, as a subarray's columns can); the host reads the
 //    partials (every plane) and takes the steps across regions, as PIMeval folds its regions'
-//    results on the host — the same tree, so the same result;
+//    results on the host — the same tree, so the same result. Where the elements cannot move
+//    (part of a layer of a 2-D mesh or of several layers) the host takes every step;
 //  * sums: elements outside the range are +0.0; the host then adds (+0.0 + tree) to *out.
 //    PIMeval adds one element after another per region from a +0.0 seed, then the regions
 //    into *out: the same up to the rounding of a different association;
@@ -1183,8 +1191,9 @@ void FloatReduce(Red op, Object& a, void* out, uint64_t b, uint64_t e) {
       WhereScope w(*off);
       x.Bits() = id.Bits();
     }
+    const uint64_t arraySteps = ElementsCanMove(m, n) ? g.regionElements : 1;
     uint64_t s = 1;
-    for (; s < e && s < g.regionElements; s *= 2) {
+    for (; s < e && s < arraySteps; s *= 2) {
       MultiFloat y = AsFloat(ShiftElements(x.Bits(), -static_cast<int>(s), n));
       if (op != Red::kSum) {  // partners past the end (the chain brings +0.0) are the seed
         const Multi past = RangeMask(g, n - s, n);
