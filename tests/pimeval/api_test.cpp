@@ -744,6 +744,20 @@ float TreeSum(const std::vector<float>& v, uint64_t b, uint64_t e, float cur) {
     for (uint64_t i = 0; i < t.size(); ++i) t[i] = t[i] + (i + s < t.size() ? t[i + s] : 0.0f);
   return cur + (0.0f + t[0]);
 }
+// pimRedSum/Min/Max of object o over [b, e) as the call takes it (e 0: to the end), each result
+// holding `init` first, against TreeSum and PimevalMinMax of the host's copy v.
+void CheckFloatReductions(PimObjId o, const std::vector<float>& v, uint64_t b, uint64_t e,
+                          float init) {
+  SCOPED_TRACE(testing::Message() << "range [" << b << ", " << e << "), result holding " << init);
+  const uint64_t end = e == 0 ? v.size() : std::min<uint64_t>(e, v.size());
+  float sum = init, lo = init, hi = init;
+  ASSERT_EQ(pimRedSum(o, &sum, b, e), PIM_OK);
+  ASSERT_EQ(pimRedMin(o, &lo, b, e), PIM_OK);
+  ASSERT_EQ(pimRedMax(o, &hi, b, e), PIM_OK);
+  EXPECT_TRUE(SameFloat(sum, TreeSum(v, b, end, init)));
+  EXPECT_EQ(FBits(lo), FBits(PimevalMinMax(v, b, end, init, true)));
+  EXPECT_EQ(FBits(hi), FBits(PimevalMinMax(v, b, end, init, false)));
+}
 }  // namespace
 
 TEST_F(Pim, FloatReductionsFollowPimevalOrTheDocumentedTree) {
@@ -763,18 +777,8 @@ TEST_F(Pim, FloatReductionsFollowPimevalOrTheDocumentedTree) {
   for (const Range r : {Range{0, 0}, Range{0, n}, Range{n - 1, n}, Range{10, 0}, Range{7, 7},
                         Range{n - 3, n + 10}, Range{700, 705}, Range{710, 713}, Range{720, 723},
                         Range{600, 700}, Range{0, 1}}) {
-    SCOPED_TRACE(testing::Message() << "range [" << r.b << ", " << r.e << ")");
-    const uint64_t e = r.e == 0 ? n : std::min<uint64_t>(r.e, n);
-    for (const float init : {0.0f, -0.0f, 2.5f, inf, -inf, nan}) {
-      SCOPED_TRACE(testing::Message() << "result holding " << init);
-      float sum = init, lo = init, hi = init;
-      ASSERT_EQ(pimRedSum(o, &sum, r.b, r.e), PIM_OK);
-      ASSERT_EQ(pimRedMin(o, &lo, r.b, r.e), PIM_OK);
-      ASSERT_EQ(pimRedMax(o, &hi, r.b, r.e), PIM_OK);
-      EXPECT_TRUE(SameFloat(sum, TreeSum(a, r.b, e, init)));
-      EXPECT_EQ(FBits(lo), FBits(PimevalMinMax(a, r.b, e, init, true)));
-      EXPECT_EQ(FBits(hi), FBits(PimevalMinMax(a, r.b, e, init, false)));
-    }
+    for (const float init : {0.0f, -0.0f, 2.5f, inf, -inf, nan})
+      ASSERT_NO_FATAL_FAILURE(CheckFloatReductions(o, a, r.b, r.e, init));
   }
   // Where every partial sum is exact (small integers) the order does not matter: PIMeval's
   // element-by-element sum is the same.
@@ -795,18 +799,9 @@ TEST_F(Pim, FloatReductionsOverSeveralLayersAndPartOfOne) {
   const PimObjId o = pimAlloc(PIM_ALLOC_AUTO, n, PIM_FP32);
   ASSERT_GE(o, 0);
   ASSERT_EQ(pimCopyHostToDevice((void*)a.data(), o), PIM_OK);
-  for (const uint64_t b : {uint64_t{0}, uint64_t{2000}}) {
-    for (const uint64_t e : {uint64_t{n}, uint64_t{4097}}) {
-      SCOPED_TRACE(testing::Message() << "range [" << b << ", " << e << ")");
-      float sum = 1.0f, lo = 0.0f, hi = 0.0f;
-      ASSERT_EQ(pimRedSum(o, &sum, b, e), PIM_OK);
-      ASSERT_EQ(pimRedMin(o, &lo, b, e), PIM_OK);
-      ASSERT_EQ(pimRedMax(o, &hi, b, e), PIM_OK);
-      EXPECT_TRUE(SameFloat(sum, TreeSum(a, b, e, 1.0f)));
-      EXPECT_EQ(FBits(lo), FBits(PimevalMinMax(a, b, e, 0.0f, true)));
-      EXPECT_EQ(FBits(hi), FBits(PimevalMinMax(a, b, e, 0.0f, false)));
-    }
-  }
+  for (const uint64_t b : {uint64_t{0}, uint64_t{2000}})
+    for (const uint64_t e : {uint64_t{n}, uint64_t{4097}})
+      ASSERT_NO_FATAL_FAILURE(CheckFloatReductions(o, a, b, e, 1.0f));
   // Over part of the last layer the elements cannot move along the chain: the host takes every
   // step of the same tree.
   const size_t m = 3000;
@@ -814,13 +809,8 @@ TEST_F(Pim, FloatReductionsOverSeveralLayersAndPartOfOne) {
   const PimObjId p = pimAlloc(PIM_ALLOC_AUTO, m, PIM_FP32);
   ASSERT_GE(p, 0);
   ASSERT_EQ(pimCopyHostToDevice((void*)a.data(), p), PIM_OK);
-  float sum = 0.5f, lo = 0.0f, hi = 0.0f;
-  ASSERT_EQ(pimRedSum(p, &sum, 3, 2999), PIM_OK);
-  ASSERT_EQ(pimRedMin(p, &lo), PIM_OK);
-  ASSERT_EQ(pimRedMax(p, &hi), PIM_OK);
-  EXPECT_TRUE(SameFloat(sum, TreeSum(a, 3, 2999, 0.5f)));
-  EXPECT_EQ(FBits(lo), FBits(PimevalMinMax(a, 0, m, 0.0f, true)));
-  EXPECT_EQ(FBits(hi), FBits(PimevalMinMax(a, 0, m, 0.0f, false)));
+  ASSERT_NO_FATAL_FAILURE(CheckFloatReductions(p, a, 3, 2999, 0.5f));
+  ASSERT_NO_FATAL_FAILURE(CheckFloatReductions(p, a, 0, 0, -1.0f));
 }
 
 TEST_F(Pim, FloatCallsThatDoNotApplyAreErrorsNamingThem) {
@@ -938,13 +928,8 @@ TEST(PimDevice, FloatReductionsRunOnAnotherProfile) {
     const PimObjId o = pimAlloc(PIM_ALLOC_AUTO, n, PIM_FP32);
     ASSERT_GE(o, 0);
     ASSERT_EQ(pimCopyHostToDevice((void*)a.data(), o), PIM_OK);
-    float sum = 0.0f, lo = 0.0f, hi = 0.0f;
-    ASSERT_EQ(pimRedSum(o, &sum, 700, 0), PIM_OK);
-    ASSERT_EQ(pimRedMin(o, &lo), PIM_OK);
-    ASSERT_EQ(pimRedMax(o, &hi), PIM_OK);
-    EXPECT_TRUE(SameFloat(sum, TreeSum(a, 700, n, 0.0f)));
-    EXPECT_EQ(FBits(lo), FBits(PimevalMinMax(a, 0, n, 0.0f, true)));
-    EXPECT_EQ(FBits(hi), FBits(PimevalMinMax(a, 0, n, 0.0f, false)));
+    ASSERT_NO_FATAL_FAILURE(CheckFloatReductions(o, a, 700, 0, 0.0f));
+    ASSERT_NO_FATAL_FAILURE(CheckFloatReductions(o, a, 0, 0, 1.0f));
     EXPECT_EQ(pimFree(o), PIM_OK);
   }
   EXPECT_EQ(pimDeleteDevice(), PIM_OK);
