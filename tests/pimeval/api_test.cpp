@@ -1,7 +1,9 @@
 // PIMeval's host API on the engine (tools/pimeval/, docs/pim.md): every call on every supported
 // type against plain C++ computing PIMeval's semantics (the element widened to int64_t or
-// uint64_t, the C++ operation, the result wrapped to the type), edge values, ranges at the
-// object's ends and empty ones, errors for what is refused, the modelled time's parallelism.
+// uint64_t, the C++ operation, the result wrapped to the type; for PIM_FP32 the C++ float
+// expression), edge values (INT64 min, UINT64 max, -0.0, NaN, infinities, subnormals, FLT_MAX),
+// ranges at the object's ends and empty ones, errors for what is refused, the modelled time's
+// parallelism (and the horizontal layout's passes).
 #include <gtest/gtest.h>
 
 #include <algorithm>
