@@ -54,7 +54,10 @@ enum PimDeviceProtocolEnum {
 };
 
 // Object layouts: AUTO, V and V1 are the vertical (bit-serial) layout, one element per
-// column, its bits down the rows; H and H1 (horizontal, bit-parallel) are refused.
+// column, its bits down the rows. H and H1 (an element across its bits' columns of one row) are
+// accepted as PIMeval's BitSIMD model accepts them: the same results, computed bit-serially,
+// the device counted as columns / bits-per-element columns (PIMeval's extra passes; docs/pim.md).
+// V1 and H1 refuse an object that needs more than one region per core.
 enum PimAllocEnum {
   PIM_ALLOC_AUTO = 0,
   PIM_ALLOC_V,
@@ -63,7 +66,7 @@ enum PimAllocEnum {
   PIM_ALLOC_H1,
 };
 
-// Copy layouts of the ...WithType copies: PIM_COPY_V is the plain copy; PIM_COPY_H is refused.
+// Copy layouts of the ...WithType copies: both are the plain copy (PIMeval does not use it).
 enum PimCopyEnum {
   PIM_COPY_V,
   PIM_COPY_H,
@@ -71,7 +74,8 @@ enum PimCopyEnum {
 
 // Element types. Supported: PIM_BOOL (one bit; one uint8_t per element on the host, its
 // lowest bit), PIM_INT8..64 and PIM_UINT8..64 (two's complement / unsigned, wrapping as C++'s
-// fixed-width arithmetic). Refused: PIM_FP32, PIM_FP16, PIM_BF16, PIM_FP8.
+// fixed-width arithmetic), PIM_FP32 (IEEE binary32, one float per element on the host; the
+// engine's bit-serial MultiFloat, round to nearest even). Refused: PIM_FP16, PIM_BF16, PIM_FP8.
 enum PimDataType {
   PIM_BOOL = 0,
   PIM_INT8,
@@ -140,7 +144,7 @@ PimStatus pimDeleteDevice();  // frees every object; statistics are kept until t
 // PEs only through pimAllocAssociated; operands of every operation must be associated.
 PimObjId pimAlloc(PimAllocEnum allocType, uint64_t numElements, PimDataType dataType);
 PimObjId pimAllocAssociated(PimObjId assocId, PimDataType dataType);
-// AiM's global buffer: refused (no bank-level device here).
+// AiM's global buffer: refused, as PIMeval refuses it on every target but PIM_DEVICE_AIM.
 PimObjId pimAllocBuffer(uint32_t numElements, PimDataType dataType);
 PimStatus pimFree(PimObjId obj);
 
@@ -154,13 +158,16 @@ PimStatus pimCopyDeviceToHost(PimObjId src, void* dest, uint64_t idxBegin = 0,
 PimStatus pimCopyDeviceToDevice(PimObjId src, PimObjId dest, uint64_t idxBegin = 0,
                                 uint64_t idxEnd = 0);
 PimStatus pimCopyObjectToObject(PimObjId src, PimObjId dest);
-// Element-wise conversion between integer types (value wrapped into dest's type, as a C++ cast).
+// Element-wise conversion between integer types (value wrapped into dest's type, as a C++ cast);
+// from or to PIM_FP32 refused (PIMeval leaves it unimplemented).
 PimStatus pimConvertType(PimObjId src, PimObjId dest);
 
 // ---- element-wise arithmetic and logic (operands associated, of one type) ------------------
 // Results wrap to the type's width as C++'s fixed-width integers do; pimAdd/pimSub also take
 // a PIM_BOOL src2. Division truncates toward zero; a zero divisor anywhere is PIM_ERROR with
-// dest unchanged (PIMeval's "Division by zero").
+// dest unchanged (PIMeval's "Division by zero"). On PIM_FP32: the C++ float operation on each
+// element (NaN results canonical 0x7fc00000); pimMin/pimMax are (a < b) ? a : b and
+// (a > b) ? a : b, pimAbs a < 0 ? -a : a; the bitwise calls are refused.
 PimStatus pimAdd(PimObjId src1, PimObjId src2, PimObjId dest);
 PimStatus pimSub(PimObjId src1, PimObjId src2, PimObjId dest);
 PimStatus pimMul(PimObjId src1, PimObjId src2, PimObjId dest);
@@ -174,7 +181,8 @@ PimStatus pimXnor(PimObjId src1, PimObjId src2, PimObjId dest);
 PimStatus pimMin(PimObjId src1, PimObjId src2, PimObjId dest);
 PimStatus pimMax(PimObjId src1, PimObjId src2, PimObjId dest);
 // The scalar is a 64-bit value (int64_t for signed types): the result is the C++ operation on
-// the element widened to 64 bits and the scalar, wrapped to the element's type.
+// the element widened to 64 bits and the scalar, wrapped to the element's type. On PIM_FP32 the
+// scalar's low 32 bits are the float's pattern; pimMinScalar/pimMaxScalar are std::min/std::max.
 PimStatus pimAddScalar(PimObjId src, PimObjId dest, uint64_t scalarValue);
 PimStatus pimSubScalar(PimObjId src, PimObjId dest, uint64_t scalarValue);
 PimStatus pimMulScalar(PimObjId src, PimObjId dest, uint64_t scalarValue);
@@ -200,15 +208,19 @@ PimStatus pimNEScalar(PimObjId src, PimObjId destBool, uint64_t scalarValue);
 PimStatus pimScaledAdd(PimObjId src1, PimObjId src2, PimObjId dest, uint64_t scalarValue);
 // dest = the number of one bits of each element (same type as src).
 PimStatus pimPopCount(PimObjId src, PimObjId dest);
-// Inclusive prefix sum along the elements, wrapped (all elements within one layer of PEs).
+// Inclusive prefix sum along the elements, wrapped (all elements within one layer of PEs);
+// refused on PIM_FP32 (PIMeval's element-by-element float order is not reproduced).
 PimStatus pimPrefixSum(PimObjId src, PimObjId dest);
-// AiM's per-core multiply-accumulate into a global buffer: refused (no bank-level device).
+// AiM's per-core multiply-accumulate over the global buffer: refused, as PIMeval refuses it on
+// every target but PIM_DEVICE_AIM.
 PimStatus pimMAC(PimObjId src1, PimObjId src2, void* dest);
 
 // Reductions over [idxBegin, idxEnd) (idxEnd 0: to the end; idxBegin == idxEnd != 0: empty).
 // As PIMeval, they fold into what *sum / *min / *max already holds: pimRedSum ADDS the range's
 // sum to an int64_t (signed types) or uint64_t (unsigned, PIM_BOOL); pimRedMin/Max keep the
-// smaller/larger of the object's C type value at *min/*max and the range's extreme.
+// smaller/larger of the object's C type value at *min/*max and the range's extreme. PIM_FP32:
+// a float at *sum/*min/*max; min/max pick PIMeval's element (first of the extremes, NaN skipped,
+// seeded with FLT_MAX / -FLT_MAX); the sum adds pairwise by element index (docs/pim.md).
 PimStatus pimRedSum(PimObjId src, void* sum, uint64_t idxBegin = 0, uint64_t idxEnd = 0);
 PimStatus pimRedMin(PimObjId src, void* min, uint64_t idxBegin = 0, uint64_t idxEnd = 0);
 PimStatus pimRedMax(PimObjId src, void* max, uint64_t idxBegin = 0, uint64_t idxEnd = 0);
@@ -224,7 +236,8 @@ PimStatus pimCondSelect(PimObjId condBool, PimObjId src1, PimObjId src2, PimObjI
 PimStatus pimCondSelectScalar(PimObjId condBool, PimObjId src1, uint64_t scalarBits,
                               PimObjId dest);
 
-// Every element = value wrapped to the type. pimBroadcastFP is refused (no PIM_FP32).
+// Every element = value wrapped to the type; pimBroadcastFP writes the float's bit pattern (into
+// an integer object its low bits), as PIMeval's.
 PimStatus pimBroadcastInt(PimObjId dest, int64_t value);
 PimStatus pimBroadcastUInt(PimObjId dest, uint64_t value);
 PimStatus pimBroadcastFP(PimObjId dest, float value);
@@ -256,7 +269,7 @@ struct PimProg {
 PimStatus pimFuse(PimProg prog);
 
 // ---- calls PIMeval marks as architecture-dependent -----------------------------------------
-// PIM_COPY_V is the plain copy; PIM_COPY_H is refused.
+// PIM_COPY_V and PIM_COPY_H are the plain copy (PIMeval's copies ignore the type).
 PimStatus pimCopyHostToDeviceWithType(PimCopyEnum copyType, void* src, PimObjId dest,
                                       uint64_t idxBegin = 0, uint64_t idxEnd = 0);
 PimStatus pimCopyDeviceToHostWithType(PimCopyEnum copyType, PimObjId src, void* dest,

@@ -1,28 +1,33 @@
 // tools/pimeval/pimeval.cpp — PIMeval's host API (libpimeval.h) on the emulated array: a client
-// of the installed engine API (bitserial/multi.h), as tools/kernels/ is. docs/pim.md says what
-// is supported and the decisions; the PIMeval semantics followed are those of its source at
-// github.com/UVA-LavaLab/PIMeval-PIMbench 40ce162 (libpimeval/src/pimCmd.h, pimSim.cpp).
+// of the installed engine API (bitserial/multi.h, bitserial/float.h), as tools/kernels/ is.
+// docs/pim.md says what is supported and the decisions; the PIMeval semantics followed are
+// those of its source at github.com/UVA-LavaLab/PIMeval-PIMbench 40ce162
+// (libpimeval/src/pimCmd.h, pimCmd.cpp, pimSim.cpp).
 //
 // Objects: each pimAlloc opens a group (its associated objects share it): one engine Machine of
 // exactly the group's elements as virtual PEs, each object a Multi on it (format s(b-1).0 or
-// ub.0, wrap-around). On the BitSIMD-V devices the machine's physical PEs are the columns the
-// group occupies (rounded up to 512), at most the device's ranks x banks x subarrays x columns,
-// so a 2,048-element vector costs 2,048 PEs of host work while the modelled time is the
-// device's: every column works at once, and more elements than columns run as layers, each
-// with rows/layers bits of memory (PIMeval's regions per core).
+// ub.0, wrap-around) or, for PIM_FP32, a MultiFloat (IEEE binary32). On the BitSIMD-V devices
+// the machine's physical PEs are the columns the group occupies (rounded up to 512), at most the
+// device's ranks x banks x subarrays x columns, so a 2,048-element vector costs 2,048 PEs of
+// host work while the modelled time is the device's: every column works at once, and more
+// elements than columns run as layers, each with rows/layers bits of memory (PIMeval's regions
+// per core).
 #include <fmt/format.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "bitserial/float.h"
 #include "bitserial/multi.h"
 #include "fixed/check.h"
 #include "tools/pimeval/config.h"
@@ -37,6 +42,8 @@ using bitserial::MachineProfile;
 using bitserial::MicroOp;
 using bitserial::MicroOpCounts;
 using bitserial::Multi;
+using bitserial::MultiFloat;
+using bitserial::UniFloat;
 using bitserial::Uni;
 using bitserial::WhereScope;
 using bitserial::Word;
@@ -49,8 +56,13 @@ struct TypeInfo {
   bool isSigned = false;
   int bytes = 0;       // bytes per element on the host
   const char* name = "";
+  bool isFloat = false;  // PIM_FP32: IEEE binary32, its bit pattern held as ub.0 (Fmt())
+  // The format of the element's bits on the array (for a float, its bit pattern's).
   Format Fmt() const { return isSigned ? Format::Signed(bits - 1, 0) : Format::Unsigned(bits, 0); }
 };
+
+// PIM_FP32's format on the array: IEEE binary32 with subnormals, round to nearest even.
+const fixed::FloatFormat kFp32 = fixed::FloatFormat::Binary32();
 
 const char* TypeName(PimDataType t) {
   static const char* names[] = {"PIM_BOOL",   "PIM_INT8",   "PIM_INT16",  "PIM_INT32", "PIM_INT64",
@@ -70,10 +82,14 @@ TypeInfo Info(PimDataType t) {
     case PIM_UINT16: return {16, false, 2, "UINT16"};
     case PIM_UINT32: return {32, false, 4, "UINT32"};
     case PIM_UINT64: return {64, false, 8, "UINT64"};
+    case PIM_FP32: return {32, false, 4, "FP32", true};
     default:
       throw UserError(fmt::format(
-          "data type {} ({}) is not supported: this library emulates PIM_BOOL, PIM_INT8..64 and "
-          "PIM_UINT8..64 (floating point would need the engine's MultiFloat behind it; docs/pim.md)",
+          "data type {} ({}) is not supported: this library emulates PIM_BOOL, PIM_INT8..64, "
+          "PIM_UINT8..64 and PIM_FP32 (PIMeval keeps FP16, BF16 and FP8 as 4-byte floats computed "
+          "in FP32 and charges the narrower width's time; an array computing in the narrow format "
+          "would round differently, one computing in FP32 would not cost the narrow time; "
+          "docs/pim.md)",
           TypeName(t), int(t)));
   }
 }
@@ -130,6 +146,9 @@ PimDeviceEnum CheckTarget(PimDeviceEnum d) {
 struct Group {
   int id = 0;
   uint64_t elements = 0;
+  // Elements per PIMeval region (one core's share in one pass): the subarray's columns, divided
+  // by the bits per element in the horizontal layout; on a ZEPHYR_MACHINE profile, its PEs.
+  uint64_t regionElements = 0;
   std::unique_ptr<Machine> machine;
   int live = 0;
   std::optional<bitserial::CycleReport> finalReport;  // kept when the last object is freed
@@ -142,7 +161,11 @@ struct Object {
   PimDataType type;
   TypeInfo info;
   std::shared_ptr<Group> group;
-  Multi value;
+  Multi value;         // an integer or BOOL object's elements (empty for PIM_FP32)
+  MultiFloat fvalue;   // a PIM_FP32 object's elements (empty otherwise)
+  // The elements' bits, whatever the type (copies, conditionals, moves, bit slices).
+  Multi& Raw() { return info.isFloat ? fvalue.Bits() : value; }
+  const Multi& Raw() const { return info.isFloat ? fvalue.Bits() : value; }
 };
 
 struct Device {
@@ -212,12 +235,18 @@ PimStatus Refuse(const char* api, const std::string& why) {
 }
 
 // ---- the machine of a group ---------------------------------------------------------------
-MachineProfile GroupProfile(const Device& d, uint64_t n) {
+// The profile of a group of n elements. `rowBits` is how many columns one element takes in a
+// row: 1 in the vertical layout; the first object's bits per element in the horizontal one
+// (PIM_ALLOC_H/H1), whose elements PIMeval's BitSIMD model charges as the vertical layout's
+// operations over as many passes as the horizontal regions take per core — so the device
+// counts as Pes / rowBits columns of rows x rowBits bits each (at least 512, the engine's
+// vector), the elements computed bit-serially as ever.
+MachineProfile GroupProfile(const Device& d, uint64_t n, int rowBits) {
   MachineProfile p = d.profile;
   if (d.custom) return p;
   // The engine's planes are whole vectors of 512 PEs (a profile's physicalPes is a multiple
   // of 512, bitserial/profile.cpp): the columns used are rounded up to one.
-  const uint64_t columns = d.geometry.Pes() / 512 * 512;
+  const uint64_t columns = std::max<uint64_t>(512, d.geometry.Pes() / rowBits / 512 * 512);
   const uint64_t pes = std::min((n + 511) / 512 * 512, columns);
   if (pes > (uint64_t{1} << 30))
     throw UserError(fmt::format("{} elements: more than 2^30 PEs in one layer are not emulated", n));
@@ -225,14 +254,19 @@ MachineProfile GroupProfile(const Device& d, uint64_t n) {
       d.profile.physicalPes / 8.0 / d.profile.Cost(MicroOp::kHostPlane) * d.profile.clockHz;
   p.physicalPes = static_cast<int>(pes);
   p.shapes = {bitserial::MeshShape{{static_cast<int>(pes)}}};
-  p.internalBitsPerPe = d.geometry.rows;
+  p.internalBitsPerPe = d.geometry.rows * rowBits;
   p.externalBitsPerPe = 0;
   p.geometryNote[1] = fmt::format(
       "the {} columns this group's {} elements occupy (of the device's {} = {} ranks x {} banks "
-      "x {} subarrays x {} columns), rounded up to 512; more elements than columns run as layers",
+      "x {} subarrays x {} columns{}), rounded up to 512; more elements than columns run as layers",
       pes, n, d.geometry.Pes(), d.geometry.ranks, d.geometry.banks, d.geometry.subarrays,
-      d.geometry.cols);
-  p.geometryNote[2] = fmt::format("the device's {} rows per subarray", d.geometry.rows);
+      d.geometry.cols,
+      rowBits == 1 ? "" : fmt::format("; horizontal layout: {} columns per element", rowBits));
+  p.geometryNote[2] = rowBits == 1
+                          ? fmt::format("the device's {} rows per subarray", d.geometry.rows)
+                          : fmt::format("the device's {} rows per subarray x the {} columns of "
+                                        "a horizontal element",
+                                        d.geometry.rows, rowBits);
   p.geometryNote[3] = "one space: the rows are internal memory";
   p.geometryNote[4] = "one chain of the group's columns";
   p.cost[int(MicroOp::kHostPlane)] =
@@ -246,9 +280,12 @@ MachineProfile GroupProfile(const Device& d, uint64_t n) {
 
 Object& NewObject(Device& d, PimDataType type, std::shared_ptr<Group> g, PimObjId* id) {
   const TypeInfo info = Info(type);
-  auto o = std::make_unique<Object>(Object{type, info, g, Multi()});
+  auto o = std::make_unique<Object>(Object{type, info, g, Multi(), MultiFloat()});
   try {
-    o->value = Multi(*g->machine, info.Fmt(), fmt::format("obj{}", d.nextId));
+    if (info.isFloat)
+      o->fvalue = MultiFloat(*g->machine, kFp32, fmt::format("obj{}", d.nextId));
+    else
+      o->value = Multi(*g->machine, info.Fmt(), fmt::format("obj{}", d.nextId));
   } catch (const UserError& e) {
     throw UserError(fmt::format(
         "{} elements of {} ({} bits each) do not fit: the device's columns hold {} rows, {} "
@@ -295,6 +332,13 @@ Multi RangeMask(Group& g, uint64_t b, uint64_t e) {
   return m;
 }
 
+// Element i of a multi read to the host: a reduction under a one-element mask (charged).
+fixed::Fixed ReadElement(Group& g, const Multi& a, uint64_t i) {
+  const Multi one = RangeMask(g, i, i + 1);
+  WhereScope w(one);
+  return ReduceOr(a);
+}
+
 // Bitwise op over every bit-plane of a (and b's or the uni's), with the engine's 1-bit logic
 // kernel and charge per plane; `invert` complements the result (one more ALU step per plane).
 Multi Bitwise(const char* name, LogicOp op, const Multi& a, const Multi* b,
@@ -327,7 +371,39 @@ Multi Slice(const Multi& a, int i) {
 
 void Store(Object& d, Multi r) {
   if (r.Format() != d.info.Fmt()) r = Convert(r, d.info.Fmt());
-  d.value = std::move(r);
+  d.Raw() = std::move(r);
+}
+// A float result into a PIM_FP32 object.
+void Store(Object& d, MultiFloat r) { d.fvalue = std::move(r); }
+
+// A bit-pattern multi (ub.32) as a PIM_FP32 value: its planes taken over, nothing moved or
+// charged. Outside any where only (inside one the planes would be copied where active).
+MultiFloat AsFloat(Multi bits) {
+  MultiFloat f(bits.GetMachine(), kFp32, "fp32");
+  f.Bits() = std::move(bits);
+  return f;
+}
+
+// A PIMeval scalar as a PIM_FP32 operand: the uint64_t's low 32 bits are the float's pattern
+// (PIMeval reads it with castBitsToType<float>, pimUtils.h).
+UniFloat FloatScalar(uint64_t bits) { return {kFp32, bits & 0xffffffffu}; }
+float FloatOf(uint64_t bits) {
+  const uint32_t b = static_cast<uint32_t>(bits);
+  float f;
+  std::memcpy(&f, &b, 4);
+  return f;
+}
+uint32_t BitsOf(float f) {
+  uint32_t b;
+  std::memcpy(&b, &f, 4);
+  return b;
+}
+
+// A call that applies to integers and BOOL only, on a PIM_FP32 object: UserError naming it
+// (PIMeval refuses these on floats too: "Cannot perform bitwise operation on floating point").
+void CheckNotFloat(const Object& o, PimObjId id, const char* what) {
+  if (o.info.isFloat)
+    throw UserError(fmt::format("object {} is PIM_FP32: {} do not apply to floating point", id, what));
 }
 
 void CheckSameGroup(const Object& a, const Object& b, PimObjId ia, PimObjId ib) {
@@ -359,12 +435,19 @@ std::pair<uint64_t, uint64_t> CopyRange(uint64_t n, uint64_t b, uint64_t e, PimO
   return {b, e};
 }
 
-// Shifts a multi by one element along the chain of elements: +1 moves element i to i+1.
+// Whether the n elements of machine m can move along their chain: one layer of a 1-D mesh, or
+// whole layers (the engine's virtual mesh).
+bool ElementsCanMove(const Machine& m, uint64_t n) {
+  return (m.Layers() == 1 && m.Shape().extent.size() == 1) ||
+         static_cast<int64_t>(n) % m.Profile().physicalPes == 0;
+}
+
+// Shifts a multi by d elements along the chain of elements: +1 moves element i to i+1.
 Multi ShiftElements(const Multi& a, int d, uint64_t n) {
   Machine& m = a.GetMachine();
   if (m.Layers() == 1 && m.Shape().extent.size() == 1) return MeshShift(a, 0, d);
   const int64_t pes = m.Profile().physicalPes;
-  if (static_cast<int64_t>(n) % pes != 0)
+  if (!ElementsCanMove(m, n))
     throw UserError(fmt::format(
         "moving {} elements along their chain takes whole layers of the machine's {} PEs on "
         "machine '{}' ({} layer(s), mesh {}): allocate a multiple of {} elements",
@@ -569,7 +652,7 @@ PimStatus pimDeleteDevice() {
   return Call("pimDeleteDevice", [&] {
     Device& d = Dev();
     for (auto& [id, o] : d.objects) {
-      { Multi dead(std::move(o->value)); }
+      { Multi dead(std::move(o->Raw())); }
       if (--o->group->live == 0) {
         o->group->finalReport = o->group->machine->Report();
         o->group->machine.reset();
@@ -585,21 +668,21 @@ PimObjId pimAlloc(PimAllocEnum allocType, uint64_t numElements, PimDataType data
   PimObjId id = -1;
   Call("pimAlloc", [&] {
     Device& d = Dev();
-    if (allocType == PIM_ALLOC_H || allocType == PIM_ALLOC_H1)
-      throw UserError(fmt::format(
-          "allocation type {} (horizontal, bit-parallel layout) is not supported: the emulated "
-          "array is bit-serial, vertical layout only (PIM_ALLOC_AUTO, _V, _V1)",
-          allocType == PIM_ALLOC_H ? "PIM_ALLOC_H" : "PIM_ALLOC_H1"));
-    if (allocType != PIM_ALLOC_AUTO && allocType != PIM_ALLOC_V && allocType != PIM_ALLOC_V1)
+    if (allocType != PIM_ALLOC_AUTO && allocType != PIM_ALLOC_V && allocType != PIM_ALLOC_V1 &&
+        allocType != PIM_ALLOC_H && allocType != PIM_ALLOC_H1)
       throw UserError(fmt::format("allocation type {} is not a PimAllocEnum", int(allocType)));
     if (numElements == 0) throw UserError("an object needs at least one element");
     if (numElements > (uint64_t{1} << 31))
       throw UserError(fmt::format("{} elements: at most 2^31 are emulated", numElements));
-    Info(dataType);
-    if (allocType == PIM_ALLOC_V1 && !d.custom && numElements > d.geometry.Pes())
-      throw UserError(fmt::format("PIM_ALLOC_V1: {} elements exceed the device's {} columns "
+    // The horizontal layouts: each element across bits columns of one row (docs/pim.md).
+    const bool horizontal = allocType == PIM_ALLOC_H || allocType == PIM_ALLOC_H1;
+    const int rowBits = horizontal ? Info(dataType).bits : 1;
+    if ((allocType == PIM_ALLOC_V1 || allocType == PIM_ALLOC_H1) && !d.custom &&
+        numElements * rowBits > d.geometry.Pes())
+      throw UserError(fmt::format("{}: {} elements x {} column(s) exceed the device's {} columns "
                                   "(one region per core)",
-                                  numElements, d.geometry.Pes()));
+                                  allocType == PIM_ALLOC_V1 ? "PIM_ALLOC_V1" : "PIM_ALLOC_H1",
+                                  numElements, rowBits, d.geometry.Pes()));
     const uint64_t capacity = d.geometry.Pes() * d.geometry.rows;
     if (!d.custom && numElements * Info(dataType).bits > capacity)
       throw UserError(fmt::format("{} elements of {} need {} bits; the device holds {} ({} columns "
@@ -609,7 +692,10 @@ PimObjId pimAlloc(PimAllocEnum allocType, uint64_t numElements, PimDataType data
     auto g = std::make_shared<Group>();
     g->id = static_cast<int>(g_stats.groups.size()) + 1;
     g->elements = numElements;
-    g->machine = std::make_unique<Machine>(GroupProfile(d, numElements), int64_t(numElements));
+    g->machine =
+        std::make_unique<Machine>(GroupProfile(d, numElements, rowBits), int64_t(numElements));
+    g->regionElements = d.custom ? uint64_t(g->machine->Profile().physicalPes)
+                                 : std::max<uint64_t>(1, d.geometry.cols / rowBits);
     g_stats.groups.push_back(g);
     NewObject(d, dataType, g, &id);
     return std::string(TypeName(dataType));
@@ -628,10 +714,13 @@ PimObjId pimAllocAssociated(PimObjId assocId, PimDataType dataType) {
   return id;
 }
 
+// PIMeval allocates the global buffer on PIM_DEVICE_AIM only ("Device does not support On-Chip
+// Buffer" on every other target, pimDevice.cpp); AiM is bit-parallel and not emulated here.
 PimObjId pimAllocBuffer(uint32_t, PimDataType) {
   Refuse("pimAllocBuffer",
-         "a global buffer is AiM's (PIM_DEVICE_AIM, bank-level); this library emulates "
-         "bit-serial devices only");
+         "the global buffer exists on PIM_DEVICE_AIM only (PIMeval refuses it on every other "
+         "simulation target: \"Device does not support On-Chip Buffer\"); AiM is bit-parallel, "
+         "not emulated here");
   return -1;
 }
 
@@ -640,7 +729,7 @@ PimStatus pimFree(PimObjId obj) {
     Device& d = Dev();
     Object& o = Obj(obj);
     std::shared_ptr<Group> g = o.group;
-    { Multi dead(std::move(o.value)); }
+    { Multi dead(std::move(o.Raw())); }
     d.objects.erase(obj);
     if (--g->live == 0) {
       g->finalReport = g->machine->Report();
@@ -667,13 +756,13 @@ PimStatus pimCopyHostToDevice(void* src, PimObjId dest, uint64_t idxBegin, uint6
       raw[i] = static_cast<int64_t>(o.type == PIM_BOOL ? (v & 1) : v);
     }
     if (b == 0 && e == o.group->elements) {
-      o.value.LoadRaw(raw);
+      o.Raw().LoadRaw(raw);
     } else {
       Multi tmp(*o.group->machine, o.info.Fmt(), "copy");
       tmp.LoadRaw(raw);
       const Multi mask = RangeMask(*o.group, b, e);
       WhereScope w(mask);
-      o.value = tmp;
+      o.Raw() = tmp;
     }
     bytes = (e - b) * o.info.bytes;
     return std::string(TypeName(o.type));
@@ -693,7 +782,7 @@ PimStatus pimCopyDeviceToHost(PimObjId src, void* dest, uint64_t idxBegin, uint6
     if (!dest) throw UserError("the host pointer is null");
     const auto [b, e] = CopyRange(o.group->elements, idxBegin, idxEnd, src);
     if (b == e) return std::string(TypeName(o.type));
-    const std::vector<int64_t> raw = o.value.ReadRaw();
+    const std::vector<int64_t> raw = o.Raw().ReadRaw();
     auto* p = static_cast<unsigned char*>(dest);
     for (uint64_t i = b; i < e; ++i) {
       const uint64_t v = static_cast<uint64_t>(raw[i]);
@@ -718,11 +807,11 @@ PimStatus pimCopyDeviceToDevice(PimObjId src, PimObjId dest, uint64_t idxBegin, 
     const auto [b, e] = CopyRange(a.group->elements, idxBegin, idxEnd, src);
     if (b == e) return std::string(TypeName(a.type));
     if (b == 0 && e == a.group->elements) {
-      d.value = a.value;
+      d.Raw() = a.Raw();
     } else {
       const Multi mask = RangeMask(*a.group, b, e);
       WhereScope w(mask);
-      d.value = a.value;
+      d.Raw() = a.Raw();
     }
     return std::string(TypeName(a.type));
   });
@@ -734,7 +823,7 @@ PimStatus pimCopyObjectToObject(PimObjId src, PimObjId dest) {
     Object& d = Obj(dest);
     CheckSameGroup(a, d, src, dest);
     CheckType(d, dest, a.type, "destination");
-    d.value = a.value;
+    d.Raw() = a.Raw();
     return std::string(TypeName(a.type));
   });
 }
@@ -744,6 +833,11 @@ PimStatus pimConvertType(PimObjId src, PimObjId dest) {
     Object& a = Obj(src);
     Object& d = Obj(dest);
     CheckSameGroup(a, d, src, dest);
+    if (a.info.isFloat || d.info.isFloat)
+      throw UserError(fmt::format(
+          "{} to {}: conversions from or to floating point are not emulated (PIMeval leaves them "
+          "unimplemented: pimCmd.cpp convertType asserts)",
+          TypeName(a.type), TypeName(d.type)));
     if (d.type == PIM_BOOL)  // a C++ conversion to bool: nonzero is true
       Store(d, Not(Equal(a.value, Uni{Zero(a.info)})));
     else
@@ -758,6 +852,47 @@ namespace {
 enum class Bin { kAdd, kSub, kMul, kDiv, kAnd, kOr, kXor, kXnor, kMin, kMax, kGT, kLT, kEQ, kNE };
 
 bool IsCompare(Bin op) { return op == Bin::kGT || op == Bin::kLT || op == Bin::kEQ || op == Bin::kNE; }
+bool IsBitwise(Bin op) { return op == Bin::kAnd || op == Bin::kOr || op == Bin::kXor || op == Bin::kXnor; }
+
+// The second operand's bit pattern as a multi: an object's, or a scalar broadcast.
+const Multi& PatternOf(Machine&, const MultiFloat& y) { return y.Bits(); }
+Multi PatternOf(Machine& m, const UniFloat& y) {
+  return Broadcast(m, fixed::Fixed{Format::Unsigned(32, 0), BigInt(y.bits)});
+}
+
+// PIMeval's float operation (pimCmd.h, computeResultFP) of x and y — an object or a scalar —
+// on the array into d, each the engine's IEEE binary32 operation (round to nearest even).
+// Min and max are PIMeval's expressions, not IEEE minimumNumber: a compare and a select of
+// the patterns. The binary calls take (x < y) ? x : y and (x > y) ? x : y; the …Scalar calls
+// std::min(x, s) = (s < x) ? s : x and std::max(x, s) = (x < s) ? s : x (`scalarForm`):
+// they differ where the two compare equal (-0 and +0) or one is NaN.
+template <typename Y>
+void FloatOp(Bin op, const MultiFloat& x, const Y& y, bool scalarForm, Object& d) {
+  Machine& m = x.GetMachine();
+  const Format pattern = Format::Unsigned(32, 0);
+  switch (op) {
+    case Bin::kAdd: Store(d, Add(x, y)); break;
+    case Bin::kSub: Store(d, Sub(x, y)); break;
+    case Bin::kMul: Store(d, Mul(x, y)); break;
+    case Bin::kDiv: Store(d, Div(x, y)); break;
+    case Bin::kGT: Store(d, Less(y, x)); break;
+    case Bin::kLT: Store(d, Less(x, y)); break;
+    case Bin::kEQ: Store(d, Equal(x, y)); break;
+    case Bin::kNE: Store(d, Not(Equal(x, y))); break;
+    case Bin::kMin:
+    case Bin::kMax: {
+      const bool isMin = op == Bin::kMin;
+      const auto& yb = PatternOf(m, y);
+      if (!scalarForm)
+        Store(d, Select(isMin ? Less(x, y) : Less(y, x), x.Bits(), yb, pattern));
+      else
+        Store(d, Select(isMin ? Less(y, x) : Less(x, y), yb, x.Bits(), pattern));
+      break;
+    }
+    default:
+      throw UserError("bitwise operations do not apply to PIM_FP32 (as in PIMeval)");
+  }
+}
 
 PimStatus Binary(const char* api, Bin op, PimObjId s1, PimObjId s2, PimObjId dst) {
   return Call(api, [&] {
@@ -766,6 +901,19 @@ PimStatus Binary(const char* api, Bin op, PimObjId s1, PimObjId s2, PimObjId dst
     Object& d = Obj(dst);
     CheckSameGroup(a, b, s1, s2);
     CheckSameGroup(a, d, s1, dst);
+    if (a.info.isFloat) {
+      if (b.type == PIM_BOOL)
+        throw UserError(fmt::format("a PIM_BOOL second source (object {}) with PIM_FP32: mixed "
+                                    "floating point and BOOL operands are refused (as in PIMeval)",
+                                    s2));
+      CheckType(b, s2, a.type, "second source");
+      CheckType(d, dst, IsCompare(op) ? PIM_BOOL : a.type, "destination");
+      if (IsBitwise(op)) CheckNotFloat(a, s1, "bitwise operations");
+      if (op == Bin::kDiv && Any(Equal(b.fvalue, FloatScalar(0))))
+        throw UserError(fmt::format("division by zero: object {} has a zero element", s2));
+      FloatOp(op, a.fvalue, b.fvalue, false, d);
+      return std::string(a.info.name);
+    }
     const bool boolOperand = (op == Bin::kAdd || op == Bin::kSub) && b.type == PIM_BOOL;
     if (!boolOperand) CheckType(b, s2, a.type, "second source");
     CheckType(d, dst, IsCompare(op) ? PIM_BOOL : a.type, "destination");
@@ -810,6 +958,13 @@ PimStatus Scalar(const char* api, Bin op, PimObjId s, PimObjId dst, uint64_t sca
     Object& d = Obj(dst);
     CheckSameGroup(a, d, s, dst);
     CheckType(d, dst, IsCompare(op) ? PIM_BOOL : a.type, "destination");
+    if (a.info.isFloat) {
+      if (IsBitwise(op)) CheckNotFloat(a, s, "bitwise operations");
+      if (op == Bin::kDiv && FloatOf(scalar) == 0.0f)
+        throw UserError("division by zero: the scalar is 0");
+      FloatOp(op, a.fvalue, FloatScalar(scalar), true, d);
+      return std::string(a.info.name);
+    }
     const Format f = a.info.Fmt();
     const Multi& x = a.value;
     const Uni w{Wrapped(a.info, scalar)};
@@ -889,7 +1044,18 @@ PimStatus pimAbs(PimObjId src, PimObjId dest) {
     Object& d = Obj(dest);
     CheckSameGroup(a, d, src, dest);
     CheckType(d, dest, a.type, "destination");
-    if (a.info.isSigned)
+    if (a.info.isFloat) {
+      // PIMeval's (x < 0) ? -x : x: the sign bit flipped where x < 0 (so -0 and a NaN keep
+      // theirs): a compare with the uni 0, the pattern copied, its sign row XORed.
+      const Multi negative = Less(a.fvalue, FloatScalar(0));
+      Multi r = a.fvalue.Bits();
+      Machine& m = r.GetMachine();
+      m.Kernels().logic(LogicOp::kXor, r.Plane(31), negative.Plane(0), r.Plane(31),
+                        m.WordsPerPlane());
+      m.Charge("fabs", bitserial::LogicCost({bitserial::BoolFormat(), r.GetSpace(), false}, true,
+                                            r.GetSpace()));
+      Store(d, std::move(r));
+    } else if (a.info.isSigned)
       Store(d, Abs(a.value, a.info.Fmt()));
     else
       d.value = a.value;
@@ -903,6 +1069,7 @@ PimStatus pimNot(PimObjId src, PimObjId dest) {
     Object& d = Obj(dest);
     CheckSameGroup(a, d, src, dest);
     CheckType(d, dest, a.type, "destination");
+    CheckNotFloat(a, src, "bitwise operations");
     Store(d, Bitwise("not", LogicOp::kNot, a.value, nullptr, nullptr, false, a.info.Fmt()));
     return std::string(a.info.name);
   });
@@ -917,6 +1084,10 @@ PimStatus pimScaledAdd(PimObjId src1, PimObjId src2, PimObjId dest, uint64_t sca
     CheckSameGroup(a, d, src1, dest);
     CheckType(b, src2, a.type, "second source");
     CheckType(d, dest, a.type, "destination");
+    if (a.info.isFloat) {  // (x * s) + y, rounded twice as PIMeval's float expression
+      Store(d, Add(Mul(a.fvalue, FloatScalar(scalarValue)), b.fvalue));
+      return std::string(a.info.name);
+    }
     const Format f = a.info.Fmt();
     Store(d, Add(Mul(a.value, Uni{Wrapped(a.info, scalarValue)}, f), b.value, f));
     return std::string(a.info.name);
@@ -929,6 +1100,7 @@ PimStatus pimPopCount(PimObjId src, PimObjId dest) {
     Object& d = Obj(dest);
     CheckSameGroup(a, d, src, dest);
     CheckType(d, dest, a.type, "destination");
+    CheckNotFloat(a, src, "bit counts");
     Multi acc = Slice(a.value, 0);
     for (int i = 1; i < a.info.bits; ++i) {
       int bits = 1;
@@ -947,6 +1119,9 @@ PimStatus pimPrefixSum(PimObjId src, PimObjId dest) {
     Object& d = Obj(dest);
     CheckSameGroup(a, d, src, dest);
     CheckType(d, dest, a.type, "destination");
+    CheckNotFloat(a, src,
+                  "prefix sums here (PIMeval adds floats in element order, one after another; "
+                  "the array's log-step scan would round differently, so it is not emulated)");
     const Format f = a.info.Fmt();
     Multi s = a.value;
     // Hillis–Steele: log2 n shift-and-add steps along the chain of elements (a PE whose
@@ -960,20 +1135,111 @@ PimStatus pimPrefixSum(PimObjId src, PimObjId dest) {
   });
 }
 
+// PIMeval runs pimMAC on PIM_DEVICE_AIM only ("only supported on AiM", pimCmd.cpp, pimCmdMAC):
+// its per-core results are AiM's banks, its second operand the global buffer above.
 PimStatus pimMAC(PimObjId, PimObjId, void*) {
   return Refuse("pimMAC",
-                "the multiply-accumulate into per-core results over a global buffer is AiM's "
-                "(PIM_DEVICE_AIM, bank-level); this library emulates bit-serial devices only");
+                "the multiply-accumulate over the global buffer into per-core results runs on "
+                "PIM_DEVICE_AIM only (PIMeval refuses it on every other simulation target: \"only "
+                "supported on AiM\"); AiM is bit-parallel, not emulated here");
 }
 
 // ---- reductions -------------------------------------------------------------------------------
 namespace {
 enum class Red { kSum, kMin, kMax };
+
+// A PIM_FP32 reduction of [b, e) folded into *out (a float), PIMeval's way where its order
+// does not matter and in a documented order where it does (docs/pim.md, "Semantics"):
+//  * the range is reduced as a tree by element index: at step k (s = 2^k, while s < e)
+//    element i combines with element i + s, so element 0 ends with the range's pairwise
+//    combination. The array takes the steps within a region (s below the region's elements:
+//    the chain moves the partner s places, as a subarray's columns can); the host reads the
+//    partials (every plane) and takes the steps across regions, as PIMeval folds its regions'
+//    results on the host — the same tree, so the same result. Where the elements cannot move
+//    (part of a layer of a 2-D mesh or of several layers) the host takes every step;
+//  * sums: elements outside the range are +0.0; the host then adds (+0.0 + tree) to *out.
+//    PIMeval adds one element after another per region from a +0.0 seed, then the regions
+//    into *out: the same up to the rounding of a different association;
+//  * min/max: PIMeval's `cur > x ? x : cur` (max: `cur < x ? x : cur`) from a seed of
+//    FLT_MAX (max: -FLT_MAX) per region keeps the first of the smallest values and skips
+//    NaN elements; the tree keeps the left operand on ties with NaN and out-of-range
+//    elements set to the seed, so it selects the same element; the host folds
+//    seed then tree into *out with PIMeval's expression (a NaN at *out stays).
+void FloatReduce(Red op, Object& a, void* out, uint64_t b, uint64_t e) {
+  Group& g = *a.group;
+  Machine& m = *g.machine;
+  const uint64_t n = g.elements;
+  const float seed = op == Red::kSum ? 0.0f
+                     : op == Red::kMin ? std::numeric_limits<float>::max()
+                                       : std::numeric_limits<float>::lowest();
+  float tree = seed;
+  if (b < e) {
+    const MultiFloat id = Broadcast(m, FloatScalar(BitsOf(seed)));
+    MultiFloat x = a.fvalue;
+    const bool ranged = !(b == 0 && e == n);
+    if (ranged || op != Red::kSum) {
+      // The elements that take the seed: outside the range; for min/max NaN too.
+      std::optional<Multi> off;
+      if (ranged) off.emplace(Not(RangeMask(g, b, e)));
+      if (op != Red::kSum) {
+        Multi nan = Not(Equal(x, x));
+        off.emplace(off ? Or(*off, nan) : std::move(nan));
+      }
+      WhereScope w(*off);
+      x.Bits() = id.Bits();
+    }
+    const uint64_t arraySteps = ElementsCanMove(m, n) ? g.regionElements : 1;
+    uint64_t s = 1;
+    for (; s < e && s < arraySteps; s *= 2) {
+      MultiFloat y = AsFloat(ShiftElements(x.Bits(), -static_cast<int>(s), n));
+      if (op != Red::kSum) {  // partners past the end (the chain brings +0.0) are the seed
+        const Multi past = RangeMask(g, n - s, n);
+        WhereScope w(past);
+        y.Bits() = id.Bits();
+      }
+      if (op == Red::kSum)
+        x = Add(x, y);
+      else  // min: y < x ? y : x; max: x < y ? y : x (x, the left one, kept on ties)
+        x = AsFloat(Select(op == Red::kMin ? Less(y, x) : Less(x, y), y.Bits(), x.Bits(),
+                           Format::Unsigned(32, 0)));
+    }
+    if (s >= e) {
+      tree = FloatOf(ReadElement(g, x.Bits(), 0).raw.convert_to<uint64_t>());
+    } else {
+      const std::vector<int64_t> raw = x.Bits().ReadRaw();
+      std::vector<float> h(n);
+      for (uint64_t i = 0; i < n; ++i) h[i] = FloatOf(static_cast<uint64_t>(raw[i]));
+      for (; s < e; s *= 2)
+        for (uint64_t i = 0; i < n; i += 2 * s) {
+          const float y = i + s < n ? h[i + s] : seed;  // past the end: the seed, as the chain
+          // brings +0.0 and the min/max steps set it
+          h[i] = op == Red::kSum ? h[i] + y : op == Red::kMin ? (y < h[i] ? y : h[i])
+                                                               : (h[i] < y ? y : h[i]);
+        }
+      tree = h[0];
+      if (std::isnan(tree)) tree = FloatOf(0x7fc00000);  // the engine's NaN (docs/pim.md)
+    }
+  }
+  float cur;
+  std::memcpy(&cur, out, 4);
+  if (op == Red::kSum) {
+    cur = cur + (0.0f + tree);
+  } else {
+    for (float r : {seed, tree})
+      cur = op == Red::kMin ? (cur > r ? r : cur) : (cur < r ? r : cur);
+  }
+  std::memcpy(out, &cur, 4);
+}
+
 PimStatus Reduce(const char* api, Red op, PimObjId src, void* out, uint64_t b0, uint64_t e0) {
   return Call(api, [&] {
     Object& a = Obj(src);
     if (!out) throw UserError("the result pointer is null");
     const auto [b, e] = ReductionRange(a.group->elements, b0, e0, src);
+    if (a.info.isFloat) {
+      FloatReduce(op, a, out, b, e);
+      return std::string(a.info.name);
+    }
     const bool ranged = !(b == 0 && e == a.group->elements);
     std::optional<Multi> mask;
     std::optional<WhereScope> where;
@@ -1033,7 +1299,7 @@ PimStatus pimBitSliceExtract(PimObjId src, PimObjId destBool, unsigned bitIdx) {
     if (bitIdx >= unsigned(a.info.bits))
       throw UserError(fmt::format("bit index {} is outside {}'s {} bits", bitIdx, TypeName(a.type),
                                   a.info.bits));
-    Store(d, Slice(a.value, int(bitIdx)));
+    Store(d, Slice(a.Raw(), int(bitIdx)));
     return std::string(a.info.name);
   });
 }
@@ -1048,15 +1314,15 @@ PimStatus pimBitSliceInsert(PimObjId srcBool, PimObjId dest, unsigned bitIdx) {
       throw UserError(fmt::format("bit index {} is outside {}'s {} bits", bitIdx, TypeName(d.type),
                                   d.info.bits));
     // One row copied into row bitIdx of the destination, in every active PE.
-    Machine& m = d.value.GetMachine();
-    const std::vector<Word> before(d.value.Plane(int(bitIdx)),
-                                   d.value.Plane(int(bitIdx)) + m.WordsPerPlane());
-    Word* row = d.value.Plane(int(bitIdx));
+    Machine& m = d.Raw().GetMachine();
+    const std::vector<Word> before(d.Raw().Plane(int(bitIdx)),
+                                   d.Raw().Plane(int(bitIdx)) + m.WordsPerPlane());
+    Word* row = d.Raw().Plane(int(bitIdx));
     const Word* act = m.Activity();
     for (size_t w = 0; w < m.WordsPerPlane(); ++w)
-      row[w] = (a.value.Plane(0)[w] & act[w]) | (before[w] & ~act[w]);
-    m.Charge("bitSliceInsert", bitserial::CopyCost(a.value.AsOperand(),
-                                                   {bitserial::BoolFormat(), d.value.GetSpace(), false}));
+      row[w] = (a.Raw().Plane(0)[w] & act[w]) | (before[w] & ~act[w]);
+    m.Charge("bitSliceInsert", bitserial::CopyCost(a.Raw().AsOperand(),
+                                                   {bitserial::BoolFormat(), d.Raw().GetSpace(), false}));
     return std::string(d.info.name);
   });
 }
@@ -1071,7 +1337,7 @@ PimStatus pimCondCopy(PimObjId condBool, PimObjId src, PimObjId dest) {
     CheckType(c, condBool, PIM_BOOL, "condition");
     CheckType(d, dest, a.type, "destination");
     WhereScope w(c.value);
-    d.value = a.value;
+    d.Raw() = a.Raw();
     return std::string(a.info.name);
   });
 }
@@ -1084,7 +1350,7 @@ PimStatus pimCondBroadcast(PimObjId condBool, uint64_t scalarBits, PimObjId dest
     CheckType(c, condBool, PIM_BOOL, "condition");
     const Multi v = Broadcast(*d.group->machine, Wrapped(d.info, scalarBits));
     WhereScope w(c.value);
-    d.value = v;
+    d.Raw() = v;
     return std::string(d.info.name);
   });
 }
@@ -1101,7 +1367,7 @@ PimStatus pimCondSelect(PimObjId condBool, PimObjId src1, PimObjId src2, PimObjI
     CheckType(c, condBool, PIM_BOOL, "condition");
     CheckType(b, src2, a.type, "second source");
     CheckType(d, dest, a.type, "destination");
-    Store(d, Select(c.value, a.value, b.value, a.info.Fmt()));
+    Store(d, Select(c.value, a.Raw(), b.Raw(), a.info.Fmt()));
     return std::string(a.info.name);
   });
 }
@@ -1117,7 +1383,7 @@ PimStatus pimCondSelectScalar(PimObjId condBool, PimObjId src1, uint64_t scalarB
     CheckType(c, condBool, PIM_BOOL, "condition");
     CheckType(d, dest, a.type, "destination");
     const Multi v = Broadcast(*a.group->machine, Wrapped(a.info, scalarBits));
-    Store(d, Select(c.value, a.value, v, a.info.Fmt()));
+    Store(d, Select(c.value, a.Raw(), v, a.info.Fmt()));
     return std::string(a.info.name);
   });
 }
@@ -1136,8 +1402,14 @@ PimStatus pimBroadcastUInt(PimObjId dest, uint64_t value) {
     return std::string(d.info.name);
   });
 }
-PimStatus pimBroadcastFP(PimObjId, float) {
-  return Refuse("pimBroadcastFP", "PIM_FP32 objects are not supported (docs/pim.md)");
+// The float's bit pattern into every element (PIMeval's castTypeToBits: into a narrower
+// type, its low bits).
+PimStatus pimBroadcastFP(PimObjId dest, float value) {
+  return Call("pimBroadcastFP", [&] {
+    Object& d = Obj(dest);
+    Store(d, Broadcast(*d.group->machine, Wrapped(d.info, BitsOf(value))));
+    return std::string(d.info.name);
+  });
 }
 
 namespace {
@@ -1149,12 +1421,8 @@ PimStatus MoveElements(const char* api, PimObjId src, bool right, bool rotate) {
     const uint64_t n = a.group->elements;
     Group& g = *a.group;
     std::optional<fixed::Fixed> off;
-    if (rotate) {
-      const Multi end = right ? RangeMask(g, n - 1, n) : RangeMask(g, 0, 1);
-      WhereScope w(end);
-      off = ReduceOr(a.value);
-    }
-    Multi r = ShiftElements(a.value, right ? 1 : -1, n);
+    if (rotate) off = ReadElement(g, a.Raw(), right ? n - 1 : 0);
+    Multi r = ShiftElements(a.Raw(), right ? 1 : -1, n);
     {
       // The element entering at the end: 0, or the one rotated round.
       const Multi in = right ? RangeMask(g, 0, 1) : RangeMask(g, n - 1, n);
@@ -1164,7 +1432,7 @@ PimStatus MoveElements(const char* api, PimObjId src, bool right, bool rotate) {
       WhereScope w(in);
       r = b;
     }
-    a.value = std::move(r);
+    a.Raw() = std::move(r);
     return std::string(a.info.name);
   });
 }
@@ -1182,6 +1450,7 @@ PimStatus ShiftBits(const char* api, PimObjId src, PimObjId dest, unsigned k, bo
     Object& d = Obj(dest);
     CheckSameGroup(a, d, src, dest);
     CheckType(d, dest, a.type, "destination");
+    CheckNotFloat(a, src, "bit shifts");
     // Past the width every shift gives the same as by the width (0, or the sign for a signed
     // right shift: floor(a / 2^k)).
     const int s = static_cast<int>(std::min<unsigned>(k, unsigned(a.info.bits)));
@@ -1237,18 +1506,21 @@ PimStatus pimFuse(PimProg prog) {
   return PIM_OK;
 }
 
+// PIMeval's copies take the copy type and do not use it (pimCmd.cpp, pimCmdCopy: elements are
+// copied by index and charged by bytes whatever the layout): PIM_COPY_V and PIM_COPY_H are the
+// plain copy; another value is an error.
 PimStatus pimCopyHostToDeviceWithType(PimCopyEnum copyType, void* src, PimObjId dest,
                                       uint64_t idxBegin, uint64_t idxEnd) {
-  if (copyType != PIM_COPY_V)
+  if (copyType != PIM_COPY_V && copyType != PIM_COPY_H)
     return Refuse("pimCopyHostToDeviceWithType",
-                  "PIM_COPY_H (horizontal layout) is not supported; PIM_COPY_V is");
+                  fmt::format("copy type {} is not a PimCopyEnum", int(copyType)));
   return pimCopyHostToDevice(src, dest, idxBegin, idxEnd);
 }
 PimStatus pimCopyDeviceToHostWithType(PimCopyEnum copyType, PimObjId src, void* dest,
                                       uint64_t idxBegin, uint64_t idxEnd) {
-  if (copyType != PIM_COPY_V)
+  if (copyType != PIM_COPY_V && copyType != PIM_COPY_H)
     return Refuse("pimCopyDeviceToHostWithType",
-                  "PIM_COPY_H (horizontal layout) is not supported; PIM_COPY_V is");
+                  fmt::format("copy type {} is not a PimCopyEnum", int(copyType)));
   return pimCopyDeviceToHost(src, dest, idxBegin, idxEnd);
 }
 
