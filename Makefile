@@ -37,8 +37,10 @@ OPT     ?= -O2
 DEPCFLAGS = $(shell pkg-config --cflags libhwy libpng ompi-c fmt 2>/dev/null)
 DEPLIBS   = $(shell pkg-config --libs libhwy libpng ompi-c fmt 2>/dev/null)
 CXXFLAGS ?= $(OPT) -g
-# The flags every build of the engine shares (the ordinary one and zephyr-smpi's).
-COMMON_CXXFLAGS = -std=c++20 -Wall -Wextra -I.
+# The flags every build of the engine shares (the ordinary one and zephyr-smpi's). -fPIC:
+# zephyr-smpi is a shared object SimGrid loads once per simulated rank, linked from the
+# ordinary objects (below); -fno-semantic-interposition keeps calls within the program direct.
+COMMON_CXXFLAGS = -std=c++20 -Wall -Wextra -I. -fPIC -fno-semantic-interposition
 ALL_CXXFLAGS = $(COMMON_CXXFLAGS) $(DEPCFLAGS) $(CXXFLAGS)
 LDLIBS_ALL   = $(DEPLIBS) -fopenmp -lpthread
 # OpenMP (GCC's libgomp) in the files that use it: layer blocks and the host recompute run
@@ -241,11 +243,23 @@ PROFILE_FILES := $(wildcard bitserial/profiles/*.json)
 $(BUILD)/obj/bitserial/profile.o $(BUILD)/smpi/obj/bitserial/profile.o $(BUILD)/fuzz/obj/bitserial/profile.o: $(PROFILE_FILES)
 
 # ---------------------------------------------------------------------------
-# The simulated build (docs/testbed.md): the same sources compiled a second time with
-# SimGrid's smpicxx into build/bin/zephyr-smpi, which smpirun runs on a platform file of the
-# paper's network (hosts/testbed/platforms/). -DZEPHYR_SMPI switches hosts/testbed to
-# SimGrid's clock; smpi_prelude.h lets CLI11 through SMPI's exit() macro. No -g: smpirun
-# copies the program once per simulated rank.
+# The simulated build (docs/testbed.md): build/bin/zephyr-smpi, which smpirun runs on a platform
+# file of the paper's network (hosts/testbed/platforms/). Each source is compiled once per
+# compiler that must see it: only the translation units that call MPI or what SimGrid
+# replaces are compiled with SimGrid's smpicxx (SMPI_ONLY_SRCS: derived below, never a kept
+# list); the rest of zephyr-smpi is linked from the objects `zephyr` uses (compiled -fPIC).
+# -DZEPHYR_SMPI switches hosts/farm and hosts/testbed to SimGrid's clock; smpi_prelude.h lets
+# CLI11 through SMPI's exit() macro.
+#
+# SMPI's privatisation of globals holds for both kinds of object: smpirun loads the whole
+# shared object once per simulated rank (dlopen privatisation, SimGrid's default), so every
+# global of every object in it — smpicxx's or g++'s — is the rank's own. What only smpicxx
+# gives is its macros: exit, sleep, usleep, nanosleep, gettimeofday, clock_gettime, getopt
+# and getpid redirected to the simulation (smpi_helpers.h), MPI from SimGrid's mpi.h, and
+# ZEPHYR_SMPI; a source that names any of them, or includes a header that tests ZEPHYR_SMPI
+# or includes mpi.h, is compiled by smpicxx (a mention in a comment only costs a compile),
+# without -g; the link strips the ordinary objects' debug information (smpirun copies the
+# program once per rank).
 SMPICXX    ?= smpicxx
 HAVE_SMPI  := $(shell command -v $(SMPICXX) 2>/dev/null)
 # smpicxx calls the compiler itself; ccache in front of it still caches (rebuilds after a
@@ -264,7 +278,12 @@ SMPI_COMMANDS := hosts/cmd/render.cpp hosts/cmd/testbed.cpp
 SMPI_SRCS := $(filter-out $(filter-out $(SMPI_COMMANDS),$(shell grep -l '^CommandRegistration [a-zA-Z]' hosts/cmd/*.cpp)) \
                hosts/scene/gen.cpp hosts/scene/pov.cpp hosts/trace/stability.cpp hosts/methods/accuracy.cpp \
                hosts/farm/test_pattern.cpp,$(LIB_SRCS))
-SMPI_OBJS := $(SMPI_SRCS:%.cpp=$(SMPI_BUILD)/obj/%.o) $(SMPI_BUILD)/obj/hosts/cmd/main.o
+LPAREN := (
+SMPI_HEADERS := $(shell grep -rlE '^[[:space:]]*\#[[:space:]]*(if|ifdef|ifndef|elif)[^/]*ZEPHYR_SMPI|^[[:space:]]*\#[[:space:]]*include[[:space:]]*<mpi\.h>' --include='*.h' fixed bitserial hosts)
+SMPI_ONLY_SRCS := $(shell grep -lE 'ZEPHYR_SMPI|<mpi\.h>|(^|[^A-Za-z0-9_.>])(exit|sleep|usleep|nanosleep|gettimeofday|clock_gettime|getopt|getopt_long|getpid)[[:space:]]*[$(LPAREN)]$(foreach h,$(SMPI_HEADERS),|"$(h)")' \
+                    $(SMPI_SRCS) hosts/cmd/main.cpp)
+SMPI_OBJS := $(SMPI_ONLY_SRCS:%.cpp=$(SMPI_BUILD)/obj/%.o) \
+             $(patsubst %.cpp,$(BUILD)/obj/%.o,$(filter-out $(SMPI_ONLY_SRCS),$(SMPI_SRCS)))
 # The layer blocks use OpenMP here too (as in the ordinary build).
 $(OPENMP_SRCS:%.cpp=$(SMPI_BUILD)/obj/%.o): SMPI_CXXFLAGS += -fopenmp
 
