@@ -119,7 +119,7 @@ Positions KeyPositions(const std::string& text) {
       at.value.emplace(current(), start);
       stack.push_back(Frame{.object = c == '{', .base = current(), .key = {}});
     } else if (c == '}' || c == ']') {
-      stack.pop_back();
+      if (!stack.empty()) stack.pop_back();  // nlohmann refused an unbalanced text already
     } else if (c == ',' && !stack.empty()) {
       if (stack.back().object)
         stack.back().expectKey = true;
@@ -297,6 +297,7 @@ class ProfileReader {
     }
     nlohmann::json j;
     try {
+      RefuseNulBytes(text_, file_);  // nlohmann would stop reading at it
       j = nlohmann::json::parse(text_);
     } catch (const nlohmann::json::parse_error& e) {
       const Position p = PositionOf(text_, e.byte == 0 ? 0 : e.byte - 1);

@@ -65,4 +65,20 @@ std::string ReadInputFile(const std::string& path, InputKind kind, std::uintmax_
   return text;
 }
 
+void RefuseNulBytes(std::string_view text, const std::string& file) {
+  const size_t at = text.find('\0');
+  if (at == std::string_view::npos) return;
+  size_t line = 1, column = 1;
+  for (size_t i = 0; i < at; ++i) {
+    if (text[i] == '\n') {
+      ++line;
+      column = 1;
+    } else {
+      ++column;
+    }
+  }
+  throw UserError(PrintablePath(file) + ":" + std::to_string(line) + ":" + std::to_string(column) +
+                  ": a NUL byte (a text file holds none)");
+}
+
 }  // namespace zephyr

@@ -34,4 +34,10 @@ std::uintmax_t CheckInputFile(const std::string& path, InputKind kind, std::uint
 // The whole of `path` after CheckInputFile; UserError also when it cannot be read.
 std::string ReadInputFile(const std::string& path, InputKind kind, std::uintmax_t maxBytes);
 
+// Refuses a NUL byte in `text`, the text of `file` (a JSON profile or report): no text format
+// read here holds one, and nlohmann's parser ends its input at the first NUL, so whatever
+// follows it would be ignored without a word. UserError "FILE:LINE:COLUMN: a NUL byte (a text
+// file holds none)", at the first one.
+void RefuseNulBytes(std::string_view text, const std::string& file);
+
 }  // namespace zephyr

@@ -108,6 +108,7 @@ CommandRegistration testbedCommand("testbed", [](CLI::App& program) {
   calibrate->callback([report] {
     const std::string text =
         ReadInputFile(*report, {"the report", "a JSON render report"}, std::uintmax_t(64) << 20);
+    RefuseNulBytes(text, *report);  // nlohmann would stop reading at it
     nlohmann::json r;
     try {
       r = nlohmann::json::parse(text);

@@ -134,6 +134,15 @@ MeshBalance BalanceOverMesh(std::vector<int64_t> counts) {
   return b;
 }
 
+int MeshPartnerDistance(int bit, const std::vector<int>& extent) {
+  int64_t before = 1;  // the PEs of the axes before this one (their extents' product)
+  for (const int e : extent) {
+    if (bit < before * e) return int(bit / before);
+    before *= e;
+  }
+  return int(bit / before);  // no shape (a line), or a bit beyond the shape's PEs
+}
+
 namespace {
 
 std::vector<Slot> Balance(std::vector<Slot> packed, int pes, const SecondaryPlan& p, Machine& cm);
@@ -178,8 +187,8 @@ std::vector<Slot> LayOut(std::vector<Slot> children, int64_t layers, int pes, Co
 // top layer into a buffer (one masked copy per distinct source layer), the buffer shifted
 // both ways over the partner's distance, and the receivers' masked copies into their layers
 // (one per distinct destination layer). PE p sits at (p mod X, p div X) of the profile's
-// first shape (X its first extent): bit k < log2 X is 2^k PEs along the first axis, a higher
-// bit 2^k / X along the second.
+// shape (MeshPartnerDistance: bit k < log2 X is 2^k PEs along the first axis, a higher bit
+// 2^k / X along the second, and so on for a 3-D shape).
 std::vector<Slot> Balance(std::vector<Slot> packed, int pes, const SecondaryPlan& p, Machine& cm) {
   const int64_t layers = int64_t(packed.size()) / pes;
   std::vector<int64_t> counts(pes, 0);
@@ -198,7 +207,6 @@ std::vector<Slot> Balance(std::vector<Slot> packed, int pes, const SecondaryPlan
     for (size_t l = 0; l < perPe[pe].size(); ++l) out[l * pes + pe] = std::move(perPe[pe][l]);
   // The charges.
   const std::vector<int>& extent = cm.Shape().extent;
-  const int x = extent.empty() ? pes : extent[0];
   const Format counter = Format::Unsigned(simd::IntBitsFor(double(layers + b.layers)) + 1, 0);
   const Operand cnt{counter, Space::kInternal, false};
   const Operand fields[] = {CoordOperand(p),
@@ -209,7 +217,7 @@ std::vector<Slot> Balance(std::vector<Slot> packed, int pes, const SecondaryPlan
   size_t next = 0;
   int round = 0;
   for (int bit = 1; bit < pes; bit <<= 1, ++round) {
-    const int distance = bit < x ? bit : bit / x;
+    const int distance = MeshPartnerDistance(bit, extent);
     MicroOpCounts exchange = bitserial::MeshShiftCost(cnt, distance);
     exchange += exchange;
     exchange += bitserial::CompareCost(cnt, cnt, Space::kInternal);

@@ -114,6 +114,15 @@ struct MeshBalance {
 };
 MeshBalance BalanceOverMesh(std::vector<int64_t> counts);
 
+// The mesh distance, in PE hops, from PE p to its partner p xor `bit` in the balance's round
+// `bit` (a power of two below the PE count): PE p sits at (p mod X, (p div X) mod Y, ...) of
+// the mesh `extent` (x fastest, as bitserial::MeshShape; empty: a line of all PEs), so the bit
+// lies along the axis a whose extents before it multiply to P <= bit < P · extent[a], and the
+// partner is bit / P hops away along that axis. With a power-of-two PE count every extent is a
+// power of two, so a round's partners differ along one axis only. Across all rounds the hops
+// sum to the sum over axes of (extent - 1).
+int MeshPartnerDistance(int bit, const std::vector<int>& extent);
+
 // One bounce of the wavefront (bounce 1: the primary rays' hits; bounce k: the rays of ray-tree
 // level k): what ran on the array and what the host did.
 struct BounceReport {

@@ -343,6 +343,17 @@ TEST(MachineProfiles, HostileFilesAreRefusedQuicklyAndNeverCrash) {
               std::string::npos)
         << ReadError(t);
   }
+  // A NUL byte anywhere, even after a complete JSON value: nlohmann ends its input at the
+  // first one (it read "0.5" and ignored the rest, and the key scanner then met an unopened
+  // brace: the fuzzer's find), so it is refused at its line and column. The whole file too.
+  for (const std::string& t : {std::string("0.5\0\0\"},\n}", 10), base + std::string(1, '\0'),
+                               Replace(base, "\"value\": 16384", std::string("\"value\": 16\0" "384", 15))}) {
+    const size_t nul = t.find('\0');
+    int line = 1, column = 1;
+    for (size_t i = 0; i < nul; ++i) t[i] == '\n' ? (++line, column = 1) : ++column;
+    EXPECT_EQ(ReadError(t), "my.json:" + std::to_string(line) + ":" + std::to_string(column) +
+                                ": a NUL byte (a text file holds none)");
+  }
   // --set takes a plain decimal number only.
   MachineProfile p = Profile("wavetracer");
   for (const char* bad : {"clockHz=0x10", "clockHz= 5", "clockHz=inf", "clockHz=nan", "clockHz=",

@@ -2,7 +2,7 @@
 // bounces and compaction, the BVH's node visits and box tests, the host's counted events,
 // the bytes over the links and the modelled seconds on every built-in testbed — every figure a
 // render's report gives that does not depend on the machine it ran on — for small generated
-// scenes (each primitive, mirrors and glass, every compaction, three mesh shapes, every
+// scenes (each primitive, mirrors and glass, every compaction, four mesh shapes, every
 // testbed), against the record in tools/counted_work_recorded.json. A change of any charge by
 // one hop, one copy, one visit or one cycle fails here; a deliberate change is recorded again
 // (`ZEPHYR_RECORD_COUNTED_WORK=1 build/bin/zephyr_tests --gtest_filter='CountedWork.*'`) and
@@ -50,9 +50,10 @@ struct Case {
   int children = 0;
 };
 
-// A 1-D mesh of the WaveTracer's 8192 PEs, for the mesh compaction's third shape.
-std::string LineProfile(const TempDir& dir) {
-  const std::string path = dir / "line.json";
+// The WaveTracer's profile with another default mesh shape (`shapes`, a JSON list), named
+// `name`: a 1-D line of its 8192 PEs, or its 3-D shape first, for the mesh compaction.
+std::string ShapeProfile(const TempDir& dir, const std::string& shapes, const std::string& name) {
+  const std::string path = dir / (name + ".json");
   auto r = RunZephyrProcess("profile show wavetracer --out " + path);
   EXPECT_EQ(r.status, 0) << r.output;
   std::ifstream in(path);
@@ -60,9 +61,9 @@ std::string LineProfile(const TempDir& dir) {
   const std::string from = "[\"64x128\", \"16x32x16\"]";
   const size_t at = text.find(from);
   EXPECT_NE(at, std::string::npos) << text;
-  if (at != std::string::npos) text.replace(at, from.size(), "[\"8192\"]");
-  const size_t name = text.find("\"wavetracer\"");
-  if (name != std::string::npos) text.replace(name, 12, "\"wavetracer-line\"");
+  if (at != std::string::npos) text.replace(at, from.size(), shapes);
+  const size_t at2 = text.find("\"wavetracer\"");
+  if (at2 != std::string::npos) text.replace(at2, 12, "\"" + name + "\"");
   std::ofstream(path) << text;
   return path;
 }
@@ -73,7 +74,7 @@ const std::string kMirrors =
     "resolution 24 24\nl 4 8 6 1 1 1\nf 0.9 0.9 0.9 0.1 0.9 40 0 1\ns -1.25 0 0 1.2\n"
     "s 1.25 0 0 1.2\nf 0.9 0.2 0.2 0.8 0.1 20 0 1\ns 0 -0.2 1.5 0.4\n";
 
-std::vector<Case> Cases(const std::string& lineProfile) {
+std::vector<Case> Cases(const std::string& lineProfile, const std::string& cubeProfile) {
   const std::string spheres = "gen spheres --count 12 --seed 11 --size 32x24";
   const std::string glass = "gen spheres --count 10 --seed 5 --size 24x24";
   const std::string showcase = "gen showcase --size 32x24";
@@ -90,6 +91,7 @@ std::vector<Case> Cases(const std::string& lineProfile) {
       {"array-mesh-mpp", glass,
        "--method array --compact mesh --machine mpp --set internalBitsPerPe=2048"},
       {"array-mesh-line", glass, "--method array --compact mesh --machine " + lineProfile},
+      {"array-mesh-3d", glass, "--method array --compact mesh --machine " + cubeProfile},
       {"array-showcase", showcase, "--method array --depth 3"},
       // Mirrors only: no surface spawns a second child ray, so no bounce copies one.
       {"array-mirrors", kMirrors, "--method array --compact local --testbed ufmg1992"},
@@ -144,7 +146,8 @@ TEST(CountedWork, EveryChargeOfEveryMethodIsAsRecorded) {
   const bool record = std::getenv("ZEPHYR_RECORD_COUNTED_WORK") != nullptr;
   const bool smpi = fs::exists(SmpiPath());
   TempDir dir;
-  const std::string line = LineProfile(dir);
+  const std::string line = ShapeProfile(dir, "[\"8192\"]", "wavetracer-line");
+  const std::string cube = ShapeProfile(dir, "[\"16x32x16\", \"64x128\"]", "wavetracer-3d");
   nlohmann::json recorded;
   if (!record) {
     std::ifstream in(recordFile);
@@ -152,7 +155,7 @@ TEST(CountedWork, EveryChargeOfEveryMethodIsAsRecorded) {
     recorded = nlohmann::json::parse(in, nullptr, true, /*ignore_comments=*/true);
   }
   nlohmann::json now = nlohmann::json::object();
-  for (const Case& c : Cases(line)) {
+  for (const Case& c : Cases(line, cube)) {
     if (c.children > 0 && !smpi) {
       if (!record) std::printf("[ skipped  ] %s: no zephyr-smpi (make smpi)\n", c.name.c_str());
       continue;

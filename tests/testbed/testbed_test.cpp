@@ -878,6 +878,17 @@ TEST(TestbedSimulated, CalibrateRefusesAReportItCannotTrust) {
   nlohmann::json instant = good;
   instant["phases"]["render"] = 1e-300;
   refused(instant, "phases.render must be a time from 1e-6 s");
+  {
+    // A good report followed by a NUL and anything: nlohmann would stop at the NUL.
+    const std::string file = dir / "nul.json";
+    std::ofstream(file, std::ios::binary) << good.dump() << '\0' << "{\"hits\": -1}";
+    const auto r = RunZephyrProcess("testbed calibrate --report " + file);
+    EXPECT_NE(r.status, 0);
+    EXPECT_NE(r.output.find(file + ":1:" + std::to_string(good.dump().size() + 1) +
+                            ": a NUL byte (a text file holds none)"),
+              std::string::npos)
+        << r.output;
+  }
   const auto fifo = RunZephyrProcess("testbed calibrate --report /dev/null");
   EXPECT_NE(fifo.status, 0);
   EXPECT_NE(fifo.output.find("/dev/null: is not a regular file"), std::string::npos) << fifo.output;

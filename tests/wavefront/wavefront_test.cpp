@@ -377,6 +377,45 @@ TEST(Wavefront, MeshBalanceEvensTheCountsAsCountedByHand) {
   }
 }
 
+// The balance's round `bit` pairs PE p with p xor bit: on a mesh X wide (x fastest) that is
+// bit hops along x while bit < X, then bit / X along y, then bit / (X·Y) along z. Its closed
+// forms on the WaveTracer's two shapes, the MPP's and a line: each round's hops, and their sum
+// over the rounds, which is the sum over axes of (extent - 1).
+TEST(Wavefront, MeshRoundsMoveAlongTheAxisTheirBitLiesOn) {
+  struct Case {
+    std::vector<int> extent;
+    int pes;
+  };
+  const Case cases[] = {{{64, 128}, 8192}, {{16, 32, 16}, 8192}, {{128, 128}, 16384},
+                        {{8192}, 8192},    {{}, 8192}};
+  for (const Case& c : cases) {
+    int64_t hops = 0;
+    for (int bit = 1; bit < c.pes; bit <<= 1) {
+      int64_t axisStart = 1;  // the product of the extents before the bit's axis
+      for (const int e : c.extent) {
+        if (bit < axisStart * e) break;
+        axisStart *= e;
+      }
+      EXPECT_EQ(MeshPartnerDistance(bit, c.extent), bit / axisStart) << bit;
+      hops += MeshPartnerDistance(bit, c.extent);
+    }
+    int64_t want = 0;
+    for (const int e : c.extent) want += e - 1;
+    if (c.extent.empty()) want = c.pes - 1;
+    EXPECT_EQ(hops, want) << c.extent.size() << " axes";
+  }
+  // The boundaries, by hand: the last bit of x, the first of y, the first of z.
+  EXPECT_EQ(MeshPartnerDistance(32, {64, 128}), 32);
+  EXPECT_EQ(MeshPartnerDistance(64, {64, 128}), 1);
+  EXPECT_EQ(MeshPartnerDistance(4096, {64, 128}), 64);
+  EXPECT_EQ(MeshPartnerDistance(8, {16, 32, 16}), 8);
+  EXPECT_EQ(MeshPartnerDistance(16, {16, 32, 16}), 1);
+  EXPECT_EQ(MeshPartnerDistance(256, {16, 32, 16}), 16);
+  EXPECT_EQ(MeshPartnerDistance(512, {16, 32, 16}), 1);
+  EXPECT_EQ(MeshPartnerDistance(4096, {16, 32, 16}), 8);
+  EXPECT_EQ(MeshPartnerDistance(8192, {128, 128}), 64);
+}
+
 TEST(Wavefront, CompactionChangesTheCyclesNotTheImage) {
   const Scene scene = GenerateRandomSpheres({.count = 16, .seed = 2, .width = 128, .height = 128});
   WavefrontOptions none, local, mesh;
