@@ -330,6 +330,32 @@ TEST(Bvh, NodeVisitsOfAHandBuiltSceneEqualTheHandCount) {
   EXPECT_EQ(shadow.rays[int(RayKind::kShadow)], 1u);
 }
 
+// The walk visits the nearer child first and skips a child whose box the ray enters past the
+// nearest hit found: two pairs of spheres on the z axis (at z = 0 and z = -10, one leaf each),
+// rays along the axis from either side. From z = 10 down -z: the root and both children's
+// boxes tested (3), the root and the z = 0 leaf visited (2), its two spheres tested, hit at
+// t = 9; the z = -10 box is entered at t = 19 > 9, so never visited. From z = -20 up +z the
+// mirror image: the z = -10 leaf first, object 2. Far-first would visit 3 nodes and test 4
+// spheres in one of the two directions.
+TEST(Bvh, TheNearerChildIsVisitedFirstAndAFartherBoxIsSkipped) {
+  const Scene s =
+      Nff("0 0 10", "0 0 0", 40, 4,
+          "l 10 0 5\nf 1 1 1 1 0 0 0 1\ns 0 0 0 1\ns 0 0 0 1\ns 0 0 -10 1\ns 0 0 -10 1\n");
+  const auto bvh = Make(s, Accel::kBvh);
+  ASSERT_EQ(bvh->BuildWork().bvhNodes, 3u);
+  struct Case {
+    Vec3 origin, direction;
+    int object;
+  };
+  for (const Case& c : {Case{{0, 0, 10}, {0, 0, -1}, 0}, Case{{0, 0, -20}, {0, 0, 1}, 2}}) {
+    TraceStats stats;
+    EXPECT_EQ(bvh->FirstHit({c.origin, c.direction}, stats).object, c.object) << c.origin.z;
+    EXPECT_EQ(stats.boxTests, 3u) << c.origin.z;
+    EXPECT_EQ(stats.nodeVisits, 2u) << c.origin.z;
+    EXPECT_EQ(stats.tests[int(ShapeKind::kSphere)], 2u) << c.origin.z;
+  }
+}
+
 TEST(Bvh, BuildKeepsEveryObjectOnceAndBoxesHoldTheirObjects) {
   const Scene s = GenerateRandomSpheres({.count = 1000, .seed = 2, .width = 8, .height = 8});
   std::vector<Bounds> boxes;
