@@ -740,6 +740,55 @@ PimStatus pimFree(PimObjId obj) {
 }
 
 // ---- copies ---------------------------------------------------------------------------------
+namespace {
+// The host's `n` elements of `bytes` bytes each at `p` (little-endian, zero-extended; a bool
+// its low bit) as raw integers into `raw`. A copy of a fixed size per element type, so the
+// compiler makes it a load (a memcpy of a run-time size was a library call per element: a
+// fifth of gemv's run at 2^20).
+template <typename T>
+void FromHostAs(const unsigned char* p, bool boolean, int64_t* raw, uint64_t n) {
+  for (uint64_t i = 0; i < n; ++i) {
+    T v;
+    std::memcpy(&v, p + i * sizeof(T), sizeof(T));
+    const uint64_t u = v;
+    raw[i] = static_cast<int64_t>(boolean ? (u & 1) : u);
+  }
+}
+void FromHost(const unsigned char* p, int bytes, bool boolean, int64_t* raw, uint64_t n) {
+  switch (bytes) {
+    case 1: return FromHostAs<uint8_t>(p, boolean, raw, n);
+    case 2: return FromHostAs<uint16_t>(p, boolean, raw, n);
+    case 4: return FromHostAs<uint32_t>(p, boolean, raw, n);
+    case 8: return FromHostAs<uint64_t>(p, boolean, raw, n);
+  }
+  for (uint64_t i = 0; i < n; ++i) {  // any other size (none of PIMeval's types has one)
+    uint64_t u = 0;
+    std::memcpy(&u, p + i * bytes, size_t(bytes));
+    raw[i] = static_cast<int64_t>(boolean ? (u & 1) : u);
+  }
+}
+// The reverse: `n` raw integers into the host's elements of `bytes` bytes (their low bytes).
+template <typename T>
+void ToHostAs(const int64_t* raw, uint64_t n, unsigned char* p) {
+  for (uint64_t i = 0; i < n; ++i) {
+    const T v = static_cast<T>(static_cast<uint64_t>(raw[i]));
+    std::memcpy(p + i * sizeof(T), &v, sizeof(T));
+  }
+}
+void ToHost(const int64_t* raw, uint64_t n, int bytes, unsigned char* p) {
+  switch (bytes) {
+    case 1: return ToHostAs<uint8_t>(raw, n, p);
+    case 2: return ToHostAs<uint16_t>(raw, n, p);
+    case 4: return ToHostAs<uint32_t>(raw, n, p);
+    case 8: return ToHostAs<uint64_t>(raw, n, p);
+  }
+  for (uint64_t i = 0; i < n; ++i) {  // any other size (none of PIMeval's types has one)
+    const uint64_t u = static_cast<uint64_t>(raw[i]);
+    std::memcpy(p + i * bytes, &u, size_t(bytes));
+  }
+}
+}  // namespace
+
 PimStatus pimCopyHostToDevice(void* src, PimObjId dest, uint64_t idxBegin, uint64_t idxEnd) {
   const double t0 = g_device ? ModelledSeconds() : 0;
   uint64_t bytes = 0;
@@ -749,12 +798,8 @@ PimStatus pimCopyHostToDevice(void* src, PimObjId dest, uint64_t idxBegin, uint6
     const auto [b, e] = CopyRange(o.group->elements, idxBegin, idxEnd, dest);
     if (b == e) return std::string(TypeName(o.type));
     std::vector<int64_t> raw(e, 0);
-    const auto* p = static_cast<const unsigned char*>(src);
-    for (uint64_t i = b; i < e; ++i) {
-      uint64_t v = 0;
-      std::memcpy(&v, p + (i - b) * o.info.bytes, o.info.bytes);
-      raw[i] = static_cast<int64_t>(o.type == PIM_BOOL ? (v & 1) : v);
-    }
+    FromHost(static_cast<const unsigned char*>(src), o.info.bytes, o.type == PIM_BOOL,
+             raw.data() + b, e - b);
     if (b == 0 && e == o.group->elements) {
       o.Raw().LoadRaw(raw);
     } else {
@@ -783,11 +828,7 @@ PimStatus pimCopyDeviceToHost(PimObjId src, void* dest, uint64_t idxBegin, uint6
     const auto [b, e] = CopyRange(o.group->elements, idxBegin, idxEnd, src);
     if (b == e) return std::string(TypeName(o.type));
     const std::vector<int64_t> raw = o.Raw().ReadRaw();
-    auto* p = static_cast<unsigned char*>(dest);
-    for (uint64_t i = b; i < e; ++i) {
-      const uint64_t v = static_cast<uint64_t>(raw[i]);
-      std::memcpy(p + (i - b) * o.info.bytes, &v, o.info.bytes);
-    }
+    ToHost(raw.data() + b, e - b, o.info.bytes, static_cast<unsigned char*>(dest));
     bytes = (e - b) * o.info.bytes;
     return std::string(TypeName(o.type));
   });
