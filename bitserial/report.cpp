@@ -1,6 +1,7 @@
 #include "bitserial/report.h"
 
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 
 #include "fixed/check.h"
 

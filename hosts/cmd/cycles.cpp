@@ -4,6 +4,7 @@
 //   zephyr cycles --profile mpp --op add --bits 8          -> 25
 //   zephyr cycles --op mul --bits 16 --bits2 12 --json
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 
 #include <CLI/CLI.hpp>
 #include <algorithm>

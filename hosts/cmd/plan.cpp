@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <memory>
+#include <nlohmann/json.hpp>
 
 #include "hosts/cmd/command.h"
 #include "hosts/cmd/simd_flags.h"

@@ -8,7 +8,7 @@
 // (testbed::ModelledTime::Json). The keys: docs/report.md.
 #pragma once
 
-#include <nlohmann/json.hpp>
+#include <nlohmann/json_fwd.hpp>
 
 #include "hosts/methods/render.h"
 #include "hosts/simd/pass.h"

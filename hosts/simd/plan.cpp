@@ -4,6 +4,7 @@
 #include "hosts/simd/plan.h"
 
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cmath>

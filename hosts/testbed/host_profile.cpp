@@ -1,6 +1,7 @@
 #include "hosts/testbed/host_profile.h"
 
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 
 #include <map>
 

@@ -17,7 +17,7 @@
 //   HostTime t = ModelHostTime(stats, ss2);   // t.seconds, t.Json()
 #pragma once
 
-#include <nlohmann/json.hpp>
+#include <nlohmann/json_fwd.hpp>
 #include <string>
 #include <vector>
 

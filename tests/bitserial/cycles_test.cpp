@@ -3,6 +3,7 @@
 // MPP profile reproduces Batcher's published figures from the same engine code.
 #include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <functional>
 #include <random>

@@ -4,6 +4,7 @@
 #include "bitserial/float.h"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <bit>
 #include <cmath>

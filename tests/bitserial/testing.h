@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 #include <hwy/targets.h>
+#include <nlohmann/json.hpp>
 
 #include <functional>
 #include <map>

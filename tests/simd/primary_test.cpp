@@ -1,5 +1,6 @@
 // The SIMD/sequential method's primary pass against the exact (128-bit) first-hit reference.
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cmath>

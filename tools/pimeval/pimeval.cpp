@@ -13,6 +13,7 @@
 // elements than columns run as layers, each with rows/layers bits of memory (PIMeval's regions
 // per core).
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 
 #include <chrono>
 #include <cmath>
