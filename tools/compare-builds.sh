@@ -6,7 +6,8 @@
 #
 #   [SCENES=DIR] [OLD_JQ=FILTER] [BOTH_JQ=FILTER] tools/compare-builds.sh OLD/zephyr NEW/zephyr [WORKDIR]
 #
-# seq and simd run a second time with --testbed ufmg1992 (the modelled seconds); each run's
+# seq and simd run a second time with --testbed ufmg1992 (the modelled seconds), seq and
+# hetero a third with --accel bvh on it (the hierarchy's counted work); each run's
 # standard output (the cycle report, the summary line) is compared too, with its wall-clock
 # figures blanked. OLD_JQ is a jq filter applied to the old build's reports first: a change
 # that renames report keys lists the renames there (docs/report.md lists them); BOTH_JQ is
@@ -56,11 +57,12 @@ untimed() {
           s#$work/(old|new)/#OUT/#g; s/[0-9]+ back\$/N back/" "$1"
 }
 
-run() {  # run BIN OUTDIR SCENE METHOD [--testbed NAME]
-  local bin=$1 dir=$2 scene=$3 method=$4 name
-  name=$(basename "$scene" .nff).$method${6:+.$6}
+run() {  # run BIN OUTDIR SCENE METHOD [SUFFIX FLAG...]: SUFFIX names the run's flags
+  local bin=$1 dir=$2 scene=$3 method=$4 suffix=${5:-} name
+  shift 5 2>/dev/null || shift 4
+  name=$(basename "$scene" .nff).$method${suffix:+.$suffix}
   local args=(render --method "$method" "$scene" --out "$dir/$name.png" --report "$dir/$name.json"
-              --no-progress ${5:+"$5" "$6"})
+              --no-progress "$@")
   case $method in  # dist and hetero produce no --dump-primary (it is an error there)
     seq|simd) args+=(--dump-primary "$dir/$name.csv") ;;
   esac
@@ -96,9 +98,16 @@ for scene in "$work"/scenes/*.nff; do
     compare "$base.$method"
   done
   for method in seq simd; do
-    run "$old" "$work/old" "$scene" "$method" --testbed ufmg1992
-    run "$new" "$work/new" "$scene" "$method" --testbed ufmg1992
+    run "$old" "$work/old" "$scene" "$method" ufmg1992 --testbed ufmg1992
+    run "$new" "$work/new" "$scene" "$method" ufmg1992 --testbed ufmg1992
     compare "$base.$method.ufmg1992"
+  done
+  # The host tracer's hierarchy: its walk's counted work (node visits, box tests, tests by
+  # kind) at the parent and at the children, priced.
+  for method in seq hetero; do
+    run "$old" "$work/old" "$scene" "$method" bvh --accel bvh --testbed ufmg1992
+    run "$new" "$work/new" "$scene" "$method" bvh --accel bvh --testbed ufmg1992
+    compare "$base.$method.bvh"
   done
 done
 echo "compare-builds: $same identical, $diff different (outputs in $work)"

@@ -1,6 +1,6 @@
 // hosts/trace/bvh.h — the bounding-volume hierarchy of the host tracer's `--accel bvh`
 // (docs/shading.md, "The BVH"): conservative world-space bounds of every primitive and a
-// binned-SAH build over them. The traversal lives in the tracer (hosts/trace/tracer.cpp),
+// binned-SAH build over them. The traversal is hosts/trace/bvh_walk.h, used by the tracer
 // beside the exhaustive loops whose answers it must give bit for bit.
 //
 //   std::vector<Bounds> boxes;  for (const Primitive& p : scene.objects)
