@@ -7,7 +7,8 @@
 #   [SCENES=DIR] [OLD_JQ=FILTER] [BOTH_JQ=FILTER] tools/compare-builds.sh OLD/zephyr NEW/zephyr [WORKDIR]
 #
 # seq and simd run a second time with --testbed ufmg1992 (the modelled seconds), seq and
-# hetero a third with --accel bvh on it (the hierarchy's counted work); each run's
+# hetero a third with --accel bvh on it (the hierarchy's counted work); array (every ray on
+# the array) with its default compaction, and with --compact mesh on it; each run's
 # standard output (the cycle report, the summary line) is compared too, with its wall-clock
 # figures blanked. OLD_JQ is a jq filter applied to the old build's reports first: a change
 # that renames report keys lists the renames there (docs/report.md lists them); BOTH_JQ is
@@ -109,6 +110,13 @@ for scene in "$work"/scenes/*.nff; do
     run "$new" "$work/new" "$scene" "$method" bvh --accel bvh --testbed ufmg1992
     compare "$base.$method.bvh"
   done
+  # Every ray on the array (the wavefront): its bounces' cycles under both compactions.
+  run "$old" "$work/old" "$scene" array ""
+  run "$new" "$work/new" "$scene" array ""
+  compare "$base.array"
+  run "$old" "$work/old" "$scene" array mesh --compact mesh --testbed ufmg1992
+  run "$new" "$work/new" "$scene" array mesh --compact mesh --testbed ufmg1992
+  compare "$base.array.mesh"
 done
 echo "compare-builds: $same identical, $diff different (outputs in $work)"
 [ $diff -eq 0 ]

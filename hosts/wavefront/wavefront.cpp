@@ -401,187 +401,286 @@ SmallestObject SmallestObjectOf(const Scene& scene) {
   return smallest;
 }
 
-WavefrontResult RenderWavefront(const Tracer& tracer, const simd::PrimaryPass& pass,
-                                const WavefrontOptions& options, std::vector<Vec3>& pixels,
-                                TraceStats& hostWork) {
-  const Scene& scene = tracer.GetScene();
-  const int depth = tracer.Options().depth;
-  SecondaryPlan plan = PlanResolvingSecondary(scene, options, pass.plan);
-  const int F = plan.fracBits;
-  plan.primaryErrors.assign(scene.objects.size(), pass.plan.tErrorBound);
-  for (const simd::ObjectPlan& o : pass.plan.objects) {
-    const double e = std::isfinite(o.bounds.tError) ? o.bounds.tError : 0;
-    plan.primaryErrors.at(size_t(o.index)) =
-        std::max(e, pass.refine ? pass.refine->tErrorBound : 0);
-  }
-  const bitserial::MachineProfile& profile = pass.array.cycles.Profile();
-  const int pes = profile.physicalPes;
-  CheckMeshCompaction(profile, options.compaction);
-  const size_t lights = scene.lights.size();
-  WavefrontResult result;
-  result.compaction = options.compaction;
-  result.fracBits = F, result.intBits = plan.intBits;
-  result.tErrorBound = plan.tError, result.epsilon = plan.epsilon;
+namespace {
 
-  const simd::PrimaryMatrix& matrix = pass.matrix;
-  const int64_t pixelCount = int64_t(matrix.hits.size());
-  pixels.assign(size_t(pixelCount), Vec3{});
-  hostWork.pixels += uint64_t(pixelCount);
-  // Bounce 1: the primary pass's hits, in its layout (pixel k in virtual PE k).
-  const int64_t primaryLayers = (pixelCount + pes - 1) / pes;
-  std::vector<Slot> slots(size_t(primaryLayers) * pes);
-  for (int64_t i = 0; i < pixelCount; ++i) {
-    const PrimaryHit& h = matrix.hits[i];
-    if (h.object < 0) {
-      pixels[i] = scene.background;
-      continue;
-    }
-    Slot& s = slots[i];
-    s.pixel = int32_t(i), s.weight = 1, s.kind = RayKind::kPrimary;
-    for (int k = 0; k < 3; ++k)
-      s.o[k] = RawOf(scene.camera.from[k], F), s.d[k] = RawOf(h.direction[k], F);
-    s.object = h.object + 1, s.t = RawOf(h.t, F);
+// One render's bounces as named stages, after pbrt-v4's wavefront integrator
+// (docs/wavefront.md, "The bounces"): the primary pass's hits laid out as bounce 1's rays;
+// then per bounce, batch by batch of layers, the array's pass (RunBounce) and the host's
+// shading of each ray from its record, which spawns the next bounce's rays; the shares
+// summed into the pixels in (pixel, path) order; the next layout. The compaction before a
+// bounce (and the second children's copies) is charged to it, through `pending_`.
+class Bounces {
+ public:
+  Bounces(const Tracer& tracer, const simd::PrimaryPass& pass, const WavefrontOptions& options,
+          std::vector<Vec3>& pixels, TraceStats& hostWork)
+      : tracer_(tracer),
+        scene_(tracer.GetScene()),
+        options_(options),
+        profile_(pass.array.cycles.Profile()),
+        pes_(profile_.physicalPes),
+        depth_(tracer.Options().depth),
+        lights_(scene_.lights.size()),
+        plan_(PlanForPass(scene_, options, pass)),
+        F_(plan_.fracBits),
+        pixels_(pixels),
+        hostWork_(hostWork) {
+    CheckMeshCompaction(profile_, options.compaction);
+    result_.compaction = options.compaction;
+    result_.fracBits = F_, result_.intBits = plan_.intBits;
+    result_.tErrorBound = plan_.tError, result_.epsilon = plan_.epsilon;
   }
-  // The compaction before a bounce is charged to it: bounce 1's packs the primary layout.
-  auto pending = std::make_unique<Machine>(profile, pes);
-  slots = LayOut(std::move(slots), primaryLayers, pes, options.compaction, plan, *pending);
-  std::map<std::pair<int, bool>, int> fitted;
-  for (int bounce = 1; bounce <= depth && !slots.empty(); ++bounce) {
+
+  WavefrontResult Run(const simd::PrimaryMatrix& matrix) {
+    const int64_t primaryLayers = PrimarySlots(matrix);
+    pending_ = std::make_unique<Machine>(profile_, pes_);
+    slots_ = LayOut(std::move(slots_), primaryLayers, pes_, options_.compaction, plan_, *pending_);
+    for (int bounce = 1; bounce <= depth_ && !slots_.empty(); ++bounce) Bounce(bounce);
+    return std::move(result_);
+  }
+
+ private:
+  // The secondary rays' plan, with each object's primary t error (the pass's bound, or the
+  // refine step's) for the hits bounce 1 starts from.
+  static SecondaryPlan PlanForPass(const Scene& scene, const WavefrontOptions& options,
+                                   const simd::PrimaryPass& pass) {
+    SecondaryPlan plan = PlanResolvingSecondary(scene, options, pass.plan);
+    plan.primaryErrors.assign(scene.objects.size(), pass.plan.tErrorBound);
+    for (const simd::ObjectPlan& o : pass.plan.objects) {
+      const double e = std::isfinite(o.bounds.tError) ? o.bounds.tError : 0;
+      plan.primaryErrors.at(size_t(o.index)) =
+          std::max(e, pass.refine ? pass.refine->tErrorBound : 0);
+    }
+    return plan;
+  }
+
+  // Bounce 1: the primary pass's hits, in its layout (pixel k in virtual PE k); a pixel whose
+  // primary ray hit nothing is the background at once. The layers it fills.
+  int64_t PrimarySlots(const simd::PrimaryMatrix& matrix) {
+    const int64_t pixelCount = int64_t(matrix.hits.size());
+    pixels_.assign(size_t(pixelCount), Vec3{});
+    hostWork_.pixels += uint64_t(pixelCount);
+    const int64_t layers = (pixelCount + pes_ - 1) / pes_;
+    slots_.assign(size_t(layers) * pes_, Slot{});
+    for (int64_t i = 0; i < pixelCount; ++i) {
+      const PrimaryHit& h = matrix.hits[i];
+      if (h.object < 0) {
+        pixels_[i] = scene_.background;
+        continue;
+      }
+      Slot& s = slots_[i];
+      s.pixel = int32_t(i), s.weight = 1, s.kind = RayKind::kPrimary;
+      for (int k = 0; k < 3; ++k)
+        s.o[k] = RawOf(scene_.camera.from[k], F_), s.d[k] = RawOf(h.direction[k], F_);
+      s.object = h.object + 1, s.t = RawOf(h.t, F_);
+    }
+    return layers;
+  }
+
+  void Bounce(int bounce) {
     const auto start = std::chrono::steady_clock::now();
-    BounceReport& report = result.bounces.emplace_back();
-    report.bounce = bounce;
-    report.cycles.Add(pending->Report());
-    result.cycles.Add(pending->Report());
-    report.compactionCycles = pending->Report().TotalCycles();
-    pending = std::make_unique<Machine>(profile, pes);
+    BounceReport& report = StartBounce(bounce);
     const bool intersect = bounce > 1;
-    const int64_t layers = int64_t(slots.size()) / pes;
-    auto key = std::make_pair(int(layers), intersect);
-    if (!fitted.count(key)) fitted[key] = LayersPerPass(profile, layers, plan, intersect);
-    const int perPass = fitted[key];
-    report.layers = layers, report.slots = layers * pes;
-    for (const Slot& s : slots) report.rays += s.pixel >= 0;
-    report.utilisation = report.slots ? double(report.rays) / double(report.slots) : 0;
+    const int64_t layers = report.layers;
+    const int perPass = LayersPerPassOf(layers, intersect);
     // The next bounce's rays, laid out without compaction: a first child in its parent's
     // slot, a second (the refracted ray of a surface that also reflects) `layers` layers on.
-    std::vector<Slot> children(bounce < depth ? slots.size() * 2 : 0);
-    std::vector<Share> shares;
-    bool anySecond = false;
+    children_.assign(bounce < depth_ ? slots_.size() * 2 : 0, Slot{});
+    shares_.clear();
+    anySecond_ = false;
     for (int64_t first = 0; first < layers; first += perPass) {
       const int64_t count = std::min<int64_t>(perPass, layers - first);
-      const size_t begin = size_t(first) * pes, n = size_t(count) * pes;
-      BounceInputs in;
-      for (int k = 0; k < 3; ++k) in.o[k].resize(n), in.d[k].resize(n);
-      in.object.resize(n), in.t.resize(n), in.from.resize(n);
-      in.live.resize(n), in.outward.resize(n);
-      for (size_t i = 0; i < n; ++i) {
-        const Slot& s = slots[begin + i];
-        for (int k = 0; k < 3; ++k) in.o[k][i] = s.o[k], in.d[k][i] = s.d[k];
-        in.object[i] = s.object, in.t[i] = s.t, in.live[i] = s.pixel >= 0;
-        in.from[i] = s.from, in.outward[i] = s.outward;
-      }
-      Machine m(profile, int64_t(n));
-      BounceOutputs out;
-      RunBounce(m, plan, intersect, in, out, bool(options.audit));
-      report.cycles.Add(m.Report());
-      result.cycles.Add(m.Report());
-      report.hostLinkBytes += out.hostLinkBits / 8;
-      ++report.passes;
-      // The host: shade each live slot from its record, sum the tree, spawn the children.
-      for (size_t i = 0; i < n; ++i) {
-        const Slot& s = slots[begin + i];
-        if (s.pixel < 0) continue;
-        if (intersect) ++result.arrayRays[int(s.kind)];
-        if (intersect && options.audit) {
-          AuditRay a;
-          a.bounce = bounce, a.from = int(s.from) - 1, a.outward = s.outward;
-          a.object = int(out.object[i]) - 1, a.uncertain = out.uncertain[i];
-          a.epsilon = plan.epsilon;
-          a.origin = VectorOf(out.audit.o, i, F), a.direction = VectorOf(out.audit.d, i, F);
-          options.audit(a);
-        }
-        if (intersect && out.uncertain[i]) {
-          // The array could not certify this ray's first hit: its whole subtree on the host,
-          // from the ray as the array holds it.
-          ++report.uncertainRays;
-          const Vec3 o = VectorOf(out.o, i, F), d = Normalize(VectorOf(out.d, i, F));
-          shares.push_back(
-              {s.pixel, s.path,
-               tracer.TraceRay(o, d, HostOffset(plan, s.originError), bounce, s.kind, hostWork) *
-                   s.weight});
-          continue;
-        }
-        const int64_t object = out.object[i] - 1;
-        if (object < 0) {
-          shares.push_back({s.pixel, s.path, scene.background * s.weight});
-          continue;
-        }
-        ++report.hits;
-        result.arrayRays[int(RayKind::kShadow)] += lights;
-        std::vector<double> nl(lights), rv(lights), through(lights);
-        const Vec3 p = VectorOf(out.p, i, F);
-        // This hit's t error, for the host's offset from p and for its children's.
-        const double hitError =
-            HitError(plan, bounce, int(object),
-                     Normalize(Vec3{ValueOf(s.d[0], F), ValueOf(s.d[1], F), ValueOf(s.d[2], F)}));
-        for (size_t j = 0; j < lights; ++j) {
-          nl[j] = ValueOf(out.nl[j][i], F), rv[j] = ValueOf(out.rv[j][i], F);
-          through[j] = ValueOf(out.through[j][i], F);
-          if (out.shadowUncertain[j][i] && nl[j] > 0) {
-            ++report.uncertainShadows;
-            through[j] = tracer.LightThrough(p, int(j), HostOffset(plan, hitError), hostWork);
-          }
-        }
-        shares.push_back(
-            {s.pixel, s.path,
-             tracer.LocalFromRecord(int(object), nl.data(), rv.data(), through.data(), hostWork) *
-                 s.weight});
-        if (bounce >= depth) continue;
-        const Material& mat = scene.materials[scene.objects[object].material];
-        Slot child;
-        child.pixel = s.pixel;
-        child.from = object + 1;
-        child.originError = hitError;
-        child.path = s.path << 1;
-        for (int k = 0; k < 3; ++k) child.o[k] = out.p[k][i];
-        size_t to = begin + i;
-        if (mat.ks > 0) {
-          child.weight = s.weight * mat.ks, child.kind = RayKind::kReflected;
-          child.outward = !out.inside[i];
-          for (int k = 0; k < 3; ++k) child.d[k] = out.mirror[k][i];
-          children[to] = child;
-          to += slots.size();
-          child.path |= 1;
-          ++report.spawned;
-        }
-        if (mat.t > 0) {
-          const bool tir = out.tir[i];
-          report.totalInternalReflections += tir;
-          child.weight = s.weight * mat.t;
-          child.kind = tir ? RayKind::kReflected : RayKind::kRefracted;
-          child.outward = tir ? !out.inside[i] : bool(out.inside[i]);
-          for (int k = 0; k < 3; ++k) child.d[k] = tir ? out.mirror[k][i] : out.refracted[k][i];
-          children[to] = child;
-          anySecond |= to >= slots.size();
-          ++report.spawned;
-        }
-      }
+      RunBatch(report, bounce, size_t(first) * pes_, size_t(count) * pes_);
     }
-    std::sort(shares.begin(), shares.end());
-    for (const Share& share : shares) pixels[share.pixel] += share.colour;
-    if (!anySecond && bounce < depth) children.resize(slots.size());
-    // The second children's masked copies into their layers (one per source layer), then
-    // the next bounce's layout; both charged to the next bounce.
-    for (int64_t l = 0; anySecond && l < layers; ++l)
-      pending->Charge("childCopy", RecordCopy(plan));
-    const int64_t childLayers = int64_t(children.size()) / pes;
-    slots = bounce < depth
-                ? LayOut(std::move(children), childLayers, pes, options.compaction, plan, *pending)
-                : std::vector<Slot>{};
+    AddShares();
+    NextLayout(bounce, layers);
     report.hostSeconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   }
-  return result;
+
+  // The bounce's report, charged with the compaction that made its layout.
+  BounceReport& StartBounce(int bounce) {
+    BounceReport& report = result_.bounces.emplace_back();
+    report.bounce = bounce;
+    report.cycles.Add(pending_->Report());
+    result_.cycles.Add(pending_->Report());
+    report.compactionCycles = pending_->Report().TotalCycles();
+    pending_ = std::make_unique<Machine>(profile_, pes_);
+    report.layers = int64_t(slots_.size()) / pes_, report.slots = report.layers * pes_;
+    for (const Slot& s : slots_) report.rays += s.pixel >= 0;
+    report.utilisation = report.slots ? double(report.rays) / double(report.slots) : 0;
+    return report;
+  }
+
+  // The layers one pass of the bounce program takes (fitted once per layout and kind).
+  int LayersPerPassOf(int64_t layers, bool intersect) {
+    const auto key = std::make_pair(int(layers), intersect);
+    if (!fitted_.count(key)) fitted_[key] = LayersPerPass(profile_, layers, plan_, intersect);
+    return fitted_[key];
+  }
+
+  // One pass over slots [begin, begin + n): the array's records, then the host's shading of
+  // each live ray from them.
+  void RunBatch(BounceReport& report, int bounce, size_t begin, size_t n) {
+    BounceInputs in;
+    for (int k = 0; k < 3; ++k) in.o[k].resize(n), in.d[k].resize(n);
+    in.object.resize(n), in.t.resize(n), in.from.resize(n);
+    in.live.resize(n), in.outward.resize(n);
+    for (size_t i = 0; i < n; ++i) {
+      const Slot& s = slots_[begin + i];
+      for (int k = 0; k < 3; ++k) in.o[k][i] = s.o[k], in.d[k][i] = s.d[k];
+      in.object[i] = s.object, in.t[i] = s.t, in.live[i] = s.pixel >= 0;
+      in.from[i] = s.from, in.outward[i] = s.outward;
+    }
+    Machine m(profile_, int64_t(n));
+    BounceOutputs out;
+    RunBounce(m, plan_, bounce > 1, in, out, bool(options_.audit));
+    report.cycles.Add(m.Report());
+    result_.cycles.Add(m.Report());
+    report.hostLinkBytes += out.hostLinkBits / 8;
+    ++report.passes;
+    for (size_t i = 0; i < n; ++i)
+      if (slots_[begin + i].pixel >= 0) ShadeRay(report, bounce, out, i, begin + i);
+  }
+
+  // The host's part for the live ray in slot `slot` (PE i of the pass): its share of the
+  // pixel from the array's record (or its whole subtree on the host where the array could
+  // not certify its hit), and its children.
+  void ShadeRay(BounceReport& report, int bounce, const BounceOutputs& out, size_t i, size_t slot) {
+    const Slot& s = slots_[slot];
+    const bool intersect = bounce > 1;
+    if (intersect) ++result_.arrayRays[int(s.kind)];
+    if (intersect && options_.audit) Audit(bounce, s, out, i);
+    if (intersect && out.uncertain[i]) {
+      // The array could not certify this ray's first hit: its whole subtree on the host,
+      // from the ray as the array holds it.
+      ++report.uncertainRays;
+      const Vec3 o = VectorOf(out.o, i, F_), d = Normalize(VectorOf(out.d, i, F_));
+      shares_.push_back(
+          {s.pixel, s.path,
+           tracer_.TraceRay(o, d, HostOffset(plan_, s.originError), bounce, s.kind, hostWork_) *
+               s.weight});
+      return;
+    }
+    const int64_t object = out.object[i] - 1;
+    if (object < 0) {
+      shares_.push_back({s.pixel, s.path, scene_.background * s.weight});
+      return;
+    }
+    ++report.hits;
+    // This hit's t error, for the host's offset from p and for its children's.
+    const double hitError =
+        HitError(plan_, bounce, int(object),
+                 Normalize(Vec3{ValueOf(s.d[0], F_), ValueOf(s.d[1], F_), ValueOf(s.d[2], F_)}));
+    ShadeHit(report, s, out, i, int(object), hitError);
+    if (bounce < depth_) Spawn(report, s, out, i, slot, object, hitError);
+  }
+
+  void Audit(int bounce, const Slot& s, const BounceOutputs& out, size_t i) const {
+    AuditRay a;
+    a.bounce = bounce, a.from = int(s.from) - 1, a.outward = s.outward;
+    a.object = int(out.object[i]) - 1, a.uncertain = out.uncertain[i];
+    a.epsilon = plan_.epsilon;
+    a.origin = VectorOf(out.audit.o, i, F_), a.direction = VectorOf(out.audit.d, i, F_);
+    options_.audit(a);
+  }
+
+  // The local term at a certified hit from the record's per-light products; a shadow the
+  // array could not certify is traced on the host from the hit point.
+  void ShadeHit(BounceReport& report, const Slot& s, const BounceOutputs& out, size_t i,
+                int object, double hitError) {
+    result_.arrayRays[int(RayKind::kShadow)] += lights_;
+    std::vector<double> nl(lights_), rv(lights_), through(lights_);
+    const Vec3 p = VectorOf(out.p, i, F_);
+    for (size_t j = 0; j < lights_; ++j) {
+      nl[j] = ValueOf(out.nl[j][i], F_), rv[j] = ValueOf(out.rv[j][i], F_);
+      through[j] = ValueOf(out.through[j][i], F_);
+      if (out.shadowUncertain[j][i] && nl[j] > 0) {
+        ++report.uncertainShadows;
+        through[j] = tracer_.LightThrough(p, int(j), HostOffset(plan_, hitError), hostWork_);
+      }
+    }
+    shares_.push_back(
+        {s.pixel, s.path,
+         tracer_.LocalFromRecord(object, nl.data(), rv.data(), through.data(), hostWork_) *
+             s.weight});
+  }
+
+  // The hit's children: a reflected ray in the parent's slot, a transmitted (or totally
+  // internally reflected) one there too or, when both spawn, `slots_.size()` slots on.
+  void Spawn(BounceReport& report, const Slot& s, const BounceOutputs& out, size_t i, size_t slot,
+             int64_t object, double hitError) {
+    const Material& mat = scene_.materials[scene_.objects[object].material];
+    Slot child;
+    child.pixel = s.pixel;
+    child.from = object + 1;
+    child.originError = hitError;
+    child.path = s.path << 1;
+    for (int k = 0; k < 3; ++k) child.o[k] = out.p[k][i];
+    size_t to = slot;
+    if (mat.ks > 0) {
+      child.weight = s.weight * mat.ks, child.kind = RayKind::kReflected;
+      child.outward = !out.inside[i];
+      for (int k = 0; k < 3; ++k) child.d[k] = out.mirror[k][i];
+      children_[to] = child;
+      to += slots_.size();
+      child.path |= 1;
+      ++report.spawned;
+    }
+    if (mat.t > 0) {
+      const bool tir = out.tir[i];
+      report.totalInternalReflections += tir;
+      child.weight = s.weight * mat.t;
+      child.kind = tir ? RayKind::kReflected : RayKind::kRefracted;
+      child.outward = tir ? !out.inside[i] : bool(out.inside[i]);
+      for (int k = 0; k < 3; ++k) child.d[k] = tir ? out.mirror[k][i] : out.refracted[k][i];
+      children_[to] = child;
+      anySecond_ |= to >= slots_.size();
+      ++report.spawned;
+    }
+  }
+
+  // The bounce's shares into their pixels, in (pixel, path) order.
+  void AddShares() {
+    std::sort(shares_.begin(), shares_.end());
+    for (const Share& share : shares_) pixels_[share.pixel] += share.colour;
+  }
+
+  // The second children's masked copies into their layers (one per source layer), then the
+  // next bounce's layout; both charged to the next bounce.
+  void NextLayout(int bounce, int64_t layers) {
+    if (!anySecond_ && bounce < depth_) children_.resize(slots_.size());
+    for (int64_t l = 0; anySecond_ && l < layers; ++l)
+      pending_->Charge("childCopy", RecordCopy(plan_));
+    const int64_t childLayers = int64_t(children_.size()) / pes_;
+    slots_ = bounce < depth_ ? LayOut(std::move(children_), childLayers, pes_,
+                                      options_.compaction, plan_, *pending_)
+                             : std::vector<Slot>{};
+  }
+
+  const Tracer& tracer_;
+  const Scene& scene_;
+  const WavefrontOptions& options_;
+  const bitserial::MachineProfile& profile_;
+  const int pes_, depth_;
+  const size_t lights_;
+  const SecondaryPlan plan_;
+  const int F_;
+  std::vector<Vec3>& pixels_;
+  TraceStats& hostWork_;
+  WavefrontResult result_;
+  std::vector<Slot> slots_, children_;  // this bounce's rays; the next bounce's, uncompacted
+  std::vector<Share> shares_;           // this bounce's shares of their pixels
+  bool anySecond_ = false;              // some hit of this bounce spawned a second child
+  std::unique_ptr<Machine> pending_;    // the work charged to the next bounce
+  std::map<std::pair<int, bool>, int> fitted_;  // LayersPerPass by (layers, intersect)
+};
+
+}  // namespace
+
+WavefrontResult RenderWavefront(const Tracer& tracer, const simd::PrimaryPass& pass,
+                                const WavefrontOptions& options, std::vector<Vec3>& pixels,
+                                TraceStats& hostWork) {
+  return Bounces(tracer, pass, options, pixels, hostWork).Run(pass.matrix);
 }
 
 }  // namespace zephyr::wavefront
