@@ -960,195 +960,250 @@ void ShadowProduct(Machine& m, const Multi (&pt)[3], const Multi (&l)[3], const 
   }
 }
 
-// The whole program; read = false runs it for its allocation only (BounceFits).
-void Run(Machine& m, const SecondaryPlan& p, bool intersect, const BounceInputs& in,
-         BounceOutputs* out, bool audit) {
-  const int F = p.fracBits;
-  Multi o[3], d[3];
+// What one bounce's program holds on the array from stage to stage (Run). Each register is
+// allocated where the program first computes it (allocation is first fit in program order:
+// BounceFits), and lives until the program ends.
+struct BounceRegisters {
+  Multi o[3], d[3];          // the rays: origin, unit direction
+  Multi live, outward;       // a ray in the slot; it leaves its object outward
+  Multi from;                // the object it leaves (index + 1; 0: the eye)
+  Multi object, t;           // its nearest hit (index + 1; 0: none) and distance
+  Multi uncertain;           // the hit is not certain (the host traces the ray)
+  Multi hit;                 // live and a hit
+  Multi pt[3], normal[3];    // the hit point; the unit normal facing the ray
+  Multi inside;              // the ray meets its object from inside
+  Multi mirror[3], refracted[3], tir;  // the children's directions; total internal reflection
+  std::vector<Multi> nl, rv, through, shadowUnsure;  // per light: N·L, R·(−D), S, S uncertain
+};
+
+// The rays as the previous bounce or the primary pass left them (bounce 1 also its hits).
+void LoadRays(Machine& m, const SecondaryPlan& p, bool intersect, const BounceInputs& in,
+              BounceRegisters& r) {
   for (int k = 0; k < 3; ++k)
-    o[k] = Loaded(m, p.coord, in.o[k]), d[k] = Loaded(m, p.direction, in.d[k]);
+    r.o[k] = Loaded(m, p.coord, in.o[k]), r.d[k] = Loaded(m, p.direction, in.d[k]);
   auto flags = [&](const std::vector<uint8_t>& v) {
     return Loaded(m, bitserial::BoolFormat(), std::vector<int64_t>(v.begin(), v.end()));
   };
-  const Multi live = flags(in.live), outward = flags(in.outward);
-  const Multi from = Loaded(m, p.index, in.from);
-  Multi object, t, uncertain;
-  if (!intersect) {
-    object = Loaded(m, p.index, in.object), t = Loaded(m, p.t, in.t);
+  r.live = flags(in.live), r.outward = flags(in.outward);
+  r.from = Loaded(m, p.index, in.from);
+  if (!intersect) r.object = Loaded(m, p.index, in.object), r.t = Loaded(m, p.t, in.t);
+}
+
+// Each ray's nearest object (bounce 1: the primary pass's, certain).
+void FindHits(Machine& m, const SecondaryPlan& p, bool intersect, BounceRegisters& r) {
+  if (intersect) {
+    bitserial::WhereScope scope(r.live);
+    Normalise(r.d, p);
+    Nearest n = FindNearest(m, r.o, r.d, r.from, r.outward, p);
+    r.object = std::move(n.object), r.t = std::move(n.t), r.uncertain = std::move(n.uncertain);
+  } else {
+    r.uncertain = simd::Zero(m);
   }
+  r.hit = r.live && (Broadcast(m, Fixed{p.index, 0}) < r.object);
+}
+
+// The normal of object i at the hit points of the rays that hit it, into `normal`.
+void ObjectNormal(Machine& m, const SecondaryPlan& p, size_t i, const Multi (&pt)[3],
+                  Multi (&normal)[3]) {
+  if (p.objects[i].cone) {  // frameᵀ·(x_L, y_L, −σρ): the radial direction tilted by σ
+    const ConeTerms& c = p.cones[p.objects[i].index];
+    Multi rel[3], ol[3];
+    for (int k = 0; k < 3; ++k) rel[k] = Sub(pt[k], Uni{c.anchor[k]}, c.offset);
+    for (int k = 0; k < 3; ++k) ol[k] = simd::Dot3(rel, c.frame[k], c.local[k]);
+    const Multi rho = Add(Mul(ol[2], Uni{c.sigma}, c.rho), Uni{c.r0}, c.rho);
+    ol[2] = Neg(Mul(rho, Uni{c.sigma}, c.rho), c.rho);
+    for (int k = 0; k < 3; ++k) {
+      const Fixed column[3] = {c.normalScale[0][k], c.normalScale[1][k], c.normalScale[2][k]};
+      normal[k] = simd::Dot3(ol, column, p.direction);
+    }
+    return;
+  }
+  if (!p.objects[i].sphere) {  // the polygon's front normal, or a patch's interpolated one
+    const PolygonTerms& g = p.polygons[p.objects[i].index];
+    for (int k = 0; k < 3; ++k) normal[k] = Broadcast(m, g.normal[k]);
+    if (!g.fan.empty()) PatchNormal(m, pt, g, p, normal);
+    return;
+  }
+  const SphereTerms& s = p.spheres[p.objects[i].index];
+  if (s.ellipsoid) {  // Mᵀ·M(P − anchor): the object-space normal mapped to world space
+    const EllipsoidTerms& e = *s.ellipsoid;
+    Multi rel[3], ol[3];
+    for (int k = 0; k < 3; ++k) rel[k] = Sub(pt[k], Uni{e.anchor[k]}, e.offset);
+    for (int k = 0; k < 3; ++k) ol[k] = simd::Dot3(rel, e.inverse[k], e.local[k]);
+    for (int k = 0; k < 3; ++k) {
+      const Fixed column[3] = {s.normalScale[0][k], s.normalScale[1][k], s.normalScale[2][k]};
+      normal[k] = simd::Dot3(ol, column, p.direction);
+    }
+    return;
+  }
+  for (int k = 0; k < 3; ++k)
+    normal[k] = Mul(Sub(pt[k], Uni{s.centre[k]}, p.offset), Uni{s.inverseRadius}, p.direction,
+                    simd::kSaturate);
+}
+
+// The hit point P = o + t d and the unit normal there (P − c)/r of the sphere hit (or its
+// kind's), normalised.
+void SurfaceNormals(Machine& m, const SecondaryPlan& p, BounceRegisters& r) {
+  for (int k = 0; k < 3; ++k) r.pt[k] = Add(r.o[k], Mul(r.t, r.d[k], p.t), p.coord);
+  for (int k = 0; k < 3; ++k) r.normal[k] = Multi(m, p.direction, "normal");
+  for (size_t i = 0; i < p.objects.size(); ++i) {
+    bitserial::WhereScope one(r.object == Multi::Constant(m, Fixed{p.index, int64_t(i) + 1}));
+    ObjectNormal(m, p, i, r.pt, r.normal);
+  }
+  Normalise(r.normal, p, p.normalInverseBits);
+}
+
+// The transmitted direction (Snell; hosts/trace/tracer.h Refract): eta = ior leaving, 1/ior
+// entering; under total internal reflection the mirror direction.
+void Refractions(Machine& m, const SecondaryPlan& p, BounceRegisters& r, const Multi& dn) {
+  const int F = p.fracBits;
+  Multi eta = Const(m, 1, F);
+  for (size_t i = 0; i < p.objects.size(); ++i) {
+    const ObjectTerms& ob = p.objects[i];
+    const double t = ob.cone     ? p.cones[ob.index].transparency
+                     : ob.sphere ? p.spheres[ob.index].transparency
+                                 : p.polygons[ob.index].transparency;
+    const double ior = ob.cone     ? p.cones[ob.index].ior
+                       : ob.sphere ? p.spheres[ob.index].ior
+                                   : p.polygons[ob.index].ior;
+    if (t <= 0) continue;
+    const Multi one = r.object == Multi::Constant(m, Fixed{p.index, int64_t(i) + 1});
+    Where(one && r.inside, [&] { eta = Const(m, ior, F); });
+    Where(one && !r.inside, [&] { eta = Const(m, 1 / ior, F); });
+  }
+  const Multi cosi = Neg(dn, Format::Signed(2, F));
+  const Multi sin2 =
+      Sub(Const(m, 1, F), Square(cosi, Format::Unsigned(2, F)), Format::Signed(2, F));
+  const Format wide = Format::Signed(2 * p.eta.intBits + 2, F);
+  const Multi k = Sub(Const(m, 1, F), Mul(Square(eta, wide), sin2, wide), wide);
+  r.tir = k < simd::Zero(m);
+  Multi root;
+  simd::WithExpectedSaturation(
+      m, [&] { root = Sqrt(k, Format::Unsigned(2 * p.eta.intBits + 2, F)); });
+  const Format term = Format::Signed(p.eta.intBits + 2, F);
+  const Multi coef = Sub(Mul(eta, cosi, term), root, term);
+  for (int c = 0; c < 3; ++c)
+    r.refracted[c] =
+        Add(Mul(eta, r.d[c], term), Mul(coef, r.normal[c], term), p.direction, simd::kSaturate);
+  for (int c = 0; c < 3; ++c) Where(r.tir, [&] { r.refracted[c] = r.mirror[c]; });
+  Normalise(r.refracted, p);
+}
+
+// Each light: the unit direction l, N·L, R·(−D) = l·d − 2(N·L)(N·d), the shadow product.
+void LightTerms(Machine& m, const SecondaryPlan& p, BounceRegisters& r, const Multi& dn) {
+  const int F = p.fracBits;
+  for (size_t j = 0; j < r.nl.size(); ++j) {
+    Multi w[3], l[3];
+    for (int k = 0; k < 3; ++k) w[k] = Sub(Uni{p.lights[k][j]}, r.pt[k], p.toLight);
+    const Multi dist =
+        Sqrt(simd::SumOfSquares(w, Format::Unsigned(2 * p.toLight.intBits, F)), p.distance);
+    for (int k = 0; k < 3; ++k) l[k] = Div(w[k], dist, p.direction, simd::kSaturate);
+    r.nl[j] = Dot(r.normal, l, p.direction);
+    const Multi twice = Mul(r.nl[j], dn, p.direction);
+    r.rv[j] = Sub(Dot(l, r.d, p.direction), Add(twice, twice, Format::Signed(2, F)),
+                  Format::Signed(3, F), simd::kSaturate);
+    ShadowProduct(m, r.pt, l, dist, r.object, r.inside, p, j, r.through[j], r.shadowUnsure[j]);
+  }
+}
+
+// Where a ray hit: the normal faced toward it, the children's directions, each light's terms.
+void ShadeHits(Machine& m, const SecondaryPlan& p, BounceRegisters& r) {
+  bitserial::WhereScope scope(r.hit);
+  SurfaceNormals(m, p, r);
+  Multi dn = Dot(r.d, r.normal, p.direction);
+  r.inside = simd::Zero(m) < dn;
+  Where(r.inside, [&] {
+    for (int k = 0; k < 3; ++k) r.normal[k] = Neg(r.normal[k], p.direction);
+    dn = Neg(dn, p.direction);
+  });
+  for (int k = 0; k < 3; ++k) {
+    const Multi twice = Mul(dn, r.normal[k], p.t);
+    r.mirror[k] = Sub(r.d[k], Add(twice, twice, p.t), p.direction, simd::kSaturate);
+  }
+  if (p.anyTransparent) Refractions(m, p, r, dn);
+  LightTerms(m, p, r, dn);
+}
+
+// x's raw values read over the host link (charged by the caller's count of bits).
+void ReadOver(const Multi& x, std::vector<int64_t>& to, BounceOutputs& out) {
+  to = x.ReadRaw();
+  out.hostLinkBits += int64_t(x.Width()) * x.GetMachine().VirtualPes();
+}
+void ReadFlagsOver(const Multi& x, std::vector<uint8_t>& to, BounceOutputs& out) {
+  std::vector<int64_t> raw;
+  ReadOver(x, raw, out);
+  to.assign(raw.begin(), raw.end());
+}
+// The emulation's copy of what stays on the array (not charged: the next bounce reads it
+// where it is).
+void Peek(const Multi& x, std::vector<int64_t>& to) {
+  const int w = x.Width();
+  const int64_t n = x.GetMachine().VirtualPes();
+  to.assign(n, 0);
+  for (int i = 0; i < w; ++i)
+    for (int64_t pe = 0; pe < n; ++pe)
+      if (x.BitAt(i, pe)) to[pe] |= int64_t{1} << i;
+  if (x.Format().isSigned)
+    for (int64_t& v : to)
+      if ((v >> (w - 1)) & 1) v -= int64_t{1} << w;
+}
+
+// The records the host reads (BounceOutputs); overflow anywhere in a ray's program (its
+// flags latch per PE) makes it uncertain.
+void ReadRecords(Machine& m, const SecondaryPlan& p, const BounceInputs& in,
+                 const BounceRegisters& r, BounceOutputs& out, bool audit) {
+  const int64_t n = m.VirtualPes();
+  const size_t lights = r.nl.size();
+  ReadOver(r.object, out.object, out);
+  m.Charge("hostRead", bitserial::HostTransferCost(1));  // the overflow flags
+  ReadFlagsOver(r.uncertain, out.uncertain, out);
+  for (int64_t pe = 0; pe < n; ++pe)
+    if (m.Overflow(pe) || m.DivideByZero(pe)) out.uncertain[pe] = 1;
+  ReadFlagsOver(r.tir, out.tir, out);
+  out.nl.resize(lights), out.rv.resize(lights), out.through.resize(lights);
+  out.shadowUncertain.resize(lights);
+  bool anyShadowUnsure = false;
+  for (size_t j = 0; j < lights; ++j) {
+    ReadOver(r.nl[j], out.nl[j], out), ReadOver(r.rv[j], out.rv[j], out);
+    ReadOver(r.through[j], out.through[j], out);
+    ReadFlagsOver(r.shadowUnsure[j], out.shadowUncertain[j], out);
+    anyShadowUnsure |= std::find(out.shadowUncertain[j].begin(), out.shadowUncertain[j].end(),
+                                 1) != out.shadowUncertain[j].end();
+  }
+  bool anyUnsure = false;
+  for (int64_t pe = 0; pe < n; ++pe) anyUnsure |= in.live[pe] && out.uncertain[pe];
+  if (audit)
+    for (int k = 0; k < 3; ++k) Peek(r.o[k], out.audit.o[k]), Peek(r.d[k], out.audit.d[k]);
+  std::vector<int64_t> inside;
+  Peek(r.inside, inside);
+  out.inside.assign(inside.begin(), inside.end());
+  for (int k = 0; k < 3; ++k) {
+    if (anyUnsure) ReadOver(r.o[k], out.o[k], out), ReadOver(r.d[k], out.d[k], out);
+    if (anyShadowUnsure)
+      ReadOver(r.pt[k], out.p[k], out);
+    else
+      Peek(r.pt[k], out.p[k]);
+    Peek(r.mirror[k], out.mirror[k]);
+    if (p.anyTransparent) Peek(r.refracted[k], out.refracted[k]);
+  }
+}
+
+// The whole program: the rays loaded, their hits, the shading terms at them, the records
+// read; out = nullptr runs it for its allocation only (BounceFits).
+void Run(Machine& m, const SecondaryPlan& p, bool intersect, const BounceInputs& in,
+         BounceOutputs* out, bool audit) {
+  BounceRegisters r;
+  LoadRays(m, p, intersect, in, r);
   // The inputs are already on the array (the previous bounce or the primary pass wrote
   // them; the compaction's moves are charged apart): the program starts here.
   m.Report().Clear();
   m.ClearFlags();
-  if (intersect) {
-    bitserial::WhereScope scope(live);
-    Normalise(d, p);
-    Nearest n = FindNearest(m, o, d, from, outward, p);
-    object = std::move(n.object), t = std::move(n.t), uncertain = std::move(n.uncertain);
-  } else {
-    uncertain = simd::Zero(m);
-  }
-  const Multi hit = live && (Broadcast(m, Fixed{p.index, 0}) < object);
+  FindHits(m, p, intersect, r);
+  r.tir = simd::Zero(m);
   const size_t lights = p.lights[0].size();
-  Multi pt[3], normal[3], mirror[3], refracted[3], tir = simd::Zero(m), inside;
-  std::vector<Multi> nl(lights), rv(lights), through(lights), shadowUnsure(lights);
-  {
-    bitserial::WhereScope scope(hit);
-    for (int k = 0; k < 3; ++k) pt[k] = Add(o[k], Mul(t, d[k], p.t), p.coord);
-    // The unit normal (P − c)/r of the sphere hit, normalised, turned to face the ray.
-    for (int k = 0; k < 3; ++k) normal[k] = Multi(m, p.direction, "normal");
-    for (size_t i = 0; i < p.objects.size(); ++i) {
-      bitserial::WhereScope one(object == Multi::Constant(m, Fixed{p.index, int64_t(i) + 1}));
-      if (p.objects[i].cone) {  // frameᵀ·(x_L, y_L, −σρ): the radial direction tilted by σ
-        const ConeTerms& c = p.cones[p.objects[i].index];
-        Multi rel[3], ol[3];
-        for (int k = 0; k < 3; ++k) rel[k] = Sub(pt[k], Uni{c.anchor[k]}, c.offset);
-        for (int k = 0; k < 3; ++k) ol[k] = simd::Dot3(rel, c.frame[k], c.local[k]);
-        const Multi rho = Add(Mul(ol[2], Uni{c.sigma}, c.rho), Uni{c.r0}, c.rho);
-        ol[2] = Neg(Mul(rho, Uni{c.sigma}, c.rho), c.rho);
-        for (int k = 0; k < 3; ++k) {
-          const Fixed column[3] = {c.normalScale[0][k], c.normalScale[1][k], c.normalScale[2][k]};
-          normal[k] = simd::Dot3(ol, column, p.direction);
-        }
-        continue;
-      }
-      if (!p.objects[i].sphere) {  // the polygon's front normal, or a patch's interpolated one
-        const PolygonTerms& g = p.polygons[p.objects[i].index];
-        for (int k = 0; k < 3; ++k) normal[k] = Broadcast(m, g.normal[k]);
-        if (!g.fan.empty()) PatchNormal(m, pt, g, p, normal);
-        continue;
-      }
-      const SphereTerms& s = p.spheres[p.objects[i].index];
-      if (s.ellipsoid) {  // Mᵀ·M(P − anchor): the object-space normal mapped to world space
-        const EllipsoidTerms& e = *s.ellipsoid;
-        Multi rel[3], ol[3];
-        for (int k = 0; k < 3; ++k) rel[k] = Sub(pt[k], Uni{e.anchor[k]}, e.offset);
-        for (int k = 0; k < 3; ++k) ol[k] = simd::Dot3(rel, e.inverse[k], e.local[k]);
-        for (int k = 0; k < 3; ++k) {
-          const Fixed column[3] = {s.normalScale[0][k], s.normalScale[1][k], s.normalScale[2][k]};
-          normal[k] = simd::Dot3(ol, column, p.direction);
-        }
-        continue;
-      }
-      for (int k = 0; k < 3; ++k)
-        normal[k] = Mul(Sub(pt[k], Uni{s.centre[k]}, p.offset), Uni{s.inverseRadius}, p.direction,
-                        simd::kSaturate);
-    }
-    Normalise(normal, p, p.normalInverseBits);
-    Multi dn = Dot(d, normal, p.direction);
-    inside = simd::Zero(m) < dn;
-    Where(inside, [&] {
-      for (int k = 0; k < 3; ++k) normal[k] = Neg(normal[k], p.direction);
-      dn = Neg(dn, p.direction);
-    });
-    for (int k = 0; k < 3; ++k) {
-      const Multi twice = Mul(dn, normal[k], p.t);
-      mirror[k] = Sub(d[k], Add(twice, twice, p.t), p.direction, simd::kSaturate);
-    }
-    if (p.anyTransparent) {
-      // Snell (hosts/trace/tracer.h Refract): eta = ior leaving, 1/ior entering.
-      Multi eta = Const(m, 1, F);
-      for (size_t i = 0; i < p.objects.size(); ++i) {
-        const ObjectTerms& ob = p.objects[i];
-        const double t = ob.cone     ? p.cones[ob.index].transparency
-                         : ob.sphere ? p.spheres[ob.index].transparency
-                                     : p.polygons[ob.index].transparency;
-        const double ior = ob.cone     ? p.cones[ob.index].ior
-                           : ob.sphere ? p.spheres[ob.index].ior
-                                       : p.polygons[ob.index].ior;
-        if (t <= 0) continue;
-        const Multi one = object == Multi::Constant(m, Fixed{p.index, int64_t(i) + 1});
-        Where(one && inside, [&] { eta = Const(m, ior, F); });
-        Where(one && !inside, [&] { eta = Const(m, 1 / ior, F); });
-      }
-      const Multi cosi = Neg(dn, Format::Signed(2, F));
-      const Multi sin2 =
-          Sub(Const(m, 1, F), Square(cosi, Format::Unsigned(2, F)), Format::Signed(2, F));
-      const Format wide = Format::Signed(2 * p.eta.intBits + 2, F);
-      const Multi k = Sub(Const(m, 1, F), Mul(Square(eta, wide), sin2, wide), wide);
-      tir = k < simd::Zero(m);
-      Multi root;
-      simd::WithExpectedSaturation(
-          m, [&] { root = Sqrt(k, Format::Unsigned(2 * p.eta.intBits + 2, F)); });
-      const Format term = Format::Signed(p.eta.intBits + 2, F);
-      const Multi coef = Sub(Mul(eta, cosi, term), root, term);
-      for (int c = 0; c < 3; ++c)
-        refracted[c] =
-            Add(Mul(eta, d[c], term), Mul(coef, normal[c], term), p.direction, simd::kSaturate);
-      for (int c = 0; c < 3; ++c) Where(tir, [&] { refracted[c] = mirror[c]; });
-      Normalise(refracted, p);
-    }
-    // Each light: the unit direction l, N·L, R·(−D) = l·d − 2(N·L)(N·d), the shadow product.
-    for (size_t j = 0; j < lights; ++j) {
-      Multi w[3], l[3];
-      for (int k = 0; k < 3; ++k) w[k] = Sub(Uni{p.lights[k][j]}, pt[k], p.toLight);
-      const Multi dist =
-          Sqrt(simd::SumOfSquares(w, Format::Unsigned(2 * p.toLight.intBits, F)), p.distance);
-      for (int k = 0; k < 3; ++k) l[k] = Div(w[k], dist, p.direction, simd::kSaturate);
-      nl[j] = Dot(normal, l, p.direction);
-      const Multi twice = Mul(nl[j], dn, p.direction);
-      rv[j] = Sub(Dot(l, d, p.direction), Add(twice, twice, Format::Signed(2, F)),
-                  Format::Signed(3, F), simd::kSaturate);
-      ShadowProduct(m, pt, l, dist, object, inside, p, j, through[j], shadowUnsure[j]);
-    }
-  }
-  // Overflow anywhere in a ray's program (its flags latch per PE) makes it uncertain.
-  if (!out) return;
-  const int64_t n = m.VirtualPes();
-  auto read = [&](const Multi& x, std::vector<int64_t>& to) {
-    to = x.ReadRaw();
-    out->hostLinkBits += int64_t(x.Width()) * n;
-  };
-  auto readFlags = [&](const Multi& x, std::vector<uint8_t>& to) {
-    std::vector<int64_t> raw;
-    read(x, raw);
-    to.assign(raw.begin(), raw.end());
-  };
-  // The emulation's copy of what stays on the array (not charged: the next bounce reads it
-  // where it is).
-  auto peek = [&](const Multi& x, std::vector<int64_t>& to) {
-    const int w = x.Width();
-    to.assign(n, 0);
-    for (int i = 0; i < w; ++i)
-      for (int64_t pe = 0; pe < n; ++pe)
-        if (x.BitAt(i, pe)) to[pe] |= int64_t{1} << i;
-    if (x.Format().isSigned)
-      for (int64_t& v : to)
-        if ((v >> (w - 1)) & 1) v -= int64_t{1} << w;
-  };
-  read(object, out->object);
-  m.Charge("hostRead", bitserial::HostTransferCost(1));  // the overflow flags
-  readFlags(uncertain, out->uncertain);
-  for (int64_t pe = 0; pe < n; ++pe)
-    if (m.Overflow(pe) || m.DivideByZero(pe)) out->uncertain[pe] = 1;
-  readFlags(tir, out->tir);
-  out->nl.resize(lights), out->rv.resize(lights), out->through.resize(lights);
-  out->shadowUncertain.resize(lights);
-  bool anyShadowUnsure = false;
-  for (size_t j = 0; j < lights; ++j) {
-    read(nl[j], out->nl[j]), read(rv[j], out->rv[j]), read(through[j], out->through[j]);
-    readFlags(shadowUnsure[j], out->shadowUncertain[j]);
-    anyShadowUnsure |= std::find(out->shadowUncertain[j].begin(), out->shadowUncertain[j].end(),
-                                 1) != out->shadowUncertain[j].end();
-  }
-  bool anyUnsure = false;
-  for (int64_t pe = 0; pe < n; ++pe) anyUnsure |= in.live[pe] && out->uncertain[pe];
-  if (audit)
-    for (int k = 0; k < 3; ++k) peek(o[k], out->audit.o[k]), peek(d[k], out->audit.d[k]);
-  {
-    std::vector<int64_t> raw;
-    peek(inside, raw);
-    out->inside.assign(raw.begin(), raw.end());
-  }
-  for (int k = 0; k < 3; ++k) {
-    if (anyUnsure) read(o[k], out->o[k]), read(d[k], out->d[k]);
-    if (anyShadowUnsure)
-      read(pt[k], out->p[k]);
-    else
-      peek(pt[k], out->p[k]);
-    peek(mirror[k], out->mirror[k]);
-    if (p.anyTransparent) peek(refracted[k], out->refracted[k]);
-  }
+  r.nl.resize(lights), r.rv.resize(lights), r.through.resize(lights), r.shadowUnsure.resize(lights);
+  ShadeHits(m, p, r);
+  if (out) ReadRecords(m, p, in, r, *out, audit);
 }
 
 }  // namespace
