@@ -365,16 +365,9 @@ class NffParser {
         p.normals.push_back(nrm / len);
       }
     }
-    // Newell's normal; its length is twice the area.
-    Vec3 normal;
+    const Vec3 normal = NewellNormal(p.vertices);  // its length is twice the area
     double size = 0;
-    for (size_t i = 0; i < p.vertices.size(); ++i) {
-      const Vec3& a = p.vertices[i];
-      const Vec3& b = p.vertices[(i + 1) % p.vertices.size()];
-      normal +=
-          Vec3{(a.y - b.y) * (a.z + b.z), (a.z - b.z) * (a.x + b.x), (a.x - b.x) * (a.y + b.y)};
-      size = std::max(size, Length(b - p.vertices[0]));
-    }
+    for (const Vec3& v : p.vertices) size = std::max(size, Length(v - p.vertices[0]));
     const double area2 = Length(normal);
     if (!std::isfinite(area2)) Fail(k, "polygon too large: its area overflows");
     if (!(size > 0) || !(area2 > 1e-12 * size * size)) {

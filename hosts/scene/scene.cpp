@@ -11,6 +11,29 @@ std::string SourceLocation::ToString() const {
   return file + ":" + std::to_string(line) + ":" + std::to_string(column);
 }
 
+Vec3 NewellNormal(const std::vector<Vec3>& v) {
+  Vec3 n;
+  for (size_t i = 0; i < v.size(); ++i) {
+    const Vec3& a = v[i];
+    const Vec3& b = v[(i + 1) % v.size()];
+    n += Vec3{(a.y - b.y) * (a.z + b.z), (a.z - b.z) * (a.x + b.x), (a.x - b.x) * (a.y + b.y)};
+  }
+  return n;
+}
+
+WorldSpacePolygon ToWorldSpace(const Primitive& p) {
+  const Polygon& q = std::get<Polygon>(p.shape);
+  WorldSpacePolygon w{q.vertices, q.normals, {}, 1};
+  if (p.transform) {
+    const Affine inv = p.transform->Inverse();
+    for (Vec3& x : w.vertices) x = p.transform->ApplyPoint(x);
+    for (Vec3& n : w.normals) n = inv.ApplyTransposed(n);
+    w.front = p.transform->RelativeDeterminant() < 0 ? -1 : 1;
+  }
+  w.normal = Normalize(ScaledDown(NewellNormal(w.vertices)));
+  return w;
+}
+
 const char* ShapeKindName(ShapeKind kind) {
   static constexpr NamedValues<ShapeKind, 3> kNames{{{{ShapeKind::kSphere, "sphere"},
                                                       {ShapeKind::kCone, "cone"},

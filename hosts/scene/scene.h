@@ -86,6 +86,25 @@ struct Primitive {
   ShapeKind Kind() const { return static_cast<ShapeKind>(shape.index()); }
 };
 
+// Newell's normal of a polygon with vertices v (not unit: its length is twice the area; it
+// points to the side from which v winds counter-clockwise), summed edge by edge from vertex 0.
+// The one sum the reader's area test and every polygon's world form start from.
+Vec3 NewellNormal(const std::vector<Vec3>& v);
+
+// A polygon (or patch) as every ray test takes it — the host tracer, the primary pass, the
+// bounces: its vertices in world space (the transform applied), its vertex normals mapped by
+// the inverse transpose (a patch's; empty for a flat polygon), the unit Newell normal of the
+// world vertices, and `front`, −1 under a mirroring transform (its world winding is reversed,
+// so front·normal keeps the object's front its front) else 1. Made once here so the three
+// agree bit for bit.
+struct WorldSpacePolygon {
+  std::vector<Vec3> vertices, normals;
+  Vec3 normal;    // unit: Normalize(ScaledDown(NewellNormal(vertices)))
+  int front = 1;  // ±1
+};
+// p's world form; p must be a polygon (std::bad_variant_access otherwise: a caller's bug).
+WorldSpacePolygon ToWorldSpace(const Primitive& p);
+
 struct Scene {
   Camera camera;
   Vec3 background{0, 0, 0};

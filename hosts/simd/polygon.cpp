@@ -43,23 +43,11 @@ struct WorldPolygon {
   bool degenerate = false;
 };
 
-std::vector<Vec3> WorldVertices(const Primitive& p) {
-  std::vector<Vec3> v;
-  for (const Vec3& x : std::get<Polygon>(p.shape).vertices)
-    v.push_back(p.transform ? p.transform->ApplyPoint(x) : x);
-  return v;
-}
-
 WorldPolygon MakeWorldPolygon(const Primitive& p, const Vec3& eye) {
   WorldPolygon w;
-  w.v = WorldVertices(p);
-  const size_t n = w.v.size();
-  Vec3 nn;
-  for (size_t i = 0; i < n; ++i) {
-    const Vec3 &a = w.v[i], &b = w.v[(i + 1) % n];
-    nn += Vec3{(a.y - b.y) * (a.z + b.z), (a.z - b.z) * (a.x + b.x), (a.x - b.x) * (a.y + b.y)};
-  }
-  w.normal = Normalize(ScaledDown(nn));
+  WorldSpacePolygon world = ToWorldSpace(p);
+  w.v = std::move(world.vertices);
+  w.normal = world.normal;
   w.eyeDistance = Dot(w.normal, w.v[0] - eye);
   // A ray from the eye that meets the plane in front has sign(n̂·d) = σ, the facing the
   // tracer's rule uses.
@@ -206,7 +194,7 @@ class PolygonProgram final : public ObjectProgram {
 
 ObjectExtent PolygonExtent(const Primitive& p, const Vec3& eye) {
   ObjectExtent e;
-  const std::vector<Vec3> v = WorldVertices(p);
+  const std::vector<Vec3> v = ToWorldSpace(p).vertices;
   for (size_t k = 0; k < v.size(); ++k) {
     e.farthest = std::max(e.farthest, Length(v[k] - eye));
     e.feature = std::min(e.feature, Length(v[k] - v[(k + 1) % v.size()]) / 2);

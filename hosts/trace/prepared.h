@@ -76,27 +76,17 @@ Prepared<T> Prepare(const Primitive& p) {
   r.kind = p.Kind();
   r.material = p.material;
   double scale = 0;
-  if (auto* q = std::get_if<Polygon>(&p.shape)) {
-    std::vector<Vec3> v = q->vertices, normals = q->normals;
-    if (p.transform) {
-      const Affine inv = p.transform->Inverse();
-      for (Vec3& x : v) x = p.transform->ApplyPoint(x);
-      for (Vec3& n : normals) n = inv.ApplyTransposed(n);
-      r.front = p.transform->RelativeDeterminant() < 0 ? -1 : 1;
-    }
-    Vec3 n;  // Newell's normal, in double
-    for (size_t i = 0; i < v.size(); ++i) {
-      const Vec3& a = v[i];
-      const Vec3& b = v[(i + 1) % v.size()];
-      n += Vec3{(a.y - b.y) * (a.z + b.z), (a.z - b.z) * (a.x + b.x), (a.x - b.x) * (a.y + b.y)};
-    }
-    n = Normalize(ScaledDown(n));
+  if (p.Kind() == ShapeKind::kPolygon) {
+    const WorldSpacePolygon world = ToWorldSpace(p);
+    const std::vector<Vec3>& v = world.vertices;
+    const Vec3& n = world.normal;
+    r.front = world.front;
     const double offset = Dot(n, v[0]);
     r.normal = V(n);
     r.planeOffset = T(offset);
     r.groups = PolygonEdgeGroups(v, n);
     for (const Vec3& x : v) r.vertices.push_back(V(x));
-    for (const Vec3& x : normals) r.normals.push_back(V(x));
+    for (const Vec3& x : world.normals) r.normals.push_back(V(x));
     scale = std::abs(offset);
   } else if (p.transform) {
     r.transformed = true;

@@ -301,7 +301,6 @@ SecondaryPlan PlanSecondary(const Scene& scene, int fracBits, double primaryTErr
   std::vector<Vec3> worldNormals;
   for (const Primitive& o : scene.objects) {
     const auto* s = std::get_if<Sphere>(&o.shape);
-    const auto* q = std::get_if<Polygon>(&o.shape);
     if (const auto* c = std::get_if<Cone>(&o.shape)) {
       const double r = std::max(std::abs(c->baseRadius), std::abs(c->apexRadius));
       extent = std::max(
@@ -325,25 +324,11 @@ SecondaryPlan PlanSecondary(const Scene& scene, int fracBits, double primaryTErr
       minRadius = std::min(minRadius, s->radius);
       p.spheres.emplace_back();  // filled below
     } else {
-      std::vector<Vec3> v = q->vertices, normals = q->normals;
-      int front = 1;
-      if (o.transform) {
-        const Affine inv = o.transform->Inverse();
-        for (Vec3& x : v) x = o.transform->ApplyPoint(x);
-        for (Vec3& x : normals) x = inv.ApplyTransposed(x);  // as the tracer's Prepare
-        front = o.transform->RelativeDeterminant() < 0 ? -1 : 1;
-      }
-      Vec3 n;  // Newell's normal, as hosts/trace/tracer.cpp Prepare
-      for (size_t i = 0; i < v.size(); ++i) {
-        const Vec3& a = v[i];
-        const Vec3& b = v[(i + 1) % v.size()];
-        n += Vec3{(a.y - b.y) * (a.z + b.z), (a.z - b.z) * (a.x + b.x), (a.x - b.x) * (a.y + b.y)};
-      }
-      n = Normalize(ScaledDown(n));
-      for (const Vec3& x : v) extent = std::max(extent, MaxAbs(x));
-      worldVertices.push_back(v);
-      worldVertexNormals.push_back(normals);
-      worldNormals.push_back(n * double(front));
+      WorldSpacePolygon world = ToWorldSpace(o);  // as the tracer and the primary pass take it
+      for (const Vec3& x : world.vertices) extent = std::max(extent, MaxAbs(x));
+      worldNormals.push_back(world.normal * double(world.front));
+      worldVertices.push_back(std::move(world.vertices));
+      worldVertexNormals.push_back(std::move(world.normals));
     }
     const Material& m = scene.materials[o.material];
     maxIor = std::max({maxIor, m.ior, 1 / m.ior});
