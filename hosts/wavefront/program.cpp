@@ -288,74 +288,76 @@ void PlanPatch(const std::vector<Vec3>& v, const std::vector<Vec3>& normals, dou
   t.weight = Format::Signed(IntBitsFor(reach) + 1, F);
 }
 
-}  // namespace
-
-SecondaryPlan PlanSecondary(const Scene& scene, int fracBits, double primaryTError) {
-  if (fracBits < 8 || fracBits > 40)
-    throw UserError("the secondary rays' fraction bits must be 8..40, got " +
-                    std::to_string(fracBits));
-  SecondaryPlan p;
-  double extent = MaxAbs(scene.camera.from), light = 0, maxIor = 1, minRadius = 1e300;
-  // Each polygon's world vertices and front normal, as the tracer takes them.
+// What the plan needs of the scene before any format is chosen: the largest coordinate any
+// ray or object reaches, the farthest light, the largest index of refraction either way, and
+// each polygon's world form (ToWorldSpace, as the tracer and the primary pass take it). Also
+// fills p.objects (each object's kind and its index among its kind's terms, whose entries
+// PlanObjects fills) and p.anyMirror, p.anyTransparent.
+struct SceneSurvey {
+  double extent = 0, light = 0, maxIor = 1;
   std::vector<std::vector<Vec3>> worldVertices, worldVertexNormals;
-  std::vector<Vec3> worldNormals;
+  std::vector<Vec3> worldNormals;  // unit, turned by a mirroring transform (front·normal)
+};
+
+SceneSurvey Survey(const Scene& scene, SecondaryPlan& p) {
+  SceneSurvey v;
+  v.extent = MaxAbs(scene.camera.from);
   for (const Primitive& o : scene.objects) {
     const auto* s = std::get_if<Sphere>(&o.shape);
     if (const auto* c = std::get_if<Cone>(&o.shape)) {
       const double r = std::max(std::abs(c->baseRadius), std::abs(c->apexRadius));
-      extent = std::max(
-          extent, o.transform ? MaxAbs(o.transform->ApplyPoint(c->base)) +
-                                    o.transform->LinearNormInf() * (MaxAbs(c->apex - c->base) + r)
-                              : std::max(MaxAbs(c->base), MaxAbs(c->apex)) + r);
+      v.extent = std::max(
+          v.extent, o.transform ? MaxAbs(o.transform->ApplyPoint(c->base)) +
+                                      o.transform->LinearNormInf() * (MaxAbs(c->apex - c->base) + r)
+                                : std::max(MaxAbs(c->base), MaxAbs(c->apex)) + r);
       p.objects.push_back({false, int(p.cones.size()), true});
-      p.cones.emplace_back();  // filled below
-      const Material& m = scene.materials[o.material];
-      maxIor = std::max({maxIor, m.ior, 1 / m.ior});
-      p.anyMirror |= m.ks > 0;
-      p.anyTransparent |= m.t > 0;
-      continue;
-    }
-    const bool sphere = s != nullptr;
-    p.objects.push_back({sphere, int(sphere ? p.spheres.size() + 0 : worldVertices.size())});
-    if (sphere) {
-      extent = std::max(extent, o.transform ? MaxAbs(o.transform->ApplyPoint(s->centre)) +
-                                                  s->radius * o.transform->LinearNormInf()
-                                            : MaxAbs(s->centre) + s->radius);
-      minRadius = std::min(minRadius, s->radius);
-      p.spheres.emplace_back();  // filled below
+      p.cones.emplace_back();
+    } else if (s) {
+      v.extent = std::max(v.extent, o.transform ? MaxAbs(o.transform->ApplyPoint(s->centre)) +
+                                                      s->radius * o.transform->LinearNormInf()
+                                                : MaxAbs(s->centre) + s->radius);
+      p.objects.push_back({true, int(p.spheres.size())});
+      p.spheres.emplace_back();
     } else {
+      p.objects.push_back({false, int(v.worldVertices.size())});
       WorldSpacePolygon world = ToWorldSpace(o);  // as the tracer and the primary pass take it
-      for (const Vec3& x : world.vertices) extent = std::max(extent, MaxAbs(x));
-      worldNormals.push_back(world.normal * double(world.front));
-      worldVertices.push_back(std::move(world.vertices));
-      worldVertexNormals.push_back(std::move(world.normals));
+      for (const Vec3& x : world.vertices) v.extent = std::max(v.extent, MaxAbs(x));
+      v.worldNormals.push_back(world.normal * double(world.front));
+      v.worldVertices.push_back(std::move(world.vertices));
+      v.worldVertexNormals.push_back(std::move(world.normals));
     }
     const Material& m = scene.materials[o.material];
-    maxIor = std::max({maxIor, m.ior, 1 / m.ior});
+    v.maxIor = std::max({v.maxIor, m.ior, 1 / m.ior});
     p.anyMirror |= m.ks > 0;
     p.anyTransparent |= m.t > 0;
   }
-  for (const Light& l : scene.lights) light = std::max(light, MaxAbs(l.position));
-  const int F = fracBits;
+  for (const Light& l : scene.lights) v.light = std::max(v.light, MaxAbs(l.position));
+  return v;
+}
+
+// The formats at F fraction bits for the survey's extent, lights and indices; refused when a
+// coordinate or the widest value would not fit what the host and the engine read.
+void ChooseFormats(SecondaryPlan& p, const SceneSurvey& v, int F, size_t objects) {
   const double u = std::ldexp(1.0, -F);
   p.fracBits = F, p.ulp = u;
-  p.intBits = IntBitsFor(extent) + 1;
+  p.intBits = IntBitsFor(v.extent) + 1;
   const int I = p.intBits;
   p.coord = Format::Signed(I, F);
   p.offset = Format::Signed(I + 1, F);
   p.t = Format::Signed(I + 2, F);
   p.direction = Format::Signed(1, F);
-  const int il = IntBitsFor(light + extent) + 1;
+  const int il = IntBitsFor(v.light + v.extent) + 1;
   p.toLight = Format::Signed(il, F);
   p.distance = Format::Unsigned(il, F);
-  p.eta = Format::Unsigned(IntBitsFor(maxIor) + 1, F);
+  p.eta = Format::Unsigned(IntBitsFor(v.maxIor) + 1, F);
   p.unit = Format::Unsigned(1, F);
-  p.index = Format::Unsigned(IntBitsFor(double(scene.objects.size()) + 1) + 1, 0);
+  p.index = Format::Unsigned(IntBitsFor(double(objects) + 1) + 1, 0);
   // The host reads coordinates as 64-bit integers and the engine's widest value has 128 bits
   // (the polygon edge functions' are the widest here).
-  const int widest = p.polygons.empty() && worldVertices.empty() ? p.t.Width() : 2 * I + 8 + F;
+  const bool polygons = !v.worldVertices.empty();
+  const int widest = !polygons ? p.t.Width() : 2 * I + 8 + F;
   if (p.coord.Width() > 62 || widest > 120)
-    throw UserError("the scene's extent (" + fmt::format("{:.6g}", extent) + ") needs " +
+    throw UserError("the scene's extent (" + fmt::format("{:.6g}", v.extent) + ") needs " +
                     std::to_string(I) + " integer bits: with " + std::to_string(F) +
                     " fraction bits a coordinate would take " + std::to_string(p.coord.Width()) +
                     " bits (at most 62: the host reads it as a 64-bit integer) and the widest "
@@ -363,41 +365,85 @@ SecondaryPlan PlanSecondary(const Scene& scene, int fracBits, double primaryTErr
                     std::to_string(widest) +
                     " (at most 120): use fewer fraction "
                     "bits, at most " +
-                    std::to_string(std::min(61 - I, worldVertices.empty() ? 61 - I : 112 - 2 * I)));
+                    std::to_string(std::min(61 - I, !polygons ? 61 - I : 112 - 2 * I)));
   p.edgeVector = Format::Signed(I + 2, F);
   p.edgeCross = Format::Signed(2 * I + 5, F);
   p.edgeValue = Format::Signed(2 * I + 7, F);
   // A direction normalised on the array (d·(1/|d|), each step floor-rounded): | |d|² − 1 |
   // below 12u (docs/wavefront.md, "Error bounds"); 16u taken.
   p.directionError = 16 * u;
-  const double diameter = 2 * std::sqrt(3.0) * extent;
+}
+
+// Polygons (docs/wavefront.md, "Error bounds"): each edge function's error from the vertices
+// rounded to nearest (|p − o|, |q − o| <= the diameter D) and five floor products; t =
+// (n·v0 − n·o)/(n·d) with n and n·v0 rounded to nearest, where |n·d| >= the parallel band.
+void PlanPolygons(SecondaryPlan& p, const SceneSurvey& v, double D, int F) {
+  const double u = p.ulp;
+  const double eNum = 3 * std::ldexp(1.0, p.intBits) * u / 2 + 3 * u + u / 2,
+               eNd = 1.75 * u / 2 + 3 * u;
+  const double edgeBand = 1.25 * (1.75 * (2 * D * u + 2 * u + u * u) + 3 * u);
+  double rungs[3];
+  for (int k = 0; k < 3; ++k)
+    rungs[k] = (eNum + D * eNd) / (kPolygonRungs[k] - eNd) + D * p.directionError + 2 * u;
+  const double tError = rungs[0];
+  for (size_t j = 0; j < v.worldVertices.size(); ++j) {
+    PolygonTerms t;
+    const Vec3& n = v.worldNormals[j];
+    for (int k = 0; k < 3; ++k) t.normal[k] = Tight(n[k], F);
+    t.offset = Tight(Dot(n, v.worldVertices[j][0]), F);
+    for (const Vec3& x : v.worldVertices[j])
+      t.vertices.push_back({Tight(x.x, F), Tight(x.y, F), Tight(x.z, F)});
+    t.groups = PolygonEdgeGroups(v.worldVertices[j], n);
+    t.edgeBand = edgeBand, t.tError = tError;
+    for (int k = 0; k < 3; ++k) t.tErrorRung[k] = rungs[k];
+    PlanPatch(v.worldVertices[j], v.worldVertexNormals[j], D, F, t);
+    p.polygons.push_back(t);
+  }
+}
+
+// An untransformed sphere's terms: its centre, r² and 1/r at F, its formats, its grazing band
+// and t error.
+SphereTerms PlanSphere(const Primitive& o, const Sphere& s, const std::vector<Light>& lights,
+                       double diameter, const SecondaryPlan& p, int F) {
+  const double u = p.ulp;
   const double eTca = 4 * u;    // Σ d_k (c_k − o_k): c rounded to nearest, 3 floor products
   const double eCross = 3 * u;  // f_j d_l − f_l d_j
-  // Polygons (docs/wavefront.md, "Error bounds"): each edge function's error from the vertices
-  // rounded to nearest (|p − o|, |q − o| <= the diameter D) and five floor products; t =
-  // (n·v0 − n·o)/(n·d) with n and n·v0 rounded to nearest, where |n·d| >= the parallel band.
-  {
-    const double D = diameter;
-    const double eNum = 3 * std::ldexp(1.0, I) * u / 2 + 3 * u + u / 2, eNd = 1.75 * u / 2 + 3 * u;
-    const double edgeBand = 1.25 * (1.75 * (2 * D * u + 2 * u + u * u) + 3 * u);
-    double rungs[3];
-    for (int k = 0; k < 3; ++k)
-      rungs[k] = (eNum + D * eNd) / (kPolygonRungs[k] - eNd) + D * p.directionError + 2 * u;
-    const double tError = rungs[0];
-    for (size_t j = 0; j < worldVertices.size(); ++j) {
-      PolygonTerms t;
-      const Vec3& n = worldNormals[j];
-      for (int k = 0; k < 3; ++k) t.normal[k] = Tight(n[k], F);
-      t.offset = Tight(Dot(n, worldVertices[j][0]), F);
-      for (const Vec3& x : worldVertices[j])
-        t.vertices.push_back({Tight(x.x, F), Tight(x.y, F), Tight(x.z, F)});
-      t.groups = PolygonEdgeGroups(worldVertices[j], n);
-      t.edgeBand = edgeBand, t.tError = tError;
-      for (int k = 0; k < 3; ++k) t.tErrorRung[k] = rungs[k];
-      PlanPatch(worldVertices[j], worldVertexNormals[j], D, F, t);
-      p.polygons.push_back(t);
-    }
+  SphereTerms t;
+  // 1/r (the normal's scale) must fit the engine's widest number beside F fraction bits.
+  if (IntBitsFor(1 / s.radius) + 1 + F > fixed::kMaxWidth)
+    throw UserError(fmt::format(
+        "{}: a sphere of radius {:.3g} is too small for the array's secondary rays at {} "
+        "fraction bits (1/r needs {} integer bits; docs/wavefront.md, \"Formats\"): render it "
+        "with the seq, simd or hetero method (--method)",
+        o.where.ToString(), s.radius, F, IntBitsFor(1 / s.radius)));
+  for (int k = 0; k < 3; ++k) t.centre[k] = Tight(s.centre[k], F);
+  t.r2 = Tight(s.radius * s.radius, F);
+  t.inverseRadius = Tight(1 / s.radius, F);
+  const int R = IntBitsFor(s.radius);
+  t.clamped = Format::Signed(R, F), t.square = Format::Unsigned(2 * R + 2, F);
+  t.disc = Format::Signed(2 * R + 2, F), t.root = Format::Unsigned(R + 1, F);
+  const double r2 = s.radius * s.radius;
+  // The band as the primary pass's (the radius/8 floor), grown by the direction's
+  // non-unit length: r² − |f×d|² against r² − |f×d̂|² differs by <= (r² + G)·δ.
+  double g = r2 / 64, eDisc = 0;
+  for (int it = 0; it < 8; ++it) {
+    const auto [band, e] = simd::GrazingBand(r2, g, eCross, u / 2, std::ldexp(1.0, R), u);
+    eDisc = e + 1.01 * p.directionError * (r2 + band);
+    g = std::max(band, 2 * eDisc);
+    if (2 * eDisc <= g && band <= g) break;
   }
+  t.grazeBand = g;
+  // f·d along the array's d against f·d̂: |f|·| |d| − 1 |.
+  const double eDir = diameter * p.directionError;
+  t.tError = eTca + eDir + eDisc / std::sqrt(g) + 2 * u;
+  t.slack = std::max(t.tError, eTca + eDir + std::sqrt(g + eDisc)) + u;
+  for (const Light& l : lights) t.lightOutside.push_back(Length(l.position - s.centre) > s.radius);
+  return t;
+}
+
+// Every object's terms, each with its material's transparency and index, and the plan's
+// largest t error and normal inverse bits over them.
+void PlanObjects(const Scene& scene, SecondaryPlan& p, double extent, double diameter, int F) {
   for (size_t j = 0; j < scene.objects.size(); ++j) {
     const Primitive& o = scene.objects[j];
     const Material& m = scene.materials[o.material];
@@ -416,53 +462,21 @@ SecondaryPlan PlanSecondary(const Scene& scene, int fracBits, double primaryTErr
       continue;
     }
     const Sphere& s = std::get<Sphere>(o.shape);
-    if (o.transform) {
-      SphereTerms t = PlanEllipsoid(o, s, scene.lights, extent, diameter, p, F);
-      t.transparency = m.t, t.ior = m.ior;
-      p.tError = std::max(p.tError, t.tError);
-      p.spheres[p.objects[j].index] = t;
-      continue;
-    }
-    SphereTerms t;
-    // 1/r (the normal's scale) must fit the engine's widest number beside F fraction bits.
-    if (IntBitsFor(1 / s.radius) + 1 + F > fixed::kMaxWidth)
-      throw UserError(fmt::format(
-          "{}: a sphere of radius {:.3g} is too small for the array's secondary rays at {} "
-          "fraction bits (1/r needs {} integer bits; docs/wavefront.md, \"Formats\"): render it "
-          "with the seq, simd or hetero method (--method)",
-          o.where.ToString(), s.radius, F, IntBitsFor(1 / s.radius)));
-    for (int k = 0; k < 3; ++k) t.centre[k] = Tight(s.centre[k], F);
-    t.r2 = Tight(s.radius * s.radius, F);
-    t.inverseRadius = Tight(1 / s.radius, F);
-    const int R = IntBitsFor(s.radius);
-    t.clamped = Format::Signed(R, F), t.square = Format::Unsigned(2 * R + 2, F);
-    t.disc = Format::Signed(2 * R + 2, F), t.root = Format::Unsigned(R + 1, F);
-    const double r2 = s.radius * s.radius;
-    // The band as the primary pass's (the radius/8 floor), grown by the direction's
-    // non-unit length: r² − |f×d|² against r² − |f×d̂|² differs by <= (r² + G)·δ.
-    double g = r2 / 64, eDisc = 0;
-    for (int it = 0; it < 8; ++it) {
-      const auto [band, e] = simd::GrazingBand(r2, g, eCross, u / 2, std::ldexp(1.0, R), u);
-      eDisc = e + 1.01 * p.directionError * (r2 + band);
-      g = std::max(band, 2 * eDisc);
-      if (2 * eDisc <= g && band <= g) break;
-    }
-    t.grazeBand = g;
-    // f·d along the array's d against f·d̂: |f|·| |d| − 1 |.
-    const double eDir = diameter * p.directionError;
-    t.tError = eTca + eDir + eDisc / std::sqrt(g) + 2 * u;
-    t.slack = std::max(t.tError, eTca + eDir + std::sqrt(g + eDisc)) + u;
+    SphereTerms t = o.transform ? PlanEllipsoid(o, s, scene.lights, extent, diameter, p, F)
+                                : PlanSphere(o, s, scene.lights, diameter, p, F);
     t.transparency = m.t, t.ior = m.ior;
-    for (const Light& l : scene.lights)
-      t.lightOutside.push_back(Length(l.position - s.centre) > s.radius);
     p.tError = std::max(p.tError, t.tError);
     p.spheres[p.objects[j].index] = t;
   }
-  p.primaryTError = primaryTError;
   for (const SphereTerms& t : p.spheres)
     p.normalInverseBits = std::max(p.normalInverseBits, t.normalInverseBits);
   for (const PolygonTerms& t : p.polygons)
     if (!t.fan.empty()) p.normalInverseBits = std::max(p.normalInverseBits, kPatchNormalBits);
+}
+
+// The hit point's slack, the array's cut-off ε and the error format, from the object terms.
+void PlanSlacks(SecondaryPlan& p, double diameter) {
+  const double u = p.ulp;
   // A hit point's distance from its surface: t's error along |d| <= 1 + δ, t·| |d| − 1 |, and
   // the point's own rounding; a ray leaving it ignores roots up to four times that.
   p.pointSlack = diameter * p.directionError + 2 * u;
@@ -477,9 +491,25 @@ SecondaryPlan PlanSecondary(const Scene& scene, int fracBits, double primaryTErr
   for (const ConeTerms& t : p.cones) eEps = std::max(eEps, t.tError);
   for (const PolygonTerms& t : p.polygons) eEps = std::max(eEps, t.tErrorRung[2]);
   p.epsilon = 2 * (eEps + u);
-  p.error = Format::Unsigned(IntBitsFor(2 * (p.tError + u)) + 1, F);
+  p.error = Format::Unsigned(IntBitsFor(2 * (p.tError + u)) + 1, p.fracBits);
+}
+
+}  // namespace
+
+SecondaryPlan PlanSecondary(const Scene& scene, int fracBits, double primaryTError) {
+  if (fracBits < 8 || fracBits > 40)
+    throw UserError("the secondary rays' fraction bits must be 8..40, got " +
+                    std::to_string(fracBits));
+  SecondaryPlan p;
+  const SceneSurvey survey = Survey(scene, p);
+  ChooseFormats(p, survey, fracBits, scene.objects.size());
+  const double diameter = 2 * std::sqrt(3.0) * survey.extent;
+  PlanPolygons(p, survey, diameter, fracBits);
+  PlanObjects(scene, p, survey.extent, diameter, fracBits);
+  p.primaryTError = primaryTError;
+  PlanSlacks(p, diameter);
   for (const Light& l : scene.lights)
-    for (int k = 0; k < 3; ++k) p.lights[k].push_back(Tight(l.position[k], F));
+    for (int k = 0; k < 3; ++k) p.lights[k].push_back(Tight(l.position[k], fracBits));
   return p;
 }
 
