@@ -811,167 +811,236 @@ struct Nearest {
   Multi object, t, uncertain;
 };
 
-Nearest FindNearest(Machine& m, const Multi (&o)[3], const Multi (&d)[3], const Multi& from,
-                    const Multi& outward, const SecondaryPlan& p) {
-  const int F = p.fracBits;
-  const Fixed tMax{p.t, p.t.MaxRaw()};
+// The search for each ray's nearest hit, object by object (FindNearest): the best so far
+// (n: object index + 1 and t; bestErr: its t error + ulp), whether a candidate tied with it,
+// and the nearest t at which an uncertain candidate may lie (tGraze). Made by Start, in the
+// program's allocation order.
+struct NearestSearch {
+  Machine& m;
+  const SecondaryPlan& p;
   Nearest n;
-  n.t = Broadcast(m, tMax);
-  n.object = Broadcast(m, Fixed{p.index, 0});
-  Multi tie = simd::Zero(m), tGraze = Broadcast(m, tMax);
-  const Multi eps = Const(m, p.epsilon, F), none = Broadcast(m, tMax);
-  // Each ray's best hit's t error + ulp (a polygon's per ray: its rung).
-  Multi bestErr = Broadcast(m, Fixed{p.error, 0});
+  Multi tie, tGraze, eps, none, bestErr;
+
+  static NearestSearch Start(Machine& m, const SecondaryPlan& p) {
+    const Fixed tMax{p.t, p.t.MaxRaw()};
+    NearestSearch s{m, p, {}, {}, {}, {}, {}, {}};
+    s.n.t = Broadcast(m, tMax);
+    s.n.object = Broadcast(m, Fixed{p.index, 0});
+    s.tie = simd::Zero(m), s.tGraze = Broadcast(m, tMax);
+    s.eps = Const(m, p.epsilon, p.fracBits), s.none = Broadcast(m, tMax);
+    s.bestErr = Broadcast(m, Fixed{p.error, 0});
+    return s;
+  }
   // Object i's candidate t where `hit` into the best, with its error `err`: a tie with the
   // best (their t within the sum of their errors) flagged.
-  auto fold = [&](const Multi& t, const Multi& hit, size_t i, const Multi& err) {
+  void Fold(const Multi& t, const Multi& hit, size_t i, const Multi& err) {
     Multi band;
     simd::WithExpectedSaturation(m, [&] { band = Add(err, bestErr, p.error, simd::kSaturate); });
-    tie = tie || (hit && (n.t < none) && simd::Near(m, t - n.t, band, F));
+    tie = tie || (hit && (n.t < none) && simd::Near(m, t - n.t, band, p.fracBits));
     const Multi closer = hit && (t < n.t);
     Where(closer, [&] {
       n.t = t;
       n.object = Broadcast(m, Fixed{p.index, int64_t(i) + 1});
       bestErr = err;
     });
-  };
-  auto errOf = [&](double e) { return Const(m, e + p.ulp, F); };
+  }
+  // An uncertain candidate at or beyond `low` where `unsure`.
+  void Graze(const Multi& unsure, const Multi& low) {
+    Where(unsure, [&] { tGraze = Min(tGraze, low, p.t); });
+  }
+  Multi ErrOf(double e) const { return Const(m, e + p.ulp, p.fracBits); }
+};
+
+// Convex (a frustum): a ray leaving the cone outward never meets it again; one entering it
+// meets it at its larger root, if that lies in [0, h] (else it leaves by an open end).
+void ConeCandidates(NearestSearch& s, const Multi (&o)[3], const Multi (&d)[3], const Multi& self,
+                    const Multi& outward, size_t i) {
+  const SecondaryPlan& p = s.p;
+  const ConeTerms& c = p.cones[p.objects[i].index];
+  const ConeCross x = ConeAlong(s.m, o, d, c, p);
+  const Multi leaving = self && outward, entering = self && !outward;
+  for (int r = 0; r < 2; ++r) {
+    const Multi consider = !leaving && (!entering || x.larger[r]);
+    const Multi nearEps =
+        x.ok[r] && !self && simd::Near(s.m, x.t[r] - s.eps, c.tError + p.ulp, p.fracBits);
+    const Multi unsure = !leaving && ((x.maybe[r] && !x.ok[r]) || (consider && nearEps));
+    s.Graze(unsure, x.low[r]);
+    s.Fold(x.t[r], consider && x.ok[r] && (s.eps < x.t[r]), i, s.ErrOf(c.tError));
+  }
+}
+
+// A plane is met once: the polygon a ray leaves is never its next hit.
+void PolygonCandidate(NearestSearch& s, const Multi (&o)[3], const Multi (&d)[3],
+                      const Multi& self, size_t i) {
+  const SecondaryPlan& p = s.p;
+  Machine& m = s.m;
+  const PolygonTerms& g = p.polygons[p.objects[i].index];
+  const PolygonCross c = PolygonAlong(m, o, d, g, p);
+  const Multi hit = c.inside && (s.eps < c.t) && !self;
+  const Multi front =
+      c.parallel || (Const(m, p.epsilon - g.tError - p.ulp, p.fracBits) < c.t);
+  const Multi unsure =
+      c.possible && !self && front && (!c.inside || simd::Near(m, c.t - s.eps, c.err, p.fracBits));
+  Multi low;
+  simd::WithExpectedSaturation(m, [&] {
+    low = Select(c.parallel, Broadcast(m, Fixed{p.t, p.t.MinRaw()}),
+                 Sub(c.t, c.err, p.t, simd::kSaturate), p.t);
+  });
+  s.Graze(unsure, low);
+  s.Fold(c.t, hit, i, c.err);
+}
+
+// The sphere the ray leaves: outward, no hit; inward, its far root.
+void SphereCandidate(NearestSearch& s, const Multi (&o)[3], const Multi (&d)[3], const Multi& self,
+                     const Multi& outward, size_t i) {
+  const SecondaryPlan& p = s.p;
+  Machine& m = s.m;
+  const int F = p.fracBits;
+  const SphereTerms& sp = p.spheres[p.objects[i].index];
+  const Roots r = SphereRoots(m, o, d, sp, p);
+  const Multi leaving = self && outward, entering = self && !outward;
+  const Multi t =
+      Select(entering || (s.eps < r.t0), Select(entering, r.t1, r.t0, p.t), r.t1, p.t);
+  const Multi real = simd::Zero(m) <= r.disc;
+  const Multi hit = real && (s.eps < t) && !leaving;
+  // Uncertain: grazing, or a root within its bound of ε — unless the far root is
+  // certainly behind ε; on the sphere it enters, only grazing.
+  const Multi nearEps = (simd::Near(m, r.t0 - s.eps, sp.tError + p.ulp, F) ||
+                         simd::Near(m, r.t1 - s.eps, sp.tError + p.ulp, F)) &&
+                        (real || r.grazing) && !self;
+  const Multi front = Const(m, p.epsilon - sp.slack, F) < r.t1;
+  const Multi unsure = (r.grazing || nearEps) && front && !leaving;
+  Where(unsure, [&] { s.tGraze = Min(s.tGraze, simd::SubBound(m, r.t0, sp.slack, p.t), p.t); });
+  s.Fold(t, hit, i, s.ErrOf(sp.tError));
+}
+
+Nearest FindNearest(Machine& m, const Multi (&o)[3], const Multi (&d)[3], const Multi& from,
+                    const Multi& outward, const SecondaryPlan& p) {
+  NearestSearch s = NearestSearch::Start(m, p);
   for (size_t i = 0; i < p.objects.size(); ++i) {
     const Multi self = from == Multi::Constant(m, Fixed{p.index, int64_t(i) + 1});
-    if (p.objects[i].cone) {
-      // Convex (a frustum): a ray leaving it outward never meets it again; one entering it
-      // meets it at its larger root, if that lies in [0, h] (else it leaves by an open end).
-      const ConeTerms& c = p.cones[p.objects[i].index];
-      const ConeCross x = ConeAlong(m, o, d, c, p);
-      const Multi leaving = self && outward, entering = self && !outward;
-      for (int r = 0; r < 2; ++r) {
-        const Multi consider = !leaving && (!entering || x.larger[r]);
-        const Multi nearEps = x.ok[r] && !self && simd::Near(m, x.t[r] - eps, c.tError + p.ulp, F);
-        const Multi unsure = !leaving && ((x.maybe[r] && !x.ok[r]) || (consider && nearEps));
-        Where(unsure, [&] { tGraze = Min(tGraze, x.low[r], p.t); });
-        fold(x.t[r], consider && x.ok[r] && (eps < x.t[r]), i, errOf(c.tError));
-      }
-      continue;
-    }
-    if (!p.objects[i].sphere) {
-      // A plane is met once: the polygon a ray leaves is never its next hit.
-      const PolygonTerms& g = p.polygons[p.objects[i].index];
-      const PolygonCross c = PolygonAlong(m, o, d, g, p);
-      const Multi hit = c.inside && (eps < c.t) && !self;
-      const Multi front = c.parallel || (Const(m, p.epsilon - g.tError - p.ulp, F) < c.t);
-      const Multi unsure =
-          c.possible && !self && front && (!c.inside || simd::Near(m, c.t - eps, c.err, F));
-      Multi low;
-      simd::WithExpectedSaturation(m, [&] {
-        low = Select(c.parallel, Broadcast(m, Fixed{p.t, p.t.MinRaw()}),
-                     Sub(c.t, c.err, p.t, simd::kSaturate), p.t);
-      });
-      Where(unsure, [&] { tGraze = Min(tGraze, low, p.t); });
-      fold(c.t, hit, i, c.err);
-      continue;
-    }
-    const SphereTerms& s = p.spheres[p.objects[i].index];
-    const Roots r = SphereRoots(m, o, d, s, p);
-    // The sphere the ray leaves: outward, no hit; inward, its far root.
-    const Multi leaving = self && outward, entering = self && !outward;
-    const Multi t = Select(entering || (eps < r.t0), Select(entering, r.t1, r.t0, p.t), r.t1, p.t);
-    const Multi real = simd::Zero(m) <= r.disc;
-    const Multi hit = real && (eps < t) && !leaving;
-    // Uncertain: grazing, or a root within its bound of ε — unless the far root is
-    // certainly behind ε; on the sphere it enters, only grazing.
-    const Multi nearEps = (simd::Near(m, r.t0 - eps, s.tError + p.ulp, F) ||
-                           simd::Near(m, r.t1 - eps, s.tError + p.ulp, F)) &&
-                          (real || r.grazing) && !self;
-    const Multi front = Const(m, p.epsilon - s.slack, F) < r.t1;
-    const Multi unsure = (r.grazing || nearEps) && front && !leaving;
-    Where(unsure, [&] { tGraze = Min(tGraze, simd::SubBound(m, r.t0, s.slack, p.t), p.t); });
-    fold(t, hit, i, errOf(s.tError));
+    if (p.objects[i].cone)
+      ConeCandidates(s, o, d, self, outward, i);
+    else if (!p.objects[i].sphere)
+      PolygonCandidate(s, o, d, self, i);
+    else
+      SphereCandidate(s, o, d, self, outward, i);
   }
   // A flagged candidate matters if it may lie in front of the best's true t <= t + E.
   Multi limit;
-  simd::WithExpectedSaturation(m, [&] { limit = Add(n.t, bestErr, p.t, simd::kSaturate); });
-  n.uncertain = tie || ((tGraze <= limit) && (tGraze < none));
-  return n;
+  simd::WithExpectedSaturation(m, [&] { limit = Add(s.n.t, s.bestErr, p.t, simd::kSaturate); });
+  s.n.uncertain = s.tie || ((s.tGraze <= limit) && (s.tGraze < s.none));
+  return std::move(s.n);
+}
+
+// One light's shadow rays, object by object (ShadowProduct): the product S of the
+// transparencies crossed before the light (`through`) and whether some crossing is uncertain.
+struct ShadowRays {
+  Machine& m;
+  const SecondaryPlan& p;
+  const Multi& dist;  // to the light
+  Multi& through;
+  Multi& uncertain;
+  Multi eps, zero;
+  // S times the transparency of the object crossed where `cross` (0 for an opaque one).
+  void Cross(const Multi& cross, double transparency) {
+    if (transparency <= 0) {
+      Where(cross, [&] { through = zero; });
+    } else {
+      const Uni kt{Tight(transparency, p.fracBits)};
+      Where(cross, [&] { through = Mul(through, kt, p.unit); });
+    }
+  }
+};
+
+// From the outside of its own cone a shadow ray never meets it again; from the inside it
+// crosses it at its larger root if that lies in [0, h] (else it leaves by an open end).
+void ConeShadow(ShadowRays& s, const Multi (&pt)[3], const Multi (&l)[3], const Multi& self,
+                const Multi& inside, size_t i) {
+  const SecondaryPlan& p = s.p;
+  const int F = p.fracBits;
+  const ConeTerms& c = p.cones[p.objects[i].index];
+  const ConeCross x = ConeAlong(s.m, pt, l, c, p);
+  const Multi skip = self && !inside, fromInside = self && inside;
+  const double band = c.tError + p.ulp;
+  for (int r = 0; r < 2; ++r) {
+    const Multi consider = !skip && (!fromInside || x.larger[r]);
+    const Multi cross = consider && x.ok[r] && (s.eps < x.t[r]) && (x.t[r] < s.dist);
+    s.Cross(cross, c.transparency);
+    const Multi near = (!self && simd::Near(s.m, x.t[r] - s.eps, band, F)) ||
+                       simd::Near(s.m, x.t[r] - s.dist, band, F);
+    const Multi past = s.dist < x.low[r];  // certainly beyond the light
+    s.uncertain = s.uncertain ||
+                  (!skip && ((x.maybe[r] && !x.ok[r] && !past) || (consider && x.ok[r] && near)));
+  }
+}
+
+void PolygonShadow(ShadowRays& s, const Multi (&pt)[3], const Multi (&l)[3], const Multi& self,
+                   size_t i) {
+  const SecondaryPlan& p = s.p;
+  Machine& m = s.m;
+  const int F = p.fracBits;
+  const PolygonTerms& g = p.polygons[p.objects[i].index];
+  const PolygonCross c = PolygonAlong(m, pt, l, g, p);
+  const Multi cross = c.inside && (s.eps < c.t) && (c.t < s.dist) && !self;
+  s.Cross(cross, g.transparency);
+  const double band = g.tError + p.ulp;
+  const Multi inRange = c.parallel || ((Const(m, p.epsilon - band, F) < c.t) &&
+                                       (simd::SubBound(m, c.t, band, p.t) < s.dist));
+  const Multi near =
+      simd::Near(m, c.t - s.eps, c.err, F) || simd::Near(m, c.t - s.dist, c.err, F);
+  s.uncertain = s.uncertain || (c.possible && !self && inRange && (!c.inside || near));
+}
+
+// The hit's own sphere (`self`): a shadow ray from outside (`inside` 0) cannot meet it
+// again; from inside it crosses it once, at the far root, when the light is outside it.
+void SphereShadow(ShadowRays& s, const Multi (&pt)[3], const Multi (&l)[3], const Multi& self,
+                  const Multi& inside, size_t i, size_t light) {
+  const SecondaryPlan& p = s.p;
+  Machine& m = s.m;
+  const int F = p.fracBits;
+  const SphereTerms& sp = p.spheres[p.objects[i].index];
+  const Roots r = SphereRoots(m, pt, l, sp, p);
+  const Multi real = simd::Zero(m) <= r.disc;
+  const Multi cross0 = real && (s.eps < r.t0) && (r.t0 < s.dist) && !self;
+  const Multi exits =
+      inside && Broadcast(m, Fixed{bitserial::BoolFormat(), sp.lightOutside[light] ? 1 : 0});
+  const Multi cross1 = (real && (s.eps < r.t1) && (r.t1 < s.dist) && !self) || (self && exits);
+  if (sp.transparency <= 0) {
+    s.Cross(cross0 || cross1, sp.transparency);
+  } else {
+    s.Cross(cross0, sp.transparency);
+    s.Cross(cross1, sp.transparency);
+  }
+  const double band = sp.tError + p.ulp;
+  const Multi near =
+      simd::Near(m, r.t0 - s.eps, band, F) || simd::Near(m, r.t1 - s.eps, band, F) ||
+      simd::Near(m, r.t0 - s.dist, band, F) || simd::Near(m, r.t1 - s.dist, band, F);
+  const Multi inRange = (Const(m, p.epsilon - sp.slack, F) < r.t1) &&
+                        (simd::SubBound(m, r.t0, sp.slack, p.t) < s.dist);
+  const Multi unsure = (r.grazing || (near && (real || r.grazing) && !self)) && inRange;
+  s.uncertain = s.uncertain || (unsure && !self);
 }
 
 // The light let through toward one light from every hit point P along the unit l (distance
-// dist): each root in (ε, dist) multiplies by its sphere's T; `uncertain` where a root or the
-// grazing band is within its bound of deciding a crossing.
-// The hit's own sphere (`object`, index + 1): a shadow ray from outside (`inside` 0) cannot
-// meet it again; from inside it crosses it once, at the far root.
-// A shadow ray from inside its sphere leaves it exactly once when the light is outside it.
+// dist): each root in (ε, dist) multiplies by its object's T; `uncertain` where a root or the
+// grazing band is within its bound of deciding a crossing. `object` is the hit's (index + 1).
 void ShadowProduct(Machine& m, const Multi (&pt)[3], const Multi (&l)[3], const Multi& dist,
                    const Multi& object, const Multi& inside, const SecondaryPlan& p, size_t light,
                    Multi& through, Multi& uncertain) {
   const int F = p.fracBits;
   through = Broadcast(m, Fixed{p.unit, int64_t(1) << F});
   uncertain = simd::Zero(m);
-  const Multi eps = Const(m, p.epsilon, F);
-  const Multi zero = Broadcast(m, Fixed{p.unit, 0});
+  ShadowRays s{m, p, dist, through, uncertain, Const(m, p.epsilon, F),
+               Broadcast(m, Fixed{p.unit, 0})};
   for (size_t i = 0; i < p.objects.size(); ++i) {
     const Multi self = object == Multi::Constant(m, Fixed{p.index, int64_t(i) + 1});
-    if (p.objects[i].cone) {
-      // From the outside of its own cone a shadow ray never meets it again; from the inside it
-      // crosses it at its larger root if that lies in [0, h] (else it leaves by an open end).
-      const ConeTerms& c = p.cones[p.objects[i].index];
-      const ConeCross x = ConeAlong(m, pt, l, c, p);
-      const Multi skip = self && !inside, fromInside = self && inside;
-      const double band = c.tError + p.ulp;
-      for (int r = 0; r < 2; ++r) {
-        const Multi consider = !skip && (!fromInside || x.larger[r]);
-        const Multi cross = consider && x.ok[r] && (eps < x.t[r]) && (x.t[r] < dist);
-        if (c.transparency <= 0) {
-          Where(cross, [&] { through = zero; });
-        } else {
-          const Uni kt{Tight(c.transparency, F)};
-          Where(cross, [&] { through = Mul(through, kt, p.unit); });
-        }
-        const Multi near = (!self && simd::Near(m, x.t[r] - eps, band, F)) ||
-                           simd::Near(m, x.t[r] - dist, band, F);
-        const Multi past = dist < x.low[r];  // certainly beyond the light
-        uncertain = uncertain ||
-                    (!skip && ((x.maybe[r] && !x.ok[r] && !past) || (consider && x.ok[r] && near)));
-      }
-      continue;
-    }
-    if (!p.objects[i].sphere) {
-      const PolygonTerms& g = p.polygons[p.objects[i].index];
-      const PolygonCross c = PolygonAlong(m, pt, l, g, p);
-      const Multi cross = c.inside && (eps < c.t) && (c.t < dist) && !self;
-      if (g.transparency <= 0) {
-        Where(cross, [&] { through = zero; });
-      } else {
-        const Uni kt{Tight(g.transparency, F)};
-        Where(cross, [&] { through = Mul(through, kt, p.unit); });
-      }
-      const double band = g.tError + p.ulp;
-      const Multi inRange = c.parallel || ((Const(m, p.epsilon - band, F) < c.t) &&
-                                           (simd::SubBound(m, c.t, band, p.t) < dist));
-      const Multi near = simd::Near(m, c.t - eps, c.err, F) || simd::Near(m, c.t - dist, c.err, F);
-      uncertain = uncertain || (c.possible && !self && inRange && (!c.inside || near));
-      continue;
-    }
-    const SphereTerms& s = p.spheres[p.objects[i].index];
-    const Roots r = SphereRoots(m, pt, l, s, p);
-    const Multi real = simd::Zero(m) <= r.disc;
-    const Multi cross0 = real && (eps < r.t0) && (r.t0 < dist) && !self;
-    const Multi exits =
-        inside && Broadcast(m, Fixed{bitserial::BoolFormat(), s.lightOutside[light] ? 1 : 0});
-    const Multi cross1 = (real && (eps < r.t1) && (r.t1 < dist) && !self) || (self && exits);
-    if (s.transparency <= 0) {
-      Where(cross0 || cross1, [&] { through = zero; });
-    } else {
-      const Uni kt{Tight(s.transparency, F)};
-      Where(cross0, [&] { through = Mul(through, kt, p.unit); });
-      Where(cross1, [&] { through = Mul(through, kt, p.unit); });
-    }
-    const double band = s.tError + p.ulp;
-    const Multi near = simd::Near(m, r.t0 - eps, band, F) || simd::Near(m, r.t1 - eps, band, F) ||
-                       simd::Near(m, r.t0 - dist, band, F) || simd::Near(m, r.t1 - dist, band, F);
-    const Multi inRange =
-        (Const(m, p.epsilon - s.slack, F) < r.t1) && (simd::SubBound(m, r.t0, s.slack, p.t) < dist);
-    const Multi unsure = (r.grazing || (near && (real || r.grazing) && !self)) && inRange;
-    uncertain = uncertain || (unsure && !self);
+    if (p.objects[i].cone)
+      ConeShadow(s, pt, l, self, inside, i);
+    else if (!p.objects[i].sphere)
+      PolygonShadow(s, pt, l, self, i);
+    else
+      SphereShadow(s, pt, l, self, inside, i, light);
   }
 }
 
