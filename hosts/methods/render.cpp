@@ -109,19 +109,16 @@ std::string RenderMethodsUsing(bool array, bool farm) {
   return names;
 }
 
-RenderOutput RunRender(const RenderOptions& given) {
-  RenderOptions options = given;
-  options.simd.hostAccel = options.trace.accel;  // the pass's recompute traces on the host too
-  const RenderMethodEntry* it = &MethodNamed(options.method);
-  RenderOutput out;
-  if (it->child) it->child(options);  // a child rank serves frames and ends there
-  // Every output and option is checked before the scene is read: nothing is computed for an
-  // output that could not be written.
+namespace {
+
+// Every output and option checked before the scene is read: nothing is computed for an
+// output that could not be written, or priced on a testbed that cannot price it.
+void CheckRenderRequest(const RenderOptions& options, const RenderMethodEntry& method) {
   CheckRenderOutputs(options);
   if (!options.alsoTestbeds.empty()) {
     if (options.testbed.empty())
       throw UserError("more testbeds to price a render on need a first one (the testbed)");
-    if (it->child != nullptr || testbed::Simulated())
+    if (method.child != nullptr || testbed::Simulated())
       throw UserError("method '" + options.method +
                       "' is timed by a simulation of one testbed's network: one testbed a run");
     std::vector<std::string> seen = {options.testbed};
@@ -131,20 +128,23 @@ RenderOutput RunRender(const RenderOptions& given) {
         throw UserError("testbed '" + bed + "' is named twice: each is priced once");
       seen.push_back(bed);
       const auto also = testbed::TestbedArrayProfile(bed);
-      if (it->usesArray && first && also && *first != *also)
+      if (method.usesArray && first && also && *first != *also)
         throw UserError(
             "testbed '" + bed + "' has the array '" + *also + "' and testbed '" + options.testbed +
             "' the array '" + *first +
             "': a render runs one array, so the testbeds it is priced on must share it");
-      testbed::CheckModelledTimeRequest(bed, options.method, false, it->usesArray,
+      testbed::CheckModelledTimeRequest(bed, options.method, false, method.usesArray,
                                         options.simd.profile);
     }
   }
-  if (it->check) it->check(options);
-  testbed::CheckModelledTimeRequest(options.testbed, options.method, it->child != nullptr,
-                                    it->usesArray, options.simd.profile);
-  out.method = options.method;
-  out.trace = options.trace;
+  if (method.check) method.check(options);
+  testbed::CheckModelledTimeRequest(options.testbed, options.method, method.child != nullptr,
+                                    method.usesArray, options.simd.profile);
+}
+
+// The scene, its warnings printed, checked against the memory the method needs for it.
+Scene ReadSceneFor(const RenderOptions& options, const RenderMethodEntry& method,
+                   RenderOutput& out) {
   Scene scene;
   {
     PhaseTimer timer(out.phases, "readScene");
@@ -165,18 +165,19 @@ RenderOutput RunRender(const RenderOptions& given) {
   CheckMemoryFits(
       "render --method " + options.method + " at " + std::to_string(c.width) + "x" +
           std::to_string(c.height),
-      {.perPixel = it->bytesPerPixel + (options.dumpPrimary.empty() ? 0 : it->dumpBytesPerPixel),
+      {.perPixel =
+           method.bytesPerPixel + (options.dumpPrimary.empty() ? 0 : method.dumpBytesPerPixel),
        .pixels = uint64_t(c.width) * uint64_t(c.height)});
   out.scene = {.path = options.scenePath,
                .objects = scene.objects.size(),
                .lights = scene.lights.size(),
                .width = c.width,
                .height = c.height};
-  {
-    PhaseTimer timer(out.phases, "render");
-    it->render(scene, options, out);
-  }
-  // --testbed (and --also-testbed): modelled seconds of the counted work.
+  return scene;
+}
+
+// --testbed (and --also-testbed): modelled seconds of the counted work.
+void Price(const RenderOptions& options, const Scene& scene, RenderOutput& out) {
   testbed::CountedWork work;
   if (out.hostWork) work.host = &*out.hostWork;
   bitserial::CycleReport everyBounce;  // array: the primary pass's and the wavefront's
@@ -199,18 +200,23 @@ RenderOutput RunRender(const RenderOptions& given) {
   out.testbed = testbed::ModelTime(options.testbed, work, scene);
   for (const std::string& bed : options.alsoTestbeds)
     out.alsoTestbeds.push_back(*testbed::ModelTime(bed, work, scene));
-  ZEPHYR_CHECK(out.image.width == c.width && out.image.height == c.height);
+}
+
+// The image, the primary hits and the report; a farm's checkpoint removed only once every
+// output is on disk (kept, and named, when one cannot be written).
+void WriteOutputs(const RenderOptions& options, RenderOutput& out) {
+  const int width = out.image.width, height = out.image.height;
   try {
     if (!options.out.empty()) {
       PhaseTimer timer(out.phases, "writePng");
       WritePng(options.out, out.image);
     }
     if (!options.dumpPrimary.empty()) {
-      if (out.primary.size() != size_t(c.width) * c.height)
+      if (out.primary.size() != size_t(width) * height)
         throw UserError("--dump-primary: method '" + options.method +
                         "' does not produce primary hits");
       PhaseTimer timer(out.phases, "dumpPrimary");
-      WritePrimaryCsv(options.dumpPrimary, c.width, c.height, out.primary);
+      WritePrimaryCsv(options.dumpPrimary, width, height, out.primary);
     }
     if (!options.report.empty())
       WriteOutputFile(options.report, "report", RenderReportJson(out).dump(2) + "\n");
@@ -224,6 +230,27 @@ RenderOutput RunRender(const RenderOptions& given) {
   }
   // Only now, with every output on disk, is the checkpoint no longer needed.
   for (const std::string& path : out.removeWhenWritten) std::remove(path.c_str());
+}
+
+}  // namespace
+
+RenderOutput RunRender(const RenderOptions& given) {
+  RenderOptions options = given;
+  options.simd.hostAccel = options.trace.accel;  // the pass's recompute traces on the host too
+  const RenderMethodEntry& method = MethodNamed(options.method);
+  if (method.child) method.child(options);  // a child rank serves frames and ends there
+  CheckRenderRequest(options, method);
+  RenderOutput out;
+  out.method = options.method;
+  out.trace = options.trace;
+  const Scene scene = ReadSceneFor(options, method, out);
+  {
+    PhaseTimer timer(out.phases, "render");
+    method.render(scene, options, out);
+  }
+  ZEPHYR_CHECK(out.image.width == scene.camera.width && out.image.height == scene.camera.height);
+  Price(options, scene, out);
+  WriteOutputs(options, out);
   return out;
 }
 
