@@ -643,77 +643,104 @@ struct ConeCross {
   Multi t[2], ok[2], maybe[2], low[2], larger[2];
 };
 
-ConeCross ConeAlong(Machine& m, const Multi (&o)[3], const Multi (&d)[3], const ConeTerms& c,
-                    const SecondaryPlan& p) {
+// A ray in a cone's local frame and its quadric A t² − 2β t + C (ConeAlong): every register
+// lives until the roots are found, in the program's allocation order.
+struct ConeQuadric {
+  Multi rel[3], ol[3], dl[3];  // o − anchor; o and d in the local frame
+  Multi rho, sdz;              // ρ = r0 + σ·o_z; σ·d_z
+  Multi a, beta, cc, gx, gy, cross, disc;
+  Multi grazing, real, possible;  // |disc| within the band; disc >= 0; either
+  Multi root, q, negative;        // √disc; Q = |β| + √disc; β < 0
+  Multi num[2];                   // the two roots' numerators (over A and over Q)
+};
+
+ConeQuadric ConeQuadricOf(Machine& m, const Multi (&o)[3], const Multi (&d)[3],
+                          const ConeTerms& c) {
   const int Fl = c.fracBits;
-  Multi rel[3], ol[3], dl[3];
-  for (int k = 0; k < 3; ++k) rel[k] = Sub(o[k], Uni{c.anchor[k]}, c.offset);
-  for (int k = 0; k < 3; ++k) {
-    ol[k] = simd::Dot3(rel, c.frame[k], c.local[k]);
-    dl[k] = simd::Dot3(d, c.frame[k], c.dLocal[k]);
+  ConeQuadric k;
+  for (int i = 0; i < 3; ++i) k.rel[i] = Sub(o[i], Uni{c.anchor[i]}, c.offset);
+  for (int i = 0; i < 3; ++i) {
+    k.ol[i] = simd::Dot3(k.rel, c.frame[i], c.local[i]);
+    k.dl[i] = simd::Dot3(d, c.frame[i], c.dLocal[i]);
   }
-  const Multi rho = Add(Mul(ol[2], Uni{c.sigma}, c.rho), Uni{c.r0}, c.rho);
-  const Multi sdz = Mul(dl[2], Uni{c.sigma}, c.sigmaDz);
-  const Multi a = Sub(Add(Square(dl[0], c.a), Square(dl[1], c.a), c.a), Square(sdz, c.a), c.a);
-  const Multi beta = Sub(Add(Mul(ol[0], dl[0], c.beta), Mul(ol[1], dl[1], c.beta), c.beta),
-                         Mul(rho, sdz, c.beta), c.beta);
-  const Multi cc = Sub(Add(Square(ol[0], c.c), Square(ol[1], c.c), c.c), Square(rho, c.c), c.c);
-  const Multi gx = Sub(Mul(rho, dl[0], c.g), Mul(sdz, ol[0], c.g), c.g);
-  const Multi gy = Sub(Mul(rho, dl[1], c.g), Mul(sdz, ol[1], c.g), c.g);
-  const Multi cross = Sub(Mul(dl[0], ol[1], c.cross), Mul(dl[1], ol[0], c.cross), c.cross);
-  const Multi disc = Sub(Add(Square(gx, c.square), Square(gy, c.square), c.square),
-                         Square(cross, c.square), c.disc);
-  const Multi grazing = simd::Near(m, disc, c.grazeBand, Fl);
-  const Multi real = simd::Zero(m) <= disc;
-  const Multi possible = real || grazing;
-  Multi root;
-  simd::WithExpectedSaturation(m, [&] { root = Sqrt(disc, c.root); });  // a miss's: unused
-  const Multi q = Add(Abs(beta, c.q), root, c.q);
-  const Multi negative = beta < simd::Zero(m);  // −sgn(β) = +1
+  const Multi(&ol)[3] = k.ol;
+  const Multi(&dl)[3] = k.dl;
+  k.rho = Add(Mul(ol[2], Uni{c.sigma}, c.rho), Uni{c.r0}, c.rho);
+  k.sdz = Mul(dl[2], Uni{c.sigma}, c.sigmaDz);
+  k.a = Sub(Add(Square(dl[0], c.a), Square(dl[1], c.a), c.a), Square(k.sdz, c.a), c.a);
+  k.beta = Sub(Add(Mul(ol[0], dl[0], c.beta), Mul(ol[1], dl[1], c.beta), c.beta),
+               Mul(k.rho, k.sdz, c.beta), c.beta);
+  k.cc = Sub(Add(Square(ol[0], c.c), Square(ol[1], c.c), c.c), Square(k.rho, c.c), c.c);
+  k.gx = Sub(Mul(k.rho, dl[0], c.g), Mul(k.sdz, ol[0], c.g), c.g);
+  k.gy = Sub(Mul(k.rho, dl[1], c.g), Mul(k.sdz, ol[1], c.g), c.g);
+  k.cross = Sub(Mul(dl[0], ol[1], c.cross), Mul(dl[1], ol[0], c.cross), c.cross);
+  k.disc = Sub(Add(Square(k.gx, c.square), Square(k.gy, c.square), c.square),
+               Square(k.cross, c.square), c.disc);
+  k.grazing = simd::Near(m, k.disc, c.grazeBand, Fl);
+  k.real = simd::Zero(m) <= k.disc;
+  k.possible = k.real || k.grazing;
+  simd::WithExpectedSaturation(m, [&] { k.root = Sqrt(k.disc, c.root); });  // a miss's: unused
+  k.q = Add(Abs(k.beta, c.q), k.root, c.q);
+  k.negative = k.beta < simd::Zero(m);  // −sgn(β) = +1
   const Format signedQ = Format::Signed(c.q.intBits, Fl);
-  const Multi num[2] = {Select(negative, q, Neg(q, signedQ), signedQ),
-                        Select(negative, cc, Neg(cc, c.c), c.c)};
-  const Multi* den[2] = {&a, &q};
+  // One full expression, as the two temporaries' lifetimes set the allocation order.
+  Multi num[2] = {Select(k.negative, k.q, Neg(k.q, signedQ), signedQ),
+                  Select(k.negative, k.cc, Neg(k.cc, c.c), c.c)};
+  k.num[0] = std::move(num[0]), k.num[1] = std::move(num[1]);
+  return k;
+}
+
+// Root r (0: num/A, 1: C/Q) of the quadric into x: its t where the division is certified,
+// whether it is certainly a hit within the cone's height (ok), whether it may be one (maybe),
+// and the least t it may have (low).
+void ConeRoot(Machine& m, const ConeQuadric& k, const ConeTerms& c, const SecondaryPlan& p,
+              int r, ConeCross& x) {
+  const int Fl = c.fracBits;
+  const Multi* den[2] = {&k.a, &k.q};
   const simd::ConeDivision* div[2][2] = {{&c.divA, &c.divAGrazing}, {&c.divC, &c.divCGrazing}};
-  ConeCross x;
   const Fixed tMax{p.t, p.t.MaxRaw()};
   const double h = fixed::ToDouble(c.height);
-  for (int r = 0; r < 2; ++r) {
-    // The quotient where the non-grazing division is certified (the grazing one's threshold
-    // is higher: its numerator's error is larger).
-    const Multi sure = !simd::Near(m, *den[r], div[r][0]->dStar, Fl);
-    x.t[r] = Broadcast(m, tMax);
-    Where(sure, [&] {
-      simd::WithExpectedSaturation(m, [&] { x.t[r] = Div(num[r], *den[r], p.t, simd::kSaturate); });
-    });
-    Multi height;
+  // The quotient where the non-grazing division is certified (the grazing one's threshold
+  // is higher: its numerator's error is larger).
+  const Multi sure = !simd::Near(m, *den[r], div[r][0]->dStar, Fl);
+  x.t[r] = Broadcast(m, tMax);
+  Where(sure, [&] {
+    simd::WithExpectedSaturation(m, [&] { x.t[r] = Div(k.num[r], *den[r], p.t, simd::kSaturate); });
+  });
+  Multi height;
+  simd::WithExpectedSaturation(m, [&] {
+    height = Add(k.ol[2], Mul(x.t[r], k.dl[2], c.s, simd::kSaturate), c.s, simd::kSaturate);
+  });
+  Multi inRange[2], inside[2], maybe[2], low[2];
+  for (int g = 0; g < 2; ++g) {  // g = 1: the grazing bounds
+    const simd::ConeDivision& v = *div[r][g];
+    const double eT = v.tError, eH = c.heightError[g][r];
+    const Multi certified = g ? !simd::Near(m, *den[r], v.dStar, Fl) : sure;
+    // Beyond the scene: a certified quotient at or past tCut, or an uncertified one whose
+    // |N|/(D* + eD) already exceeds tFar (|D| < D*: |t_exact| >= (|N| − eN)/(D* + eD)).
+    const Multi beyond =
+        (certified && !simd::Near(m, x.t[r], v.tCut, p.fracBits)) ||
+        (!certified && !simd::Near(m, k.num[r], c.tFar * (v.dStar + v.eD) + v.eN, Fl));
+    inRange[g] = certified && !beyond;
+    inside[g] = (Const(m, eH, Fl) < height) && (height < Const(m, h - eH, Fl));
+    const Multi outside = (height < Const(m, -eH, Fl)) || (Const(m, h + eH, Fl) < height);
+    const Multi behind = x.t[r] < Const(m, p.epsilon - eT - p.ulp, p.fracBits);
+    maybe[g] = !beyond && !(inRange[g] && (outside || behind));
     simd::WithExpectedSaturation(m, [&] {
-      height = Add(ol[2], Mul(x.t[r], dl[2], c.s, simd::kSaturate), c.s, simd::kSaturate);
+      low[g] = Select(inRange[g], simd::SubBound(m, x.t[r], eT + p.ulp, p.t),
+                      Broadcast(m, Fixed{p.t, p.t.MinRaw()}), p.t);
     });
-    Multi inRange[2], inside[2], maybe[2], low[2];
-    for (int g = 0; g < 2; ++g) {  // g = 1: the grazing bounds
-      const simd::ConeDivision& v = *div[r][g];
-      const double eT = v.tError, eH = c.heightError[g][r];
-      const Multi certified = g ? !simd::Near(m, *den[r], v.dStar, Fl) : sure;
-      // Beyond the scene: a certified quotient at or past tCut, or an uncertified one whose
-      // |N|/(D* + eD) already exceeds tFar (|D| < D*: |t_exact| >= (|N| − eN)/(D* + eD)).
-      const Multi beyond =
-          (certified && !simd::Near(m, x.t[r], v.tCut, p.fracBits)) ||
-          (!certified && !simd::Near(m, num[r], c.tFar * (v.dStar + v.eD) + v.eN, Fl));
-      inRange[g] = certified && !beyond;
-      inside[g] = (Const(m, eH, Fl) < height) && (height < Const(m, h - eH, Fl));
-      const Multi outside = (height < Const(m, -eH, Fl)) || (Const(m, h + eH, Fl) < height);
-      const Multi behind = x.t[r] < Const(m, p.epsilon - eT - p.ulp, p.fracBits);
-      maybe[g] = !beyond && !(inRange[g] && (outside || behind));
-      simd::WithExpectedSaturation(m, [&] {
-        low[g] = Select(inRange[g], simd::SubBound(m, x.t[r], eT + p.ulp, p.t),
-                        Broadcast(m, Fixed{p.t, p.t.MinRaw()}), p.t);
-      });
-    }
-    x.ok[r] = real && !grazing && inRange[0] && inside[0];
-    x.maybe[r] = possible && ((grazing && maybe[1]) || (!grazing && maybe[0]));
-    x.low[r] = Select(grazing, low[1], low[0], p.t);
   }
+  x.ok[r] = k.real && !k.grazing && inRange[0] && inside[0];
+  x.maybe[r] = k.possible && ((k.grazing && maybe[1]) || (!k.grazing && maybe[0]));
+  x.low[r] = Select(k.grazing, low[1], low[0], p.t);
+}
+
+ConeCross ConeAlong(Machine& m, const Multi (&o)[3], const Multi (&d)[3], const ConeTerms& c,
+                    const SecondaryPlan& p) {
+  const ConeQuadric k = ConeQuadricOf(m, o, d, c);
+  ConeCross x;
+  for (int r = 0; r < 2; ++r) ConeRoot(m, k, c, p, r, x);
   x.larger[0] = x.t[1] <= x.t[0];
   x.larger[1] = !x.larger[0];
   return x;
