@@ -11,8 +11,16 @@
 //   * paper rows: the paper's findings (Figs 5–12) as checks on the modelled 1992 seconds of
 //     the testbed sweep (`make charts TESTBED=ufmg1992`'s runs.csv): holds or not, and by how
 //     much (the worst margin over the sweep; the error is the shortfall, 0 when it holds).
+//   * host rows: the host work table (hosts/testbed/host_profile.h) against a published
+//     workstation time: Haines' own counts of ray–object tests and rays for each SPD scene,
+//     priced on the `hp-835` profile, against his ray-tracing time on the HP 9000/835 ("time"
+//     rows, seconds; and his µs per test).
+//
+// Every row carries its source's grade: "primary" (the publication itself read), "secondary"
+// (a survey, a summary page or a reproduction), "derived" (our arithmetic on quoted figures).
 //
 //   std::vector<LedgerRow> rows = MachineRows();
+//   for (LedgerRow& r : HostRows()) rows.push_back(r);
 //   auto paper = PaperRows(ReadRuns("docs/results/testbed-ufmg1992/runs.csv"));
 #pragma once
 
@@ -24,18 +32,26 @@ namespace zephyr::methods {
 struct LedgerRow {
   std::string machine;    // profile name ("mpp", "blitzen") or "paper (ufmg1992)"
   std::string operation;  // "add 8-bit", "Fig 5: SIMD/sequential below sequential", ...
-  std::string kind;       // "rate", "lower bound" or "check"
-  double published = 0;   // the published value (rates: MOPS; checks: 0, the margin's origin)
-  std::string unit;       // "MOPS", "MFLOPS", "% margin"
-  std::string source;     // where the published figure comes from
+  std::string kind;       // "rate", "time", "lower bound" or "check"
+  double published = 0;   // the published value (rates: MOPS; times: s or µs; checks: 0)
+  std::string unit;       // "MOPS", "MFLOPS", "s", "us", "% margin"
+  std::string source;     // where the published figure comes from: citation and link
+  std::string grade;      // the source's grade: "primary", "secondary" or "derived"
   double model = 0;       // the model's value in `unit` (checks: the worst margin, %)
-  double errorPct = 0;    // rate: (model − published) ÷ published × 100; bound/check: shortfall
-  bool holds = true;      // bound and check rows: met; rate rows: always true
+  double errorPct = 0;    // rate, time: (model − published) ÷ published × 100; bound/check:
+                          // shortfall
+  bool holds = true;      // bound and check rows: met; rate and time rows: always true
   std::string note;       // how the model's value was found (cycles, the sweep's points)
 };
 
 // The machine rows, from the engine's cycles on the built-in profiles.
 std::vector<LedgerRow> MachineRows();
+
+// The host rows: Haines' SPD counts (SPD README v3.14, "Timings" and "Database Analysis")
+// priced by the work table on the `hp-835` host profile (testbed::ModelHostTime), against his
+// HP 9000/835 times: one "time" row per scene (seconds of ray tracing) and his two µs-per-test
+// figures.
+std::vector<LedgerRow> HostRows();
 
 // One row of the testbed sweep's runs.csv (tools/testbed/charts.sh).
 struct SweepRun {
@@ -65,7 +81,7 @@ std::vector<LedgerRow> PaperRows(const std::vector<SweepRun>& runs);
 // docs/validation.md's text: the table, per machine the mean and maximum absolute error, and
 // the command that made it.
 std::string LedgerMarkdown(const std::vector<LedgerRow>& rows, const std::string& runsFile);
-// The table as CSV (machine,operation,kind,published,unit,model,error_pct,holds,source).
+// The table as CSV (machine,operation,kind,published,unit,model,error_pct,holds,grade,source).
 std::string LedgerCsv(const std::vector<LedgerRow>& rows);
 
 }  // namespace zephyr::methods

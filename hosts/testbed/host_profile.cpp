@@ -48,6 +48,29 @@ const std::map<std::string, HostProfile>& Profiles() {
          "none published: the SLC left the price list before SPEC CPU92 "
          "(1992); not used by the model"},
         {0, "SPECfp92", "none published (as SPECint92); not used by the model"}}},
+      // Eric Haines' SPD timing machine (issue 43 item 1; docs/validation.md): the HP 9000
+      // Model 835 his README's "Timings" ray-traced each SPD scene on. Fixed before any ledger
+      // row was computed and never from his times. The project's searches (netlib's Linpack
+      // report, OpenPA's early PA-RISC page, Mashey's MIPS Performance Briefs, SPEC89
+      // announcements) found the documents but no readable line with the 835's figures, so
+      // every value here is assumed and says so.
+      {"hp-835",
+       {"hp-835",
+        "HP 9000 Model 835 (PA-RISC 1.0): Haines' SPD timing machine (SPD README v3.14, "
+        "Timings)",
+        {15e6, "Hz",
+         "assumed: 15 MHz, the clock commonly given for the Model 835's processor (recalled, "
+         "not read in a source here); reported, not used by the model"},
+        {14, "MIPS",
+         "assumed: 14 MIPS (VAX-relative), the rating commonly given for the Model 835 "
+         "(recalled, not read in a source here: no published rating was found)"},
+        {2.06, "MFLOPS",
+         "assumed: no Linpack figure for the 835 was found; the SPARCstation 2's Linpack-to-MIPS "
+         "ratio (4.2 / 28.5) times 14 MIPS = 2.06"},
+        {0, "SPECint92",
+         "none: the 835 predates SPEC CPU92 and no SPEC89 figure was found; not used by the "
+         "model"},
+        {0, "SPECfp92", "none (as SPECint92); not used by the model"}}},
       // Present-day cores (issue 26 item 3; docs/present-day.md, table (a)). SPEC CPU92 was
       // retired in the 1990s: no present-day core has its ratings.
       {"today-calibrated",

@@ -10,6 +10,7 @@
 #include <fstream>
 
 #include "fixed/check.h"
+#include "hosts/testbed/host_profile.h"
 #include "tests/farm/mpi_launch.h"
 
 namespace zephyr::methods {
@@ -54,6 +55,91 @@ TEST(FidelityLedger, MachineRowsAreTheEnginesCycles) {
   EXPECT_DOUBLE_EQ(fmul.model, pes * 20e6 / 898 / 1e6);
   EXPECT_FALSE(fmul.holds);
   EXPECT_DOUBLE_EQ(fmul.errorPct, (450 - fmul.model) / 450 * 100);
+}
+
+// Haines' SPD rows: his own counts (tests by kind, rays) priced by the work table on the hp-835
+// profile, against his HP 9000/835 seconds; his µs per test against one test's price.
+TEST(FidelityLedger, HostRowsPriceHainesCountsOnTheHp835) {
+  const std::vector<LedgerRow> rows = HostRows();
+  ASSERT_EQ(rows.size(), 9u);  // seven scenes, two per-test rows
+  const testbed::HostProfile& hp = testbed::HostProfileNamed("hp-835");
+  // tetra: 965K polygon tests, 7637K box tests; 513x513 eye rays and 46112 shadow rays; 3:48.
+  TraceStats tetra;
+  tetra.tests[int(ShapeKind::kPolygon)] = 965000;
+  tetra.boxTests = 7637000;
+  tetra.rays[int(RayKind::kPrimary)] = 513 * 513;
+  tetra.rays[int(RayKind::kShadow)] = 46112;
+  const LedgerRow& row = Row(rows, "SPD tetra ray tracing (Haines' counts)");
+  EXPECT_EQ(row.machine, "hp-835");
+  EXPECT_EQ(row.kind, "time");
+  EXPECT_EQ(row.unit, "s");
+  EXPECT_EQ(row.published, 3 * 60 + 48);
+  EXPECT_NEAR(row.model, testbed::ModelHostTime(tetra, hp).seconds, 1e-9);
+  EXPECT_DOUBLE_EQ(row.errorPct, (row.model - 228) / 228 * 100);
+  EXPECT_EQ(Row(rows, "SPD gears ray tracing (Haines' counts)").published, 3600 + 2 * 60 + 31);
+  // One box test: 27 flops at 2.06 MFLOPS and 15 instructions at 14 MIPS, in µs.
+  const auto& box = testbed::CostOf(testbed::WorkEvent::kBoxTest);
+  const LedgerRow& boxRow = Row(rows, "bounding box test (tetra)");
+  EXPECT_EQ(boxRow.published, 26.71);
+  EXPECT_EQ(boxRow.unit, "us");
+  EXPECT_NEAR(boxRow.model, box.flops / hp.mflops.value + box.instructions / hp.mips.value,
+              1e-9);
+  for (const LedgerRow& r : rows) {
+    EXPECT_EQ(r.grade, "primary") << r.operation;
+    EXPECT_NE(r.source.find("Standard Procedural Databases README v3.14, Timings"),
+              std::string::npos);
+  }
+}
+
+// Every row's source is graded; the MPP's 12-bit rows are secondary and the table says so
+// beside their errors, and only beside theirs.
+TEST(FidelityLedger, EveryRowIsGradedAndASecondaryRowSaysSo) {
+  std::vector<LedgerRow> rows = MachineRows();
+  for (const LedgerRow& r : HostRows()) rows.push_back(r);
+  for (const LedgerRow& r : PaperRows({{"seq", 8, 0, 0, 0, 10}, {"simd", 8, 0, 0, 0, 6}}))
+    rows.push_back(r);
+  for (const LedgerRow& r : rows)
+    EXPECT_TRUE(r.grade == "primary" || r.grade == "secondary" || r.grade == "derived")
+        << r.machine << " / " << r.operation << ": '" << r.grade << "'";
+  EXPECT_EQ(Row(rows, "add 12-bit").grade, "secondary");
+  EXPECT_EQ(Row(rows, "multiply 12-bit").grade, "secondary");
+  EXPECT_EQ(Row(rows, "add 8-bit").grade, "primary");
+  const std::string md = LedgerMarkdown(rows, "runs.csv");
+  EXPECT_NE(md.find("| +0.00 % (secondary) | "), std::string::npos) << md;   // add 12-bit
+  EXPECT_NE(md.find("| +0.02 % (secondary) | "), std::string::npos) << md;   // multiply 12-bit
+  EXPECT_EQ(md.find("| +0.01 % (secondary) | "), std::string::npos) << md;   // add 8-bit
+  // Each figure in its unit: whole numbers from 100 up, two decimals below.
+  EXPECT_NE(md.find("| rate | 6553 MOPS | 6554 MOPS | +0.01 % |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| time | 26.71 us | 14.18 us | -46.92 % |"), std::string::npos) << md;
+  const std::string csv = LedgerCsv(rows);
+  EXPECT_EQ(csv.substr(0, csv.find('\n')),
+            "machine,operation,kind,published,unit,model,error_pct,holds,grade,source");
+  EXPECT_NE(csv.find(",yes,secondary,\"Batcher 1980"), std::string::npos) << csv;
+}
+
+// The per-machine summary names every machine the rows name, in the table's order, whatever
+// the name: a machine added later (here a made-up "cm-2") gets its own line.
+TEST(FidelityLedger, TheSummaryHasALineForEveryMachine) {
+  auto row = [](const std::string& machine, const std::string& kind, double error, bool holds) {
+    LedgerRow r;
+    r.machine = machine;
+    r.operation = "op";
+    r.kind = kind;
+    r.published = 100;
+    r.unit = "MOPS";
+    r.grade = "primary";
+    r.errorPct = error;
+    r.holds = holds;
+    return r;
+  };
+  const std::vector<LedgerRow> rows = {
+      row("cm-2", "rate", -10, true), row("cm-2", "time", 4, true),
+      row("maspar-mp1", "rate", 2, true), row("blitzen", "lower bound", 18.9, false)};
+  const std::string md = LedgerMarkdown(rows, "runs.csv");
+  EXPECT_NE(md.find("| cm-2 | 2 | 2 | 7.00 % | 10.00 % | - |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| maspar-mp1 | 1 | 1 | 2.00 % | 2.00 % | - |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| blitzen | 1 | 0 | - | - | 0 of 1 |"), std::string::npos) << md;
+  EXPECT_LT(md.find("| cm-2 | 2 |"), md.find("| maspar-mp1 | 1 |"));
 }
 
 // A check is the worst pair's margin: on a made-up sweep where SIMD/sequential is slower than
@@ -188,7 +274,7 @@ TEST(FidelityLedger, NoRowIsWorseThanItsRecord) {
   const std::string recorded = (repo / "tools/validation_recorded.csv").string();
   const auto ok = testing::RunZephyrProcess("validate --runs " + runs + " --check " + recorded);
   EXPECT_EQ(ok.status, 0) << ok.output;
-  EXPECT_NE(ok.output.find("14 rows checked"), std::string::npos) << ok.output;
+  EXPECT_NE(ok.output.find("23 rows checked"), std::string::npos) << ok.output;
   testing::TempDir dir;
   std::ifstream in(recorded);
   std::ofstream strict(dir / "strict.csv");
