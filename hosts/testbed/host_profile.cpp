@@ -121,7 +121,7 @@ const WorkCost kCosts[kWorkEvents] = {
      "IntersectCone, hosts/trace/intersect.h: w, d.a, w.a, the quadratic's a, b, c "
      "(~50), disc, sqrt, two roots and their range tests (~20)"},
     {44, 30,
-     "polygon in tracer.cpp: n.d (5), t (9), hit point (6), 2-D inside test ~6 per "
+     "polygon in prepared.h Intersect: n.d (5), t (9), hit point (6), 2-D inside test ~6 per "
      "edge, 4 edges assumed (24)"},
     {25, 20,
      "ray set-up: primary direction u,v (4) + forward+u right+v up (12) + normalise "
@@ -138,11 +138,11 @@ const WorkCost kCosts[kWorkEvents] = {
     // sort of the surfaces it crossed are not counted (assumed: a walk makes tens of box
     // tests, and a shadow ray crosses few surfaces).
     {2, 12,
-     "node visit in tracer.cpp NearestBvh/TransmissionBvh: pop the entry (its reference and "
+     "node visit in bvh_walk.h Walk (nearest and transmission): pop the entry (its reference and "
      "t: 2 loads), prune t > best (1), the leaf branch, the pair record's address, order the "
      "two children (1) and push them (4 stores)"},
     {27, 15,
-     "one box of EntersPair in tracer.cpp (one SSE2 lane; Enters for the root): per axis "
+     "one box of EntersPair in bvh_walk.h (one SSE2 lane; Enters for the root): per axis "
      "(lo - o)*inv and (hi - o)*inv (4), their min and max (2), the running near and far (2); "
      "the interval's three tests (3); its 6 bounds' loads, the broadcasts and the mask "
      "(assumed)"},

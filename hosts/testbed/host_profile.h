@@ -74,8 +74,8 @@ struct WorkCost {
   double instructions = 0;  // other instructions per event (loads, loop, branches, calls)
   std::string source;       // how the numbers were counted
 };
-// The work table (counted from hosts/trace/tracer.cpp, hosts/trace/sphere_kernels.cpp and,
-// for the hierarchy's events, hosts/trace/bvh.cpp).
+// The work table (counted from hosts/trace/tracer.cpp, prepared.h, sphere_kernels.cpp and, for
+// the hierarchy's events, hosts/trace/bvh_walk.h and bvh.cpp).
 const WorkCost& CostOf(WorkEvent e);
 
 // The events behind a TraceStats: count per event, in WorkEvent order.
