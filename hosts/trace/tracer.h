@@ -120,6 +120,9 @@ class Tracer {
  public:
   static std::unique_ptr<Tracer> Create(const Scene& scene, const TraceOptions& options);
   virtual ~Tracer() = default;
+  // Not copied: a tracer's hierarchy refers to its own prepared objects (bvh_walk.h).
+  Tracer(const Tracer&) = delete;
+  Tracer& operator=(const Tracer&) = delete;
 
   const Scene& GetScene() const { return scene_; }
   const TraceOptions& Options() const { return options_; }
