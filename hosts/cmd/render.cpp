@@ -1,9 +1,12 @@
 // hosts/cmd/render.cpp — `zephyr render`: the typed options of every method from the command
 // line (the SIMD flags shared with plan and accuracy: hosts/cmd/simd_flags.h), then
-// RunRender (hosts/methods/render.h) and a one-line summary.
+// RunRender (hosts/methods/render.h), then what a user reads from its typed results: the
+// array's tables (the primary pass's cycle report, its uncertain pixels and refine pass, the
+// wavefront's bounces) and a one-line summary. The methods themselves print nothing.
 #include "hosts/methods/render.h"
 
 #include <CLI/CLI.hpp>
+#include <fmt/format.h>
 #include <algorithm>
 #include <cstdio>
 #include <memory>
@@ -23,6 +26,44 @@ namespace zephyr {
 // One line a user reads after a render: what was made, how long it took, where it went;
 // for the distributed methods also frames and bytes (the JSON report has every figure).
 namespace {
+
+// The array's tables of a render, from its typed results: the primary pass's cycle report
+// (simd, array, hetero), the uncertain pixels and the refine pass (simd), the bounces
+// (array). "" for a method that ran nothing on the array.
+std::string ArrayTables(const RenderOutput& out) {
+  std::string s;
+  if (!out.simd) return s;
+  const simd::PrimaryPass& pass = *out.simd;
+  s += "cycle report (SIMD primary pass):\n" + pass.array.Table();
+  if (out.method == "simd") {
+    s += fmt::format(
+        "uncertain pixels: {} overflow, {} grazing, {} near tie; {} recomputed on the host\n",
+        pass.uncertain.overflow, pass.uncertain.grazing, pass.uncertain.nearTie,
+        pass.recomputedPixels);
+    if (pass.refine)
+      s += fmt::format("refine pass: {} pixel(s) at {} fraction bits in {} layer(s), {:.4g} cycles; "
+                       "{} still uncertain\n",
+                       pass.refine->pixels, pass.refine->fracBits, pass.refine->layers,
+                       pass.refine->array.cycles.TotalCycles(), pass.refine->stillUncertain) +
+           pass.refine->array.Table();
+  }
+  if (const auto& wave = out.wavefront) {
+    s += fmt::format(
+        "wavefront (compaction {}; s{}.{}, t error <= {:.3g}, rays ignore hits within {:.3g}):\n"
+        "  bounce      rays      hits  layers passes  utilisation  uncertain rays/shadows  "
+        "cycles\n",
+        wavefront::kCompactionNames.NameOf(wave->compaction), wave->intBits, wave->fracBits,
+        wave->tErrorBound, wave->epsilon);
+    for (const wavefront::BounceReport& b : wave->bounces)
+      s += fmt::format("  {:6} {:9} {:9} {:7} {:6} {:11.1f}% {:12} / {:<9} {:.4g}\n", b.bounce,
+                       b.rays, b.hits, b.layers, b.passes, 100 * b.utilisation, b.uncertainRays,
+                       b.uncertainShadows, b.cycles.TotalCycles());
+    s += fmt::format("  total: {:.4g} cycles = {:.4g} s at {:.3g} Hz (primary pass {:.4g} s)\n",
+                     wave->cycles.TotalCycles(), wave->cycles.ModelledSeconds(),
+                     wave->cycles.Profile().clockHz, pass.array.ModelledSeconds());
+  }
+  return s;
+}
 
 std::string RenderSummary(const RenderOptions& options, const RenderOutput& out) {
   char line[512];
@@ -152,7 +193,7 @@ CommandRegistration reg("render", [](CLI::App& program) {
       if (const std::optional<std::string> array = testbed::TestbedArrayProfile(options.testbed))
         options.simd.profile = *array;
     RenderOutput out = RunRender(options);
-    std::printf("%s\n", RenderSummary(options, out).c_str());
+    std::printf("%s%s\n", ArrayTables(out).c_str(), RenderSummary(options, out).c_str());
   });
 });
 

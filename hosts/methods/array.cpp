@@ -4,7 +4,6 @@
 // from the array's records and sums the ray tree.
 #include <fmt/format.h>
 
-#include <cstdio>
 #include <string>
 
 #include "fixed/check.h"
@@ -69,20 +68,6 @@ void RenderArray(const Scene& scene, const RenderOptions& options, RenderOutput&
     PhaseTimer timer(out.phases, "wavefront");
     wave = wavefront::RenderWavefront(*tracer, pass, options.wavefront, out.image.pixels, stats);
   }
-  std::fprintf(stdout,
-               "wavefront (compaction %s; s%d.%d, t error <= %.3g, rays ignore hits within %.3g):\n"
-               "  bounce      rays      hits  layers passes  utilisation  uncertain rays/shadows  "
-               "cycles\n",
-               std::string(wavefront::kCompactionNames.NameOf(wave.compaction)).c_str(),
-               wave.intBits, wave.fracBits, wave.tErrorBound, wave.epsilon);
-  for (const wavefront::BounceReport& b : wave.bounces)
-    std::fprintf(stdout, "  %6d %9lld %9lld %7lld %6d %11.1f%% %12lld / %-9lld %.4g\n", b.bounce,
-                 (long long)b.rays, (long long)b.hits, (long long)b.layers, b.passes,
-                 100 * b.utilisation, (long long)b.uncertainRays, (long long)b.uncertainShadows,
-                 b.cycles.TotalCycles());
-  std::fprintf(stdout, "  total: %.4g cycles = %.4g s at %.3g Hz (primary pass %.4g s)\n",
-               wave.cycles.TotalCycles(), wave.cycles.ModelledSeconds(),
-               wave.cycles.Profile().clockHz, pass.array.ModelledSeconds());
   KeepPrimaryPass(std::move(pass), stats, options, out);
   out.wavefront = std::move(wave);
 }

@@ -182,7 +182,6 @@ void RenderHetero(const Scene& scene, const RenderOptions& options, RenderOutput
       farmed::SetupText("hetero", scene, options.trace,
                         {{"dirFracBits", pass.plan.dirFracBits},
                          {"refineDirFracBits", pass.refine ? pass.refine->dirFracBits : -1}});
-  std::fprintf(stdout, "cycle report (SIMD primary pass):\n%s", pass.array.Table().c_str());
   // The parent's own work, charged under the simulated testbed: packing each frame's slice,
   // shading the degenerate frames, pasting the children's frames.
   job.sliceFor = [&](const Frame& f) {

@@ -1,7 +1,5 @@
 // hosts/methods/simd.cpp — the SIMD/sequential method (paper §3): the primary pass on the
 // emulated array (hosts/simd/pass.h), secondary rays shaded on the host from its matrix.
-#include <cstdio>
-
 #include "hosts/methods/methods.h"
 #include "hosts/methods/phases.h"
 #include "hosts/simd/pass.h"
@@ -16,7 +14,6 @@ simd::PrimaryPass RunTimedPrimaryPass(const Scene& scene, const RenderOptions& o
     pass = plan ? simd::RunPrimaryPass(scene, options.simd, std::move(*plan))
                 : simd::RunPrimaryPass(scene, options.simd);
   }
-  std::fprintf(stdout, "cycle report (SIMD primary pass):\n%s", pass.array.Table().c_str());
   return pass;
 }
 
@@ -35,18 +32,6 @@ void RenderSimd(const Scene& scene, const RenderOptions& options, RenderOutput& 
   const Camera& c = scene.camera;
   const auto tracer = Tracer::Create(scene, options.trace);  // its option errors before the pass
   simd::PrimaryPass pass = RunTimedPrimaryPass(scene, options, out);
-  std::fprintf(
-      stdout,
-      "uncertain pixels: %lld overflow, %lld grazing, %lld near tie; %lld recomputed on the host\n",
-      (long long)pass.uncertain.overflow, (long long)pass.uncertain.grazing,
-      (long long)pass.uncertain.nearTie, (long long)pass.recomputedPixels);
-  if (pass.refine)
-    std::fprintf(stdout,
-                 "refine pass: %lld pixel(s) at %d fraction bits in %d layer(s), %.4g cycles; %lld "
-                 "still uncertain\n%s",
-                 (long long)pass.refine->pixels, pass.refine->fracBits, pass.refine->layers,
-                 pass.refine->array.cycles.TotalCycles(), (long long)pass.refine->stillUncertain,
-                 pass.refine->array.Table().c_str());
   TraceStats stats = tracer->BuildWork();
   out.image = Image(c.width, c.height);
   {
