@@ -19,7 +19,6 @@
 #include "hosts/cmd/simd_flags.h"
 #include "hosts/methods/phases.h"
 #include "hosts/scene/nff.h"
-#include "hosts/testbed/simulation.h"
 #include "hosts/testbed/testbed.h"
 
 namespace zephyr {
@@ -172,21 +171,12 @@ CommandRegistration reg("render", [](CLI::App& program) {
         throw UserError(flag->get_name() + ": --method " + options.method +
                         " has no frame farm (the flag applies to " +
                         RenderMethodsUsing(false, true) + ")");
-    if (use.farm && !options.alsoTestbeds.empty())
-      throw UserError("--also-testbed: --method " + options.method +
-                      " is timed by a simulation of one testbed's network: one testbed a run");
-    if (use.farm && !options.testbed.empty() && !testbed::Simulated()) {
-      // Before the farm's own checks (its MPI ranks): an unknown name, then where it runs.
-      testbed::TestbedNamed(options.testbed);
-      testbed::CheckModelledTimeRequest(options.testbed, options.method, true, use.array,
-                                        options.simd.profile);
-    }
     for (const CLI::Option* flag : wavefrontFlags)
       if (!use.wavefront && flag->count() > 0)
         throw UserError(flag->get_name() + ": --method " + options.method +
                         " traces no secondary ray on the array (the flag applies to array)");
     // On a named testbed the array is the testbed's unless --machine says otherwise (and then
-    // it must be the same profile: testbed::CheckModelledTimeRequest).
+    // it must be the same profile: testbed::CheckPricingRequest, in RunRender).
     const std::vector<std::string> simdGiven = simdFlags->Given();
     if (use.array && !options.testbed.empty() &&
         std::find(simdGiven.begin(), simdGiven.end(), "--machine") == simdGiven.end())

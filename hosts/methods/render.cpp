@@ -13,7 +13,6 @@
 #include "hosts/methods/phases.h"
 #include "hosts/methods/report.h"
 #include "hosts/scene/nff.h"
-#include "hosts/testbed/simulation.h"
 #include "hosts/testbed/testbed.h"
 
 namespace zephyr {
@@ -111,35 +110,23 @@ std::string RenderMethodsUsing(bool array, bool farm) {
 
 namespace {
 
+// What the render is priced on, as the testbed room checks it (before any work, on every
+// rank of a farmed render: before its children serve frames).
+testbed::PricingRequest PricingRequestOf(const RenderOptions& options,
+                                         const RenderMethodEntry& method) {
+  return {.testbed = options.testbed,
+          .alsoTestbeds = options.alsoTestbeds,
+          .method = options.method,
+          .farmed = method.child != nullptr,
+          .usesArray = method.usesArray,
+          .arrayProfile = options.simd.profile};
+}
+
 // Every output and option checked before the scene is read: nothing is computed for an
-// output that could not be written, or priced on a testbed that cannot price it.
+// output that could not be written.
 void CheckRenderRequest(const RenderOptions& options, const RenderMethodEntry& method) {
   CheckRenderOutputs(options);
-  if (!options.alsoTestbeds.empty()) {
-    if (options.testbed.empty())
-      throw UserError("more testbeds to price a render on need a first one (the testbed)");
-    if (method.child != nullptr || testbed::Simulated())
-      throw UserError("method '" + options.method +
-                      "' is timed by a simulation of one testbed's network: one testbed a run");
-    std::vector<std::string> seen = {options.testbed};
-    const auto first = testbed::TestbedArrayProfile(options.testbed);
-    for (const std::string& bed : options.alsoTestbeds) {
-      if (std::find(seen.begin(), seen.end(), bed) != seen.end())
-        throw UserError("testbed '" + bed + "' is named twice: each is priced once");
-      seen.push_back(bed);
-      const auto also = testbed::TestbedArrayProfile(bed);
-      if (method.usesArray && first && also && *first != *also)
-        throw UserError(
-            "testbed '" + bed + "' has the array '" + *also + "' and testbed '" + options.testbed +
-            "' the array '" + *first +
-            "': a render runs one array, so the testbeds it is priced on must share it");
-      testbed::CheckModelledTimeRequest(bed, options.method, false, method.usesArray,
-                                        options.simd.profile);
-    }
-  }
   if (method.check) method.check(options);
-  testbed::CheckModelledTimeRequest(options.testbed, options.method, method.child != nullptr,
-                                    method.usesArray, options.simd.profile);
 }
 
 // The scene, its warnings printed, checked against the memory the method needs for it.
@@ -238,6 +225,7 @@ RenderOutput RunRender(const RenderOptions& given) {
   RenderOptions options = given;
   options.simd.hostAccel = options.trace.accel;  // the pass's recompute traces on the host too
   const RenderMethodEntry& method = MethodNamed(options.method);
+  testbed::CheckPricingRequest(PricingRequestOf(options, method));
   if (method.child) method.child(options);  // a child rank serves frames and ends there
   CheckRenderRequest(options, method);
   RenderOutput out;

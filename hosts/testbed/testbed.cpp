@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -168,31 +169,60 @@ std::vector<std::string> TestbedNames() {
   return names;
 }
 
+namespace {
+
+// One testbed of a request: its name known, its array the pass's, a farmed method simulated.
 void CheckModelledTimeRequest(const std::string& testbedName, const std::string& method,
                               bool farmed, bool usesArray, const std::string& arrayProfile) {
   if (testbedName.empty()) return;
-  if (farmed && !Simulated())
-    throw UserError("a testbed's time of method '" + method +
-                    "' runs on a simulated network: build/bin/zephyr-smpi under smpirun "
-                    "(tools/testbed/simrun.sh --testbed " +
-                    testbedName + "; `make smpi`; docs/testbed.md)");
-  if (Simulated()) {
-    // The platform file names the hosts; a testbed's own platform must be the testbed named,
-    // and its array the machine profile the pass runs.
-    const std::string platform = SimulatedPlatformName();
-    if (Testbeds().count(testbedName) && Testbeds().count(platform) && platform != testbedName)
-      throw UserError("testbed '" + testbedName + "': the simulated platform is testbed '" +
-                      platform + "''s (tools/testbed/simrun.sh --testbed " + testbedName + ")");
-    const std::string array = SimulatedArrayProfile();
-    if (usesArray && !array.empty() && array != arrayProfile)
-      throw UserError("the simulated platform's array is '" + array +
+  if (!Simulated()) {
+    const Testbed& bed = TestbedNamed(testbedName);  // an unknown name first
+    if (farmed)
+      throw UserError("a testbed's time of method '" + method +
+                      "' runs on a simulated network: build/bin/zephyr-smpi under smpirun "
+                      "(tools/testbed/simrun.sh --testbed " +
+                      testbedName + "; `make smpi`; docs/testbed.md)");
+    if (usesArray && arrayProfile != bed.arrayProfile)
+      throw UserError("testbed '" + bed.name + "': its array is '" + bed.arrayProfile +
                       "', but the machine profile is '" + arrayProfile + "'");
     return;
   }
-  const Testbed& bed = TestbedNamed(testbedName);
-  if (usesArray && arrayProfile != bed.arrayProfile)
-    throw UserError("testbed '" + bed.name + "': its array is '" + bed.arrayProfile +
+  // The platform file names the hosts; a testbed's own platform must be the testbed named,
+  // and its array the machine profile the pass runs.
+  const std::string platform = SimulatedPlatformName();
+  if (Testbeds().count(testbedName) && Testbeds().count(platform) && platform != testbedName)
+    throw UserError("testbed '" + testbedName + "': the simulated platform is testbed '" +
+                    platform + "''s (tools/testbed/simrun.sh --testbed " + testbedName + ")");
+  const std::string array = SimulatedArrayProfile();
+  if (usesArray && !array.empty() && array != arrayProfile)
+    throw UserError("the simulated platform's array is '" + array +
                     "', but the machine profile is '" + arrayProfile + "'");
+}
+
+}  // namespace
+
+void CheckPricingRequest(const PricingRequest& r) {
+  if (!r.alsoTestbeds.empty()) {
+    if (r.testbed.empty())
+      throw UserError("more testbeds to price a render on need a first one (the testbed)");
+    if (r.farmed || Simulated())
+      throw UserError("method '" + r.method +
+                      "' is timed by a simulation of one testbed's network: one testbed a run");
+    std::vector<std::string> seen = {r.testbed};
+    const auto first = TestbedArrayProfile(r.testbed);
+    for (const std::string& bed : r.alsoTestbeds) {
+      if (std::find(seen.begin(), seen.end(), bed) != seen.end())
+        throw UserError("testbed '" + bed + "' is named twice: each is priced once");
+      seen.push_back(bed);
+      const auto also = TestbedArrayProfile(bed);
+      if (r.usesArray && first && also && *first != *also)
+        throw UserError("testbed '" + bed + "' has the array '" + *also + "' and testbed '" +
+                        r.testbed + "' the array '" + *first +
+                        "': a render runs one array, so the testbeds it is priced on must share it");
+      CheckModelledTimeRequest(bed, r.method, false, r.usesArray, r.arrayProfile);
+    }
+  }
+  CheckModelledTimeRequest(r.testbed, r.method, r.farmed, r.usesArray, r.arrayProfile);
 }
 
 namespace {

@@ -165,12 +165,23 @@ struct ModelledTime {
   std::optional<double> ArrayActiveShare() const;
 };
 
-// Everything ModelTime will refuse that the command line alone decides, checked before any
-// work: an unknown testbed, a farmed method outside SimGrid, a --machine other than the
-// testbed's array (`arrayProfile`: the machine profile the SIMD pass would use; only when
-// `usesArray`). No-op when `testbedName` is empty. `method` only names it in messages.
-void CheckModelledTimeRequest(const std::string& testbedName, const std::string& method,
-                              bool farmed, bool usesArray, const std::string& arrayProfile);
+// What a render asks to be priced on, as the command line says it (--testbed,
+// --also-testbed), checked once, before any work and on every rank of a farmed render, by
+// CheckPricingRequest.
+struct PricingRequest {
+  std::string testbed;                    // "" = none (then no more testbeds either)
+  std::vector<std::string> alsoTestbeds;  // more testbeds the same counted work is priced on
+  std::string method;                     // only names it in messages
+  bool farmed = false;     // dist, hetero: timed by a simulation of one testbed's network
+  bool usesArray = false;  // every testbed's array must be `arrayProfile`
+  std::string arrayProfile;  // the machine profile the SIMD pass would use
+};
+
+// Everything ModelTime will refuse that the command line alone decides: an unknown testbed,
+// a farmed method outside SimGrid, a --machine other than a testbed's array; more testbeds
+// without a first one, for a farmed or simulated run (one testbed a run), named twice, or with
+// another array than the first's. UserError naming the testbed; nothing when `testbed` is "".
+void CheckPricingRequest(const PricingRequest& request);
 
 // The modelled seconds on the testbed `testbedName` ("" = none: nullopt) of the counted work
 // of a finished render of `scene`. A farmed render (work.farm) needs the simulated build
