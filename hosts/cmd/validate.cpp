@@ -1,4 +1,4 @@
-// hosts/cmd/validate.cpp — `zephyr validate`: the fidelity ledger (hosts/methods/ledger.h;
+// hosts/cmd/validate.cpp — `zephyr validate`: the fidelity ledger (hosts/ledger/ledger.h;
 // docs/validation.md), written by `make validate`.
 //
 //   zephyr validate --runs docs/results/testbed-ufmg1992/runs.csv --out docs/validation.md
@@ -17,9 +17,9 @@
 #include "fixed/input_file.h"
 #include "hosts/cmd/command.h"
 #include "hosts/io/output_file.h"
-#include "hosts/methods/ledger.h"
+#include "hosts/ledger/ledger.h"
 
-namespace zephyr::methods {
+namespace zephyr::ledger {
 namespace {
 
 struct ValidateOptions {
@@ -82,4 +82,4 @@ CommandRegistration validateCommand("validate", [](CLI::App& program) {
 });
 
 }  // namespace
-}  // namespace zephyr::methods
+}  // namespace zephyr::ledger

@@ -1,6 +1,6 @@
 // libFuzzer target for every reader of a user's file besides the NFF scene (issue 39): the
 // machine profile reader and `--set` (bitserial/profile.h), the ledger's runs.csv and recorded
-// errors (hosts/methods/ledger.h: `zephyr validate --runs` / `--check`), and the calibrate
+// errors (hosts/ledger/ledger.h: `zephyr validate --runs` / `--check`), and the calibrate
 // report (`zephyr testbed calibrate`: JSON, then hosts/testbed/testbed.h), and PIMeval's device
 // files as the PIMeval API reads them (tools/pimeval/config.h: a .cfg, and a memory .ini with
 // the BitSIMD-V timings taken from it). The first byte picks the reader (modulo 6: the seeds'
@@ -22,7 +22,7 @@
 
 #include "bitserial/profile.h"
 #include "fixed/check.h"
-#include "hosts/methods/ledger.h"
+#include "hosts/ledger/ledger.h"
 #include "hosts/testbed/testbed.h"
 #include "tools/pimeval/config.h"
 
@@ -77,10 +77,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         Profile(text);
         break;
       case 1:
-        zephyr::methods::ReadRuns(ScratchFile(text));
+        zephyr::ledger::ReadRuns(ScratchFile(text));
         break;
       case 2:
-        zephyr::methods::ReadRecorded(ScratchFile(text));
+        zephyr::ledger::ReadRecorded(ScratchFile(text));
         break;
       case 3: {
         const nlohmann::json r = nlohmann::json::parse(text, nullptr, false);

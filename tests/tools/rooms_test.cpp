@@ -34,12 +34,16 @@ const std::map<std::string, std::set<std::string>>& Allowed() {
       // needs neither the SIMD pass's code nor any method's.
       {"hosts/testbed",
        {"fixed", "bitserial", "hosts/io", "hosts/scene", "hosts/trace", "hosts/testbed"}},
+      // The fidelity ledger sets published figures against the engine and the work table.
+      {"hosts/ledger",
+       {"fixed", "bitserial", "hosts/io", "hosts/scene", "hosts/trace", "hosts/testbed",
+        "hosts/ledger"}},
       {"hosts/methods",
        {"fixed", "bitserial", "hosts/io", "hosts/scene", "hosts/trace", "hosts/simd", "hosts/farm",
         "hosts/testbed", "hosts/wavefront", "hosts/methods"}},
       {"hosts/cmd",
        {"fixed", "bitserial", "hosts/io", "hosts/scene", "hosts/trace", "hosts/simd", "hosts/farm",
-        "hosts/testbed", "hosts/wavefront", "hosts/methods", "hosts/cmd"}},
+        "hosts/testbed", "hosts/wavefront", "hosts/methods", "hosts/ledger", "hosts/cmd"}},
   };
   return allowed;
 }

@@ -1,8 +1,8 @@
-// The fidelity ledger (hosts/methods/ledger.h; docs/validation.md): the machine rows come from
+// The fidelity ledger (hosts/ledger/ledger.h; docs/validation.md): the machine rows come from
 // the engine's cycles, a check's margin is the worst pair's, and no row's error is worse than
 // tools/validation_recorded.csv (the quick version of `make validate` in `make test`: the
 // machine rows recomputed, the paper rows on the committed sweep).
-#include "hosts/methods/ledger.h"
+#include "hosts/ledger/ledger.h"
 
 #include <gtest/gtest.h>
 
@@ -13,7 +13,7 @@
 #include "hosts/testbed/host_profile.h"
 #include "tests/farm/mpi_launch.h"
 
-namespace zephyr::methods {
+namespace zephyr::ledger {
 namespace {
 
 std::filesystem::path Repo() {  // the nearest directory above the test binary with tools/
@@ -292,4 +292,4 @@ TEST(FidelityLedger, NoRowIsWorseThanItsRecord) {
 }
 
 }  // namespace
-}  // namespace zephyr::methods
+}  // namespace zephyr::ledger

@@ -1,4 +1,4 @@
-#include "hosts/methods/ledger.h"
+#include "hosts/ledger/ledger.h"
 
 #include <fmt/format.h>
 
@@ -17,7 +17,7 @@
 #include "fixed/input_file.h"
 #include "hosts/testbed/host_profile.h"
 
-namespace zephyr::methods {
+namespace zephyr::ledger {
 namespace {
 
 using bitserial::MachineProfile;
@@ -505,4 +505,4 @@ std::string LedgerMarkdown(const std::vector<LedgerRow>& rows, const std::string
   return s;
 }
 
-}  // namespace zephyr::methods
+}  // namespace zephyr::ledger
