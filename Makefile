@@ -26,8 +26,11 @@ CXX     ?= g++
 ifeq ($(origin CCACHE),undefined)
   CCACHE := $(shell command -v ccache 2>/dev/null)
 endif
-# Paths under the checkout are hashed relative to it: a second worktree reuses the cache.
+# Paths under the checkout are hashed relative to it, and the debug information names the
+# checkout as "." (-fdebug-prefix-map, below), so ccache leaves the working directory out of
+# its hash: a second clone or worktree (make mutants' scratch trees) reuses the cache.
 export CCACHE_BASEDIR := $(CURDIR)
+DEBUG_PREFIX_MAP := -fdebug-prefix-map=$(CURDIR)=.
 ifeq ($(origin CXX),default)
   CXX := $(if $(CCACHE),ccache )g++
 endif
@@ -44,7 +47,7 @@ CXXFLAGS ?= $(OPT) -g1
 # The flags every build of the engine shares (the ordinary one and zephyr-smpi's). -fPIC:
 # zephyr-smpi is a shared object SimGrid loads once per simulated rank, linked from the
 # ordinary objects (below); -fno-semantic-interposition keeps calls within the program direct.
-COMMON_CXXFLAGS = -std=c++20 -Wall -Wextra -I. -fPIC -fno-semantic-interposition
+COMMON_CXXFLAGS = -std=c++20 -Wall -Wextra -I. -fPIC -fno-semantic-interposition $(DEBUG_PREFIX_MAP)
 ALL_CXXFLAGS = $(COMMON_CXXFLAGS) $(DEPCFLAGS) $(CXXFLAGS)
 LDLIBS_ALL   = $(DEPLIBS) -fopenmp -lpthread
 # OpenMP (GCC's libgomp) in the files that use it: layer blocks and the host recompute run
@@ -154,7 +157,7 @@ FUZZ_RUN   = mkdir -p $(BUILD)/fuzz/corpus-$(1) && $(BUILD)/fuzz/$(1)_fuzz -max_
 $(BUILD)/fuzz/obj/%.o: %.cpp
 	$(call say,FUZZCXX,$@)
 	@mkdir -p $(@D)
-	$(Q)$(FUZZ_CXX) -std=c++20 -O1 -g1 -I. -fsanitize=fuzzer-no-link,address,undefined $(FUZZ_SAN) \
+	$(Q)$(FUZZ_CXX) -std=c++20 -O1 -g1 $(DEBUG_PREFIX_MAP) -I. -fsanitize=fuzzer-no-link,address,undefined $(FUZZ_SAN) \
 	  -MMD -MP $$(pkg-config --cflags libhwy fmt) -c $< -o $@
 # The rules that need the derived lists exist only in the sub-make `fuzz-binaries` runs
 # (FUZZ_LISTS=1, the lists passed in as FUZZ_SRCS_NAME).

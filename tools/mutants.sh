@@ -42,7 +42,8 @@ list=$(realpath "${MUTANTS_JSON:-tools/mutants.json}")
 lanes=${LANES:-1}
 timeout_s=${MUTANT_TIMEOUT:-600}
 jobs=${JOBS:-2}
-export CCACHE_NOHASHDIR=true  # the scratch copies' objects share the cache with the tree's
+# The scratch copies' objects share the cache with the tree's: the Makefile hashes paths
+# relative to the checkout (CCACHE_BASEDIR, -fdebug-prefix-map).
 cxx="g++"
 command -v ccache >/dev/null && cxx="ccache g++"
 
