@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "hosts/farm/farm.h"
-#include "hosts/methods/render.h"
+#include "hosts/methods/output.h"
 #include "hosts/testbed/testbed.h"
 
 namespace zephyr::farmed {

@@ -4,7 +4,7 @@
 
 #include <optional>
 
-#include "hosts/methods/render.h"
+#include "hosts/methods/output.h"
 
 namespace zephyr {
 

@@ -10,7 +10,7 @@
 
 #include <nlohmann/json_fwd.hpp>
 
-#include "hosts/methods/render.h"
+#include "hosts/methods/output.h"
 #include "hosts/simd/pass.h"
 
 namespace zephyr {
