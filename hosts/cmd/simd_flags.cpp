@@ -66,8 +66,7 @@ simd::SimdOptions SimdFlags::Options() const {
     o.floatFormat = fixed::FloatFormat::Parse(floatFormat_);
   }
   if (o.threads != 0) bitserial::CheckThreads(o.threads);  // 0: not given, every core
-  simd::MachineProfileOf(
-      o);  // an unknown --machine before any work (UserError naming the known ones)
+  simd::ResolveMachine(o);  // an unknown --machine before any work (UserError naming the known ones)
   return o;
 }
 

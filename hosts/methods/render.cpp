@@ -225,6 +225,7 @@ RenderOutput RunRender(const RenderOptions& given) {
   RenderOptions options = given;
   options.simd.hostAccel = options.trace.accel;  // the pass's recompute traces on the host too
   const RenderMethodEntry& method = MethodNamed(options.method);
+  if (method.usesArray) simd::ResolveMachine(options.simd);  // once (the command did already)
   testbed::CheckPricingRequest(PricingRequestOf(options, method));
   if (method.child) method.child(options);  // a child rank serves frames and ends there
   CheckRenderRequest(options, method);

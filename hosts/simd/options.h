@@ -4,6 +4,7 @@
 // from the command line; the planner (plan.h) plans for them.
 #pragma once
 
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -79,9 +80,22 @@ struct SimdOptions {
   // How the host recompute of uncertain pixels finds the nearest object (the render's
   // --accel, RunRender copies it here): the same hits either way.
   Accel hostAccel = Accel::kNone;
+  // `profile` with `profileOverrides` applied, resolved once (ResolveMachine: the command
+  // line's SimdFlags::Options() and RunRender call it) and shared by every copy of the
+  // options; null until then. What it was resolved from is kept beside it, so a profile or
+  // an override changed afterwards is never priced with the old one (MachineProfileOf).
+  std::shared_ptr<const bitserial::MachineProfile> machine;
+  std::string machineResolvedFrom;
 };
 
-// The machine profile the options name, with their overrides (UserError on a bad one).
+// Resolves `profile` and `profileOverrides` into `options.machine` (a file is read, a name
+// looked up, each override applied: UserError on a bad one). Nothing to do when they have
+// not changed since the last call.
+void ResolveMachine(SimdOptions& options);
+
+// The machine profile the options name, with their overrides: `options.machine` when it was
+// resolved from them, else resolved now (a caller that never called ResolveMachine; UserError
+// on a bad one).
 bitserial::MachineProfile MachineProfileOf(const SimdOptions& options);
 
 }  // namespace zephyr::simd

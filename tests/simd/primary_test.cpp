@@ -4,6 +4,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <unistd.h>
 
 #include "fixed/check.h"
 #include "hosts/scene/gen.h"
@@ -61,6 +64,40 @@ TEST(SimdPrimary, AMachineWithoutExternalMemoryHoldsTheMatrixInternally) {
     EXPECT_EQ(pass.array.passes.at(0).externalPeakBits, 0);
     EXPECT_GT(pass.array.passes.at(0).internalPeakBits, 0);
   }
+}
+
+// The machine profile is resolved once into the options (ResolveMachine) and every stage of
+// the pass reads that: a profile file deleted after it was resolved still runs, with its
+// overrides; a profile or an override changed afterwards is the one the pass uses, never the
+// stale one.
+TEST(SimdPrimary, TheMachineProfileIsResolvedOnceAndNeverStale) {
+  const Scene scene = GenerateRandomSpheres({.count = 8, .seed = 1, .width = 32, .height = 32});
+  const std::filesystem::path file =
+      std::filesystem::temp_directory_path() / ("zephyr_resolved_" + std::to_string(::getpid()));
+  std::ofstream(file) << bitserial::Profile("mpp").FileText();
+  SimdOptions o;
+  o.profile = file.string();
+  o.profileOverrides = {"clockHz=2e7"};
+  ResolveMachine(o);
+  std::filesystem::remove(file);
+  ASSERT_NE(o.machine, nullptr);
+  EXPECT_EQ(MachineProfileOf(o).clockHz, 2e7);
+  const PrimaryPass fromFile = RunPrimaryPass(scene, o);  // the file is gone: read once
+  EXPECT_EQ(fromFile.array.cycles.Profile().clockHz, 2e7);
+  SimdOptions mpp;
+  mpp.profile = "mpp";
+  mpp.profileOverrides = {"clockHz=2e7"};
+  EXPECT_EQ(fromFile.array.cycles.TotalCycles(),
+            RunPrimaryPass(scene, mpp).array.cycles.TotalCycles());
+  // Changed after resolving: the new words win, in MachineProfileOf and in the pass.
+  o.profile = "wavetracer";
+  o.profileOverrides = {};
+  EXPECT_EQ(MachineProfileOf(o).name, "wavetracer");
+  EXPECT_EQ(RunPrimaryPass(scene, o).array.cycles.Profile().name, "wavetracer");
+  o.profileOverrides = {"clockHz=3e7"};
+  ResolveMachine(o);
+  EXPECT_EQ(o.machine->clockHz, 3e7);
+  EXPECT_EQ(RunPrimaryPass(scene, o).array.cycles.Profile().clockHz, 3e7);
 }
 
 TEST(SimdPrimary, FirstObjectAgreesOnEveryPixelSphereflake) {
