@@ -23,7 +23,7 @@ set terminal pngcairo size 800,700 font ',10'
 set output 'docs/results/validation.png'
 set datafile separator ','
 set title 'Fidelity ledger: the model against published figures (docs/validation.md)'
-set xlabel 'published (each row in its own unit: MOPS, MFLOPS, s, us)'
+set xlabel 'published (each row in its own unit: MOPS, MFLOPS, s, us, tCK)'
 set ylabel 'model (the same unit)'
 set logscale xy
 set grid

@@ -70,6 +70,7 @@ CommandRegistration validateCommand("validate", [](CLI::App& program) {
                  {{"the sweep's runs (--runs)", o->runs}, {"the recorded errors (--check)", o->check}});
     std::vector<LedgerRow> rows = MachineRows();
     for (LedgerRow& r : HostRows()) rows.push_back(r);
+    for (LedgerRow& r : PimevalRows()) rows.push_back(r);
     if (!o->runs.empty())
       for (LedgerRow& r : PaperRows(ReadRuns(o->runs))) rows.push_back(r);
     const std::string csv = LedgerCsv(rows);

@@ -11,6 +11,8 @@
 //   * paper rows: the paper's findings (Figs 5–12) as checks on the modelled 1992 seconds of
 //     the testbed sweep (`make charts TESTBED=ufmg1992`'s runs.csv): holds or not, and by how
 //     much (the worst margin over the sweep; the error is the shortfall, 0 when it holds).
+//   * model rows: the engine's cycles on the pim-bitsimd-v-bank profile against PIMeval's
+//     BitSIMD-V table (PimevalRows): one model against another, labelled so.
 //   * host rows: the host work table (hosts/testbed/host_profile.h) against a published
 //     workstation time: Haines' own counts of ray–object tests and rays for each SPD scene,
 //     priced on the `hp-835` profile, against his ray-tracing time on the HP 9000/835 ("time"
@@ -32,13 +34,13 @@ namespace zephyr::ledger {
 struct LedgerRow {
   std::string machine;    // profile name ("mpp", "blitzen") or "paper (ufmg1992)"
   std::string operation;  // "add 8-bit", "Fig 5: SIMD/sequential below sequential", ...
-  std::string kind;       // "rate", "time", "lower bound" or "check"
+  std::string kind;       // "rate", "time", "model", "lower bound" or "check"
   double published = 0;   // the published value (rates: MOPS; times: s or µs; checks: 0)
-  std::string unit;       // "MOPS", "MFLOPS", "s", "us", "% margin"
+  std::string unit;       // "MOPS", "MFLOPS", "s", "us", "tCK", "% margin"
   std::string source;     // where the published figure comes from: citation and link
   std::string grade;      // the source's grade: "primary", "secondary" or "derived"
   double model = 0;       // the model's value in `unit` (checks: the worst margin, %)
-  double errorPct = 0;    // rate, time: (model − published) ÷ published × 100; bound/check:
+  double errorPct = 0;    // rate, time, model: (model − published) ÷ published × 100; bound/check:
                           // shortfall
   bool holds = true;      // bound and check rows: met; rate and time rows: always true
   std::string note;       // how the model's value was found (cycles, the sweep's points)
@@ -52,6 +54,12 @@ std::vector<LedgerRow> MachineRows();
 // HP 9000/835 times: one "time" row per scene (seconds of ray tracing) and his two µs-per-test
 // figures.
 std::vector<LedgerRow> HostRows();
+
+// The model against PIMeval's (a model, not a measurement): the engine's cycles of add, sub,
+// multiply, less-than and min on 8-, 16- and 32-bit signed elements on the pim-bitsimd-v-bank
+// profile against PIMeval's BitSIMD-V table (its row reads, writes and logic ops priced at its
+// own DDR4-3200 timing, in tCK): "model" rows, graded derived (our arithmetic on its counts).
+std::vector<LedgerRow> PimevalRows();
 
 // One row of the testbed sweep's runs.csv (tools/testbed/charts.sh).
 struct SweepRun {
