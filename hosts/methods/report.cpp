@@ -78,6 +78,8 @@ nlohmann::json PrimaryPassJson(const simd::PrimaryPass& pass) {
   return j;
 }
 
+namespace {
+
 nlohmann::json WavefrontJson(const wavefront::WavefrontResult& w) {
   nlohmann::json rays;
   for (int k = 0; k < kRayKinds; ++k) rays[kRayKindNames[k]] = w.arrayRays[k];
@@ -112,6 +114,8 @@ nlohmann::json WavefrontJson(const wavefront::WavefrontResult& w) {
           {"byOp", cycles["byOp"]},
           {"modelledSeconds", w.cycles.ModelledSeconds()}};
 }
+
+}  // namespace
 
 nlohmann::json RenderReportJson(const RenderOutput& out) {
   nlohmann::json r = nlohmann::json::object();

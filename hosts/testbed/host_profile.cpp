@@ -48,7 +48,7 @@ const std::map<std::string, HostProfile>& Profiles() {
          "none published: the SLC left the price list before SPEC CPU92 "
          "(1992); not used by the model"},
         {0, "SPECfp92", "none published (as SPECint92); not used by the model"}}},
-      // Eric Haines' SPD timing machine (issue 43 item 1; docs/validation.md): the HP 9000
+      // Eric Haines' SPD timing machine, for the ledger's host rows (docs/validation.md): the HP 9000
       // Model 835 his README's "Timings" ray-traced each SPD scene on. Fixed before any ledger
       // row was computed and never from his times. The project's searches (netlib's Linpack
       // report, OpenPA's early PA-RISC page, Mashey's MIPS Performance Briefs, SPEC89
@@ -71,7 +71,7 @@ const std::map<std::string, HostProfile>& Profiles() {
          "none: the 835 predates SPEC CPU92 and no SPEC89 figure was found; not used by the "
          "model"},
         {0, "SPECfp92", "none (as SPECint92); not used by the model"}}},
-      // Present-day cores (issue 26 item 3; docs/present-day.md, table (a)). SPEC CPU92 was
+      // Present-day cores, for the present-day testbeds (docs/present-day.md, table (a)). SPEC CPU92 was
       // retired in the 1990s: no present-day core has its ratings.
       {"today-calibrated",
        {"today-calibrated",

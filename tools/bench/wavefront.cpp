@@ -3,7 +3,8 @@
 // (`zephyr gen showcase`: an ellipsoid, two cones, a cube): per compaction policy the
 // primary pass and the wavefront, each with its modelled seconds, host wall seconds and
 // real-time factor (modelled / host wall), and their ratio (target: the whole render's factor
-// at least half the primary pass's, issue 25); the image's PSNR against the sequential
+// at least half the primary pass's: the bounces may not cost the array more of its speed than
+// the primary pass does); the image's PSNR against the sequential
 // tracer's; per bounce the rays, layers, utilisation and the share the host traced; and the
 // exact check of the certain secondary rays (every one at 64 spheres, every 4th at 256; wrong
 // certain hits: target 0). Medians of 3.
