@@ -2,7 +2,9 @@
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
+#include <thread>
 #include <map>
 
 #include "fixed/check.h"
@@ -38,6 +40,10 @@ void RefuseEmptyValues(CLI::App& app) {
   for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) RefuseEmptyValues(*sub);
 }
 
+// How long a silent rank waits after a command-line mistake before it exits (rank 0 prints
+// and exits in microseconds; mpirun then ends the waiting ranks).
+constexpr std::chrono::seconds kSilentRankWait{5};
+
 int RunZephyr(int argc, const char* const* argv) {
   CLI::App program{
       "zephyr — an emulated WaveTracer Zephyr (8192 bit-serial PEs) and the paper's four "
@@ -63,7 +69,12 @@ int RunZephyr(int argc, const char* const* argv) {
   } catch (const CLI::ParseError& e) {
     // (program.exit): parenthesised so SMPI's exit(x) macro (zephyr-smpi, docs/testbed.md)
     // leaves CLI11's member alone.
-    return (program.exit)(e);
+    const int status = (program.exit)(e);
+    // A silent rank lets rank 0 say it first: mpirun ends the job at the first rank that exits
+    // non-zero, and on a loaded machine a silent rank's exit ended rank 0 before it had written
+    // the message (the user saw none). Rank 0's own exit then ends this wait at once.
+    if (!speak && status != 0) std::this_thread::sleep_for(kSilentRankWait);
+    return status;
   } catch (const UserError& e) {
     std::fprintf(stderr, "zephyr: error: %s\n", e.what());
     return e.ExitCode();

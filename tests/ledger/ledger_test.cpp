@@ -32,6 +32,30 @@ const LedgerRow& Row(const std::vector<LedgerRow>& rows, const std::string& op) 
   return none;
 }
 
+// The summary per machine: rows, the rows with an error (rate, time, model) and their mean and
+// largest absolute error over those rows only, and the bounds or checks held; a machine with
+// both kinds of row averages its errors over its error rows, never over all.
+TEST(FidelityLedger, TheSummaryAveragesOverTheRowsWithAnError) {
+  auto row = [](const std::string& kind, double error, bool holds) {
+    LedgerRow r;
+    r.machine = "m";
+    r.operation = kind + " row";
+    r.kind = kind;
+    r.published = 100;
+    r.unit = "MOPS";
+    r.model = 100 + error;
+    r.errorPct = kind == "lower bound" ? 0 : error;
+    r.holds = holds;
+    r.grade = "primary";
+    return r;
+  };
+  const std::string md = LedgerMarkdown(
+      {row("rate", 10, true), row("time", -30, true), row("lower bound", 0, true),
+       row("lower bound", 0, false)},
+      "runs.csv");
+  EXPECT_NE(md.find("| m | 4 | 2 | 20.00 % | 30.00 % | 1 of 2 |"), std::string::npos) << md;
+}
+
 // The model rows: PIMeval's BitSIMD-V counts priced at its DDR4-3200 timing ((R + W) × 74 tCK
 // + L × 4 tCK) against the engine's cycles on pim-bitsimd-v-bank: one model against another,
 // graded derived; add within 1 %, the multiply twice PIMeval's (docs/validation.md says why).

@@ -525,6 +525,30 @@ TEST(PimDevice, ModelledTimeFollowsTheDevicesParallelism) {
   EXPECT_DOUBLE_EQ(ms[3], 2 * ms[2]);
 }
 
+// A copy between host and device moves its bytes over every rank's channel at once
+// (PIMeval: bytes / (rank bandwidth x ranks)): the same elements copied on a device of two
+// ranks take half the modelled time of one rank's, and an add over them the same time.
+TEST(PimDevice, CopiesShareTheRanksChannels) {
+  ::unsetenv("ZEPHYR_MACHINE");
+  const TempFile report;
+  std::vector<double> copy, add;
+  std::vector<int32_t> host(4096, 7);
+  for (unsigned ranks : {1u, 2u}) {
+    ASSERT_EQ(pimCreateDevice(PIM_FUNCTIONAL, ranks, 1, 2, 256, 4096), PIM_OK);
+    const PimObjId a = pimAlloc(PIM_ALLOC_AUTO, host.size(), PIM_INT32);
+    const PimObjId b = pimAllocAssociated(a, PIM_INT32);
+    ASSERT_EQ(pimCopyHostToDevice(host.data(), a), PIM_OK);
+    ASSERT_EQ(pimAdd(a, a, b), PIM_OK);
+    ShowStats(report.path);
+    copy.push_back(ModelledMs("pimCopyHostToDevice PIM_INT32", report.path));
+    add.push_back(ModelledMs("pimAdd INT32", report.path));
+    ASSERT_EQ(pimDeleteDevice(), PIM_OK);
+  }
+  EXPECT_GT(copy[0], 0);
+  EXPECT_DOUBLE_EQ(copy[1], copy[0] / 2);
+  EXPECT_DOUBLE_EQ(add[1], add[0]);
+}
+
 TEST(PimDevice, ZephyrMachineRunsTheProgramOnAnotherProfile) {
   ::setenv("ZEPHYR_MACHINE", "wavetracer", 1);
   ASSERT_EQ(pimCreateDevice(PIM_FUNCTIONAL, 4, 128, 32, 1024, 8192), PIM_OK);
@@ -678,6 +702,8 @@ void CheckEveryFloatOperation(size_t n) {
     scalar("pimSubScalar", pimSubScalar, [&](float x) { return x - s; }, false);
     scalar("pimMulScalar", pimMulScalar, [&](float x) { return x * s; }, false);
     if (s != 0.0f) scalar("pimDivScalar", pimDivScalar, [&](float x) { return x / s; }, false);
+    else  // +0.0 and -0.0 alike, whatever the high 32 bits of the scalar hold
+      EXPECT_EQ(pimDivScalar(oa, od, bits), PIM_ERROR) << "division by " << s;
     scalar("pimMinScalar", pimMinScalar, [&](float x) { return std::min(x, s); }, true);
     scalar("pimMaxScalar", pimMaxScalar, [&](float x) { return std::max(x, s); }, true);
     auto cmp = [&](const char* name, PimStatus (*api)(PimObjId, PimObjId, uint64_t), auto ref) {

@@ -503,6 +503,7 @@ TEST(TestbedModel, AlsoTestbedPricesTheSameCountsAsARenderOnIt) {
         std::pair{"--method seq --testbed ufmg1992 --also-testbed today-zephyr --also-testbed "
                   "today-zephyr",
                   "named twice"},
+        std::pair{"--method seq --testbed ufmg1992 --also-testbed ufmg1992", "named twice"},
         std::pair{"--method hetero --testbed today-pim", "tools/testbed/simrun.sh"}}) {
     const auto r = RunZephyrProcess(std::string("render --no-progress ") + flags + " " + scene +
                                     " --out " + (dir / "x.png"));
