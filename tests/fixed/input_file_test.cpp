@@ -49,6 +49,11 @@ TEST(InputFile, WhatIsNoRegularFileIsRefusedWithoutBlocking) {
   const std::string folder = std::filesystem::path(fifo).parent_path().string();
   EXPECT_EQ(Error(folder), folder + ": is a directory, expected a test file");
   EXPECT_EQ(Error(dir / "none"), dir / "none" + ": cannot open the test file (no such file)");
+  // A path through a regular file (ENOTDIR) names no file either: the same words, not the
+  // system's "Not a directory".
+  std::ofstream(dir / "plain") << "x";
+  EXPECT_EQ(Error(dir / "plain" + "/scene.nff"),
+            dir / "plain" + "/scene.nff: cannot open the test file (no such file)");
   EXPECT_EQ(Error(""), "an empty path names no file, expected a test file");
   // A name with a control byte is shown escaped, whole.
   EXPECT_EQ(Error(dir / "x\x01y"), dir / "x\\x01y" + ": cannot open the test file (no such file)");

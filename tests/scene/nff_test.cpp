@@ -635,5 +635,26 @@ TEST(SceneNff, EveryNumberOfEveryStatementIsLocatedAtItsOwnColumn) {
   EXPECT_EQ(checked, 2 * (3 + 3 + 3 + 3 + 1 + 1 + 2 + 3 + 6 + 8 + 4 + 8 + 10 + 19 + 12));
 }
 
+// A patch's world form under a shear: its vertex normals map by the inverse transpose, so a
+// normal perpendicular to the object's surface stays perpendicular to the world's (the
+// inverse alone tilts it); its vertices by the map itself, and the Newell normal agrees.
+TEST(SceneWorldForm, APatchsNormalsStayPerpendicularUnderAShear) {
+  Primitive p;
+  const Vec3 up{0, 0, 1};
+  p.shape = Polygon{{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}, {up, up, up, up}};
+  Affine shear;  // x += 0.5 y + 0.7 z, z += 0.4 x, then a translation
+  shear.m[0][1] = 0.5, shear.m[0][2] = 0.7, shear.m[2][0] = 0.4, shear.m[1][3] = 3;
+  p.transform = shear;
+  const WorldSpacePolygon w = ToWorldSpace(p);
+  ASSERT_EQ(w.vertices.size(), 4u);
+  ASSERT_EQ(w.normals.size(), 4u);
+  EXPECT_EQ(w.vertices[2].x, shear.ApplyPoint({1, 1, 0}).x);
+  for (size_t i = 0; i < 4; ++i) {
+    const Vec3 edge = w.vertices[(i + 1) % 4] - w.vertices[i];
+    EXPECT_NEAR(Dot(w.normals[i], edge), 0, 1e-12) << "vertex " << i;
+    EXPECT_NEAR(Dot(Normalize(w.normals[i]), w.normal), 1, 1e-12) << "vertex " << i;
+  }
+}
+
 }  // namespace
 }  // namespace zephyr

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "hosts/scene/gen.h"
@@ -46,6 +47,51 @@ TEST(TraceExact, FirstObjectAgreesWithTheDoubleTracerOnEveryKind) {
       }
     EXPECT_GT(hits, 32 * 32 / 8) << scene.source;
   }
+}
+
+// A hither that cuts through a transformed sphere (an ellipsoid): a root is compared with tMin
+// in world units (its object-space t scaled by the transformed direction's length), so the
+// tracer's first hits still agree with the exact reference's where the hither lies among the
+// ellipsoid's front hits.
+TEST(TraceExact, AHitherThroughAnEllipsoidCutsItWhereTheExactReferenceDoes) {
+  Scene scene = GenerateTransformedShowcase(48, 48);
+  int ellipsoid = -1;
+  for (size_t i = 0; i < scene.objects.size(); ++i)
+    if (scene.objects[i].Kind() == ShapeKind::kSphere && scene.objects[i].transform)
+      ellipsoid = int(i);
+  ASSERT_GE(ellipsoid, 0) << "the showcase has an ellipsoid";
+  std::vector<double> front, frontAt(48 * 48, -1);
+  {
+    const PrimaryRays rays(scene.camera);
+    for (int y = 0; y < 48; ++y)
+      for (int x = 0; x < 48; ++x) {
+        const exact::Hit e =
+            exact::FirstHit(scene, rays.At(x, y), std::max(scene.camera.hither, 0.0));
+        if (e.object == ellipsoid) front.push_back(frontAt[y * 48 + x] = double(e.t));
+      }
+  }
+  ASSERT_GT(front.size(), 20u);
+  std::sort(front.begin(), front.end());
+  scene.camera.hither = front[front.size() / 2];  // half the front hits now lie before it
+  TraceOptions o;
+  o.depth = 1;
+  const auto tracer = Tracer::Create(scene, o);
+  TraceStats stats;
+  int cut = 0;
+  for (int y = 0; y < 48; ++y)
+    for (int x = 0; x < 48; ++x) {
+      const PrimaryRay ray = tracer->Rays().At(x, y);
+      const exact::Hit e = exact::FirstHit(scene, ray, scene.camera.hither);
+      const PrimaryHit h = tracer->FirstHit(ray, stats);
+      ASSERT_EQ(e.object, h.object) << "pixel " << x << "," << y;
+      if (e.object >= 0) {
+        EXPECT_NEAR(double(e.t), h.t, 1e-9 * std::max(1.0, h.t)) << x << "," << y;
+      }
+      // Its front cut away here: the hit is another surface, or the ellipsoid's far side.
+      const double was = frontAt[y * 48 + x];
+      cut += was >= 0 && (e.object != ellipsoid || double(e.t) != was);
+    }
+  EXPECT_GT(cut, 0) << "the hither should cut the ellipsoid's front";
 }
 
 }  // namespace
