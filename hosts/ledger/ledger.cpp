@@ -98,9 +98,9 @@ std::vector<LedgerRow> MachineRows() {
 
 namespace {
 
-// PIMeval's BitSIMD-V performance table (UVA-LavaLab/PIMeval-PIMbench, libpimeval/src/
-// pimPerfEnergyTables.cpp, PIM_DEVICE_BITSIMD_V): row reads, row writes and logic ops of one
-// operation on signed n-bit elements (PIM_INT8, PIM_INT16, PIM_INT32).
+// PIMeval's BitSIMD-V performance table (PIMeval, Siddique, Guo et al., IISWC 2024:
+// libpimeval/src/pimPerfEnergyTables.cpp, PIM_DEVICE_BITSIMD_V): row reads, row writes and
+// logic ops of one operation on signed n-bit elements (PIM_INT8, PIM_INT16, PIM_INT32).
 struct PimevalOp {
   const char* op;  // our name: add, sub, mul, less, min
   const char* cmd;  // PIMeval's PimCmdEnum
@@ -124,7 +124,7 @@ constexpr PimevalOp kPimevalBitsimdV[] = {
 constexpr double kPimevalRowTck = 52 + 22, kPimevalLogicTck = 4;
 
 const char* const kPimeval =
-    "PIMeval's BitSIMD-V table (UVA-LavaLab/PIMeval-PIMbench, libpimeval/src/"
+    "PIMeval's BitSIMD-V table (PIMeval, Siddique, Guo et al., IISWC 2024: libpimeval/src/"
     "pimPerfEnergyTables.cpp: row reads, writes, logic ops) priced at its DDR4-3200 timing "
     "(tRAS + tRP = 74 tCK a row, tCCD_S = 4 tCK a logic op); a model, not a measurement";
 
