@@ -15,7 +15,8 @@ REUSE=1 TESTBED=ufmg1992 bash tools/testbed/charts.sh
 # Model against published on log axes, the y = x line: every row with a published number
 # (rates, times, bounds; the paper's checks have none), each machine in its own colour. The
 # machines are the CSV's own (first column), so a machine added to the ledger is drawn without
-# touching this script; a lower bound is drawn as a triangle.
+# touching this script; a lower bound is drawn as a triangle (a point type of its own: the
+# key shows each machine's colour with a dot, which `pt variable` left blank).
 CSV=docs/results/validation.csv
 MACHINES=$(awk -F, 'NR > 1 && $3 != "check" && !seen[$1]++ { printf "%s ", $1 }' "$CSV")
 gnuplot <<GP
@@ -32,7 +33,10 @@ set offsets graph 0.05, graph 0.05, graph 0.05, graph 0.05
 machines = "$MACHINES"
 plot x with lines dt 2 lc rgb '#888888' title 'y = x', \
   for [i=1:words(machines)] '$CSV' \
-    using ((strcol(1) eq word(machines, i)) ? \$4 : NaN):6:(strcol(3) eq 'lower bound' ? 9 : 7) \
-    with points pt variable ps 1.5 lc i title word(machines, i)
+    using ((strcol(1) eq word(machines, i) && strcol(3) ne 'lower bound') ? \$4 : NaN):6 \
+    with points pt 7 ps 1.5 lc i title word(machines, i), \
+  for [i=1:words(machines)] '$CSV' \
+    using ((strcol(1) eq word(machines, i) && strcol(3) eq 'lower bound') ? \$4 : NaN):6 \
+    with points pt 9 ps 1.5 lc i notitle
 GP
 echo "validate: wrote docs/validation.md, docs/results/validation.csv, docs/results/validation.png"
