@@ -180,8 +180,10 @@ CommandRegistration reg("render", [](CLI::App& program) {
     const std::vector<std::string> simdGiven = simdFlags->Given();
     if (use.array && !options.testbed.empty() &&
         std::find(simdGiven.begin(), simdGiven.end(), "--machine") == simdGiven.end())
-      if (const std::optional<std::string> array = testbed::TestbedArrayProfile(options.testbed))
-        options.simd.profile = *array, simd::ResolveMachine(options.simd);
+      if (const std::optional<std::string> array = testbed::TestbedArrayProfile(options.testbed)) {
+        options.simd.profile = *array;
+        simd::ResolveMachine(options.simd);
+      }
     RenderOutput out = RunRender(options);
     std::printf("%s%s\n", ArrayTables(out).c_str(), RenderSummary(options, out).c_str());
   });

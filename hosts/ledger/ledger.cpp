@@ -22,14 +22,19 @@ namespace {
 
 using bitserial::MachineProfile;
 
-// Cycles of one fixed-point add or multiply of n-bit signed operands (result in the operands'
-// format, as Batcher's table counts them: 3n+1 and n²+3n on the MPP) on one layer.
+// Cycles of one fixed-point operation (add, sub, mul, less, min) of n-bit signed operands on
+// one layer, the result in the operands' format (less: one bit), as Batcher's table counts an
+// add and a multiply (3n+1 and n²+3n on the MPP) and PIMeval's table every operation.
 double FixedCycles(const MachineProfile& p, const std::string& op, int n) {
   bitserial::Machine m(p);
   const fixed::Format f = fixed::Format::Signed(n - 1, 0);
   bitserial::Multi a(m, f, "a"), b(m, f, "b");
   m.Report().Clear();
-  bitserial::Multi r = op == "add" ? Add(a, b, f) : Mul(a, b, f);
+  if (op == "add") Add(a, b, f);
+  else if (op == "sub") Sub(a, b, f);
+  else if (op == "mul") Mul(a, b, f);
+  else if (op == "less") Less(a, b);
+  else Min(a, b, f);
   return m.Report().TotalCycles();
 }
 
@@ -128,21 +133,6 @@ const char* const kPimeval =
     "pimPerfEnergyTables.cpp: row reads, writes, logic ops) priced at its DDR4-3200 timing "
     "(tRAS + tRP = 74 tCK a row, tCCD_S = 4 tCK a logic op); a model, not a measurement";
 
-// One operation of n-bit signed operands on one layer, the result in their format (less: one
-// bit), as PIMeval's table counts them.
-double EngineCycles(const MachineProfile& p, const std::string& op, int n) {
-  bitserial::Machine m(p);
-  const fixed::Format f = fixed::Format::Signed(n - 1, 0);
-  bitserial::Multi a(m, f, "a"), b(m, f, "b");
-  m.Report().Clear();
-  if (op == "add") Add(a, b, f);
-  else if (op == "sub") Sub(a, b, f);
-  else if (op == "mul") Mul(a, b, f);
-  else if (op == "less") Less(a, b);
-  else Min(a, b, f);
-  return m.Report().TotalCycles();
-}
-
 }  // namespace
 
 std::vector<LedgerRow> PimevalRows() {
@@ -157,7 +147,7 @@ std::vector<LedgerRow> PimevalRows() {
     r.unit = "tCK";
     r.source = kPimeval;
     r.grade = "derived";
-    r.model = EngineCycles(bank, o.op, o.bits);
+    r.model = FixedCycles(bank, o.op, o.bits);
     r.errorPct = (r.model - r.published) / r.published * 100;
     r.note = fmt::format("PIMeval {}R {}W {}L; the engine's schedule on one layer of {}", o.reads,
                          o.writes, o.logic, bank.name);
